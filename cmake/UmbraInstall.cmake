@@ -1,0 +1,1 @@
+# Installation is added once the io library exists.

@@ -1,0 +1,13 @@
+# Private build settings for umbra's own targets; never exported to users.
+add_library(umbra_build_settings INTERFACE)
+target_compile_options(umbra_build_settings INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wold-style-cast
+  # The ray walker must round exactly as OctoMap does: no fused multiply-add.
+  -ffp-contract=off)
+if(UMBRA_ENABLE_ASSERTS)
+  target_compile_definitions(umbra_build_settings INTERFACE UMBRA_ENABLE_ASSERTS)
+endif()
+if(UMBRA_SANITIZE)
+  target_compile_options(umbra_build_settings INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer)
+  target_link_options(umbra_build_settings INTERFACE -fsanitize=address,undefined)
+endif()

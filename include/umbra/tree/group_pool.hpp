@@ -1,0 +1,123 @@
+// GroupPool: blocked storage for sibling groups, addressed by 32-bit index.
+//
+// Every node group of one depth lives in one pool. Groups are addressed by a
+// uint32 index (half the size of a pointer), stored in blocks of
+// kBlockGroups so that growing never moves a group (no reallocation copy, no
+// peak of twice the size as with std::vector) and the unused tail is at most
+// one block. The last block starts small and doubles until it is full sized,
+// so a pool for the few groups near the root costs a few hundred bytes, not
+// a whole block. Released groups go to a free list and are handed out again.
+//
+// memory_bytes() is what the pool really allocated (block capacity, free
+// list capacity, block table), never an estimate from a count of groups.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include "umbra/core/assert.hpp"
+
+namespace umbra {
+
+inline constexpr std::uint32_t kNoGroup = 0xFFFFFFFFu;
+
+template <typename Group>
+class GroupPool {
+ public:
+  static constexpr std::uint32_t kBlockBits = 12;
+  static constexpr std::uint32_t kBlockGroups = 1u << kBlockBits;  // 4096 groups per block
+  static constexpr std::uint32_t kFirstBlockGroups = 8;
+
+  GroupPool() = default;
+  GroupPool(GroupPool&&) noexcept = default;
+  GroupPool& operator=(GroupPool&&) noexcept = default;
+  GroupPool(const GroupPool& other) { *this = other; }
+  GroupPool& operator=(const GroupPool& other) {
+    if (this == &other) return *this;
+    blocks_.clear();
+    blocks_.reserve(other.blocks_.size());
+    for (std::size_t b = 0; b < other.blocks_.size(); ++b) {
+      const std::uint32_t capacity = other.block_capacity(b);
+      blocks_.emplace_back(new Group[capacity]);
+      std::copy(other.blocks_[b].get(), other.blocks_[b].get() + capacity, blocks_.back().get());
+    }
+    last_capacity_ = other.last_capacity_;
+    high_water_ = other.high_water_;
+    free_ = other.free_;
+    return *this;
+  }
+
+  Group& operator[](std::uint32_t index) {
+    UMBRA_ASSERT(index < high_water_);
+    return blocks_[index >> kBlockBits][index & (kBlockGroups - 1)];
+  }
+  const Group& operator[](std::uint32_t index) const {
+    UMBRA_ASSERT(index < high_water_);
+    return blocks_[index >> kBlockBits][index & (kBlockGroups - 1)];
+  }
+
+  /// Index of a group whose contents are unspecified; the caller fills it.
+  std::uint32_t allocate() {
+    if (!free_.empty()) {
+      const std::uint32_t index = free_.back();
+      free_.pop_back();
+      return index;
+    }
+    if (high_water_ == kNoGroup) throw std::length_error("umbra: more than 2^32 - 1 node groups at one depth");
+    const std::uint32_t in_block = high_water_ & (kBlockGroups - 1);
+    if (blocks_.empty() || (in_block == 0 && last_capacity_ == kBlockGroups)) {
+      blocks_.emplace_back(new Group[kFirstBlockGroups]);
+      last_capacity_ = kFirstBlockGroups;
+    } else if (in_block == last_capacity_) {
+      grow_last_block();
+    }
+    return high_water_++;
+  }
+
+  void release(std::uint32_t index) {
+    UMBRA_ASSERT(index < high_water_);
+    free_.push_back(index);
+  }
+
+  /// Releases every group and all memory.
+  void clear() {
+    std::vector<std::unique_ptr<Group[]>>().swap(blocks_);
+    std::vector<std::uint32_t>().swap(free_);
+    last_capacity_ = 0;
+    high_water_ = 0;
+  }
+
+  /// Groups in use (handed out and not released).
+  [[nodiscard]] std::size_t size() const { return high_water_ - free_.size(); }
+
+  [[nodiscard]] std::size_t memory_bytes() const {
+    std::size_t groups = 0;
+    for (std::size_t b = 0; b < blocks_.size(); ++b) groups += block_capacity(b);
+    return groups * sizeof(Group) + blocks_.capacity() * sizeof(blocks_[0]) +
+           free_.capacity() * sizeof(std::uint32_t);
+  }
+
+ private:
+  [[nodiscard]] std::uint32_t block_capacity(std::size_t b) const {
+    return b + 1 == blocks_.size() ? last_capacity_ : kBlockGroups;
+  }
+
+  void grow_last_block() {
+    const std::uint32_t grown = last_capacity_ * 2;
+    std::unique_ptr<Group[]> block(new Group[grown]);
+    std::copy(blocks_.back().get(), blocks_.back().get() + last_capacity_, block.get());
+    blocks_.back() = std::move(block);
+    last_capacity_ = grown;
+  }
+
+  std::vector<std::unique_ptr<Group[]>> blocks_;
+  std::uint32_t last_capacity_ = 0;  // groups in the last block
+  std::uint32_t high_water_ = 0;     // groups ever handed out
+  std::vector<std::uint32_t> free_;  // released groups, reused first
+};
+
+}  // namespace umbra

@@ -1,0 +1,216 @@
+// OccupancyTree: the octree of log-odds occupancy with its indicators.
+//
+// Layout. Nodes live in groups of eight siblings, one pool of groups per
+// depth (0 = finest voxel, depth_levels = root). A node is addressed by
+// (depth, group index, slot 0..7); the root is slot 0 of group 0 at the top
+// depth (the other seven slots of that group are unused).
+//
+//   LeafGroup, depth 0 (32 bytes)     InnerGroup, depth >= 1 (68 bytes)
+//   +-----------------------+         +-----------------------+-----------------------+---+---+---+
+//   | log_odds[8]: float    |         | log_odds[8]: float    | child[8]: uint32      | F | U | S |
+//   +-----------------------+         +-----------------------+-----------------------+---+---+---+
+//
+// An inner node either has a group of eight children (child[i] is the index
+// of that group in the pool one depth below) or none (kNoGroup): then it is
+// an "inner leaf" whose value stands for every voxel it covers. Unknown
+// space is explicit: a child that was never observed exists with l = 0.
+// For a node with children, log_odds is the maximum of the children (so a
+// coarse query never misses an obstacle), F ("contains free") and U
+// ("contains unknown") say whether any voxel below is free / unknown, and S
+// ("all same") that all eight children are childless and equal. For a
+// childless node F and U describe its own value and S is 0. Leaves carry no
+// bits: their state is their value. "Contains occupied" is max > threshold.
+//
+// Invariants (check_invariants() verifies them all): every value lies in the
+// clamping range; inner values, F, U and S equal a recomputation from the
+// children; with automatic pruning on, no node has S set (eight equal
+// childless children are merged into their parent at once).
+//
+// Costs: a single-voxel update descends from the root and refreshes the
+// depth_levels ancestors on the way back; apply(UpdateBatch) updates a whole
+// scan in one depth-first walk that visits each touched node once and
+// never expands an inner leaf whose whole region gets the same update.
+//
+// Thread safety: const member functions may run concurrently with each
+// other; nothing may run concurrently with a non-const one.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "umbra/core/log_odds.hpp"
+#include "umbra/core/morton.hpp"
+#include "umbra/tree/group_pool.hpp"
+#include "umbra/tree/update_batch.hpp"
+
+namespace umbra {
+
+/// A node's position in the tree. The root is {0, 0, depth_levels}.
+struct NodeRef {
+  std::uint32_t group = 0;
+  std::uint8_t slot = 0;
+  std::int8_t depth = 0;
+  friend bool operator==(NodeRef, NodeRef) = default;
+};
+
+enum class NodeKind : unsigned char {
+  inner,       ///< has eight children
+  inner_leaf,  ///< depth >= 1, no children: its value covers its whole region
+  leaf,        ///< depth 0
+};
+
+struct NodeCounts {
+  std::size_t inner = 0;
+  std::size_t inner_leaf = 0;
+  std::size_t leaf = 0;
+  [[nodiscard]] std::size_t total() const { return inner + inner_leaf + leaf; }
+};
+
+/// What a query finds at a position and depth.
+struct NodeSummary {
+  float log_odds = 0.0f;        ///< the node's value (max of its voxels)
+  bool contains_free = false;
+  bool contains_unknown = false;
+  bool has_children = false;
+  int depth = 0;                ///< depth of the node found (>= the asked depth when an inner leaf covers it)
+};
+
+class OccupancyTree {
+ public:
+  struct LeafGroup {
+    std::array<float, 8> log_odds;
+  };
+  struct InnerGroup {
+    std::array<float, 8> log_odds;
+    std::array<std::uint32_t, 8> child;
+    std::uint8_t contains_free;
+    std::uint8_t contains_unknown;
+    std::uint8_t all_same;
+  };
+  static_assert(sizeof(LeafGroup) == 32, "a leaf group is 8 floats");
+  static_assert(sizeof(InnerGroup) == 68, "an inner group is 8 floats, 8 indices, 3 bit masks");
+
+  OccupancyTree(int depth_levels, LogOddsRange range, LogOddsThresholds thresholds);
+
+  [[nodiscard]] int depth_levels() const { return depth_levels_; }
+  [[nodiscard]] NodeRef root() const { return {0, 0, static_cast<std::int8_t>(depth_levels_)}; }
+  [[nodiscard]] const LogOddsRange& range() const { return range_; }
+  [[nodiscard]] const LogOddsThresholds& thresholds() const { return thresholds_; }
+
+  // --- reading -----------------------------------------------------------
+  /// The node at `depth` on the path to finest voxel `code` (or the inner
+  /// leaf above it that covers it).
+  [[nodiscard]] NodeSummary find(std::uint64_t code, int depth) const;
+  [[nodiscard]] bool has_children(NodeRef node) const {
+    return node.depth > 0 && inner_[node.depth][node.group].child[node.slot] != kNoGroup;
+  }
+  /// Child `slot` of a node that has children.
+  [[nodiscard]] NodeRef child(NodeRef node, unsigned slot) const {
+    UMBRA_ASSERT(has_children(node));
+    return {inner_[node.depth][node.group].child[node.slot], static_cast<std::uint8_t>(slot),
+            static_cast<std::int8_t>(node.depth - 1)};
+  }
+  [[nodiscard]] float log_odds(NodeRef node) const {
+    return node.depth == 0 ? leaves_[node.group].log_odds[node.slot]
+                           : inner_[node.depth][node.group].log_odds[node.slot];
+  }
+  [[nodiscard]] bool contains_free(NodeRef node) const;
+  [[nodiscard]] bool contains_unknown(NodeRef node) const;
+  /// True when the node has eight childless children of one value (only
+  /// possible while automatic pruning is off).
+  [[nodiscard]] bool all_children_same(NodeRef node) const {
+    return node.depth > 0 && (inner_[node.depth][node.group].all_same >> node.slot & 1u);
+  }
+
+  /// Calls visit(code, depth, log_odds) for every childless node, in Morton
+  /// order; `code` is the node's first finest voxel.
+  template <typename Visit>
+  void for_each_leaf(Visit&& visit) const {
+    visit_leaves(root(), 0, visit);
+  }
+
+  // --- writing -----------------------------------------------------------
+  /// Adds `delta` to finest voxel `code` (then clamps), like OctoMap's updateNode.
+  void update(std::uint64_t code, float delta);
+  /// Sets finest voxel `code` to `log_odds` (clamped).
+  void set(std::uint64_t code, float log_odds);
+  /// Applies one scan's updates: `hit` to the batch's hit voxels, `miss` to its misses.
+  void apply(const UpdateBatch& batch, float hit, float miss);
+  /// Empties the tree (everything unknown).
+  void clear();
+
+  // --- indicators, pruning -----------------------------------------------
+  /// New thresholds; every indicator is recomputed at once.
+  void set_thresholds(LogOddsThresholds thresholds);
+  /// New clamping range for future updates (stored values are left alone, as in OctoMap).
+  void set_range(LogOddsRange range) { range_ = range; }
+  /// With automatic pruning on (the default) eight equal childless children
+  /// are merged into their parent as soon as they become equal. Switching it
+  /// on prunes the whole tree.
+  void set_auto_prune(bool on);
+  [[nodiscard]] bool auto_prune() const { return auto_prune_; }
+  /// Merges every group of eight equal childless children, bottom up.
+  void prune();
+
+  // --- building (used by file readers) -----------------------------------
+  /// Gives a childless node eight children that all carry its value.
+  void subdivide(NodeRef node);
+  /// Sets a childless node's value without touching its ancestors; call
+  /// refresh_all() when done.
+  void set_childless_value(NodeRef node, float log_odds);
+  /// Recomputes every inner value and indicator bottom up (no pruning).
+  void refresh_all();
+
+  // --- statistics, checks ------------------------------------------------
+  [[nodiscard]] NodeCounts count_nodes() const;
+  /// Bytes allocated for the tree (capacity, not use).
+  [[nodiscard]] std::size_t memory_bytes() const;
+  /// Empty when every invariant in the file comment holds, else the first violation.
+  [[nodiscard]] std::string check_invariants() const;
+
+ private:
+  template <typename Visit>
+  void visit_leaves(NodeRef node, std::uint64_t first_code, Visit& visit) const {
+    if (!has_children(node)) {
+      visit(first_code, static_cast<int>(node.depth), log_odds(node));
+      return;
+    }
+    const int child_depth = node.depth - 1;
+    const std::uint32_t group = inner_[node.depth][node.group].child[node.slot];
+    for (unsigned slot = 0; slot < 8; ++slot) {
+      visit_leaves(NodeRef{group, static_cast<std::uint8_t>(slot), static_cast<std::int8_t>(child_depth)},
+                   first_code | (std::uint64_t{slot} << (3 * child_depth)), visit);
+    }
+  }
+
+  std::uint32_t new_leaf_group(float value);
+  std::uint32_t new_inner_group(int depth, float value);
+  void release_group(int depth, std::uint32_t group);
+  /// Value and indicator bits of a childless slot.
+  void set_childless(InnerGroup& group, unsigned slot, float value) const;
+  /// Gives childless node (depth, group[slot]) eight children with its value.
+  void expand(int depth, InnerGroup& group, unsigned slot);
+  /// Recomputes node (depth, group[slot]) from its children; prunes when allowed.
+  void refresh(int depth, InnerGroup& group, unsigned slot, bool allow_prune);
+  void apply_group(int depth, std::uint32_t group, const UpdateBatch& batch, std::uint32_t batch_group,
+                   float hit, float miss);
+  void apply_brick(std::uint32_t group, const UpdateBatch::Brick& todo, float hit, float miss);
+  void apply_everywhere(int depth, InnerGroup& group, unsigned slot, float delta);
+  void prune_below(int depth, InnerGroup& group, unsigned slot);
+  void refresh_below(int depth, InnerGroup& group, unsigned slot);
+  template <typename Change>
+  void modify_voxel(std::uint64_t code, Change change);
+  std::string check_node(int depth, std::uint32_t group, unsigned slot, std::vector<std::vector<bool>>& seen) const;
+
+  int depth_levels_;
+  LogOddsRange range_;
+  LogOddsThresholds thresholds_;
+  bool auto_prune_ = true;
+  GroupPool<LeafGroup> leaves_;
+  std::vector<GroupPool<InnerGroup>> inner_;  // index = depth; [0] is unused
+};
+
+}  // namespace umbra

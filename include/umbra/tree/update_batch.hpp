@@ -1,0 +1,126 @@
+// UpdateBatch: the voxels one scan updates and how, collected before the
+// tree is touched.
+//
+// OctoMap's rule for one scan is: every voxel a ray passes gets one miss,
+// every end voxel one hit, a voxel is updated at most once, and a hit wins
+// over a miss. OctoMap collects the keys in two hash sets; umbra collects
+// them in this small octree of bit masks, shaped like the map:
+//
+//   Inner group (depth >= 2, 8 sibling nodes)      Brick (depth 1: 8 nodes x 8 voxels)
+//   +--------------------------+------+            +-------------+-------------+
+//   | child[8]: uint32 indices | full |            | miss[8]: u8 | hit[8]: u8  |  one bit per voxel
+//   +--------------------------+------+            +-------------+-------------+
+//
+// The finest level is a brick of 4x4x4 voxels held in 16 bytes, so the
+// three quarters of ray steps that stay within one brick only set a bit.
+// A `full` bit means "every voxel of that node gets a miss and none a hit";
+// for a depth-1 node that is miss == 0xFF and hit == 0. When the eight nodes
+// of a group are all full, the group is released and its parent's bit is
+// set instead: the dense free space near a sensor collapses to a few coarse
+// nodes, so the batch stays small and later rays through it stop after one
+// comparison.
+//
+// Adding codes in ray order is cheap: the path of the previous code is
+// cached, and a new code only descends from the highest depth at which the
+// two paths differ. The tree applies a batch in one depth-first walk
+// (OccupancyTree::apply).
+//
+// Not thread-safe; use one batch per thread and merge() them.
+#pragma once
+
+#include <array>
+#include <bit>
+#include <cstdint>
+#include <vector>
+
+#include "umbra/core/morton.hpp"
+#include "umbra/tree/group_pool.hpp"
+
+namespace umbra {
+
+class UpdateBatch {
+ public:
+  struct Inner {
+    std::array<std::uint32_t, 8> child;  // group one depth below, kNoGroup: nothing there (unless `full`)
+    std::uint8_t full;                   // bit i: node i's whole region gets a miss
+  };
+  struct Brick {
+    std::array<std::uint8_t, 8> miss;  // miss[i] bit j: voxel j of depth-1 node i gets a miss ...
+    std::array<std::uint8_t, 8> hit;   // ... unless this bit is set: then it gets a hit
+  };
+
+  explicit UpdateBatch(int depth_levels = 16);
+
+  /// Empties the batch (and frees its memory) for a map of `depth_levels`.
+  void reset(int depth_levels);
+
+  /// The finest voxel `code` gets a hit (wins over any miss).
+  void add_hit(std::uint64_t code);
+
+  /// The finest voxel `code` gets a miss, unless it gets a hit.
+  void add_miss(std::uint64_t code) {
+    // Inline fast paths, because rays call this for every voxel: still inside
+    // the full node that covered the previous code, or in the same brick.
+    const int top = morton::highest_differing_depth(code, last_code_);
+    if (top < covered_depth_) return;
+    if (top <= 1 && valid_from_ == 1) {
+      last_code_ = code;
+      Brick& brick = *brick_;
+      const unsigned node = morton::slot(code, 1);
+      brick.miss[node] |= static_cast<std::uint8_t>(1u << morton::slot(code, 0));
+      if (brick.miss[node] == 0xFF && is_full(brick)) collapse_upwards(code, 1);
+      return;
+    }
+    add_miss_slow(code);
+  }
+
+  /// Every voxel of the depth-`depth` node containing `code` gets a miss
+  /// (voxels with a hit keep it).
+  void add_miss_node(std::uint64_t code, int depth);
+  /// Merges another batch over the same depth levels into this one.
+  void merge(const UpdateBatch& other);
+
+  [[nodiscard]] bool empty() const;
+  [[nodiscard]] int depth_levels() const { return depth_levels_; }
+  [[nodiscard]] std::size_t memory_bytes() const;
+
+  // Read access for the walk that applies the batch. The root is slot 0 of
+  // group 0 at depth depth_levels() (a brick when depth_levels() == 1).
+  [[nodiscard]] const Inner& inner(int depth, std::uint32_t group) const { return inner_[depth][group]; }
+  [[nodiscard]] const Brick& brick(std::uint32_t group) const { return bricks_[group]; }
+
+  /// True when every voxel of the brick gets a miss and none a hit.
+  static bool is_full(const Brick& brick) {
+    return std::bit_cast<std::uint64_t>(brick.miss) == ~std::uint64_t{0} &&
+           std::bit_cast<std::uint64_t>(brick.hit) == 0;
+  }
+
+ private:
+  enum class Mark { hit, miss };
+  void add_miss_slow(std::uint64_t code);
+  /// Walks the cached path down to the group at `depth` (>= 1) on the path of
+  /// `code` and returns it, or kNoGroup when a full node above already covers
+  /// it (only for misses: a hit splits full nodes on its way down).
+  std::uint32_t descend(std::uint64_t code, int depth, Mark mark);
+  /// The group at `depth` on the path of `code` is entirely full: release it
+  /// and set its parent's bit instead, repeating upwards.
+  void collapse_upwards(std::uint64_t code, int depth);
+  /// Marks every voxel below group (depth, group) missed; true if all are now full.
+  bool fill_with_misses(int depth, std::uint32_t group);
+  std::uint32_t new_group(int depth, bool full);
+  void release_group(int depth, std::uint32_t group);
+  void merge_group(const UpdateBatch& other, int depth, std::uint32_t other_group, std::uint64_t first_code);
+
+  int depth_levels_ = 0;
+  GroupPool<Brick> bricks_;              // depth 1
+  std::vector<GroupPool<Inner>> inner_;  // index = depth >= 2; [0] and [1] are unused
+
+  // Cache of the last added code's path (see the file comment).
+  std::uint64_t last_code_ = 0;
+  std::array<std::uint32_t, kMaxDepthLevels + 1> path_{};  // group per depth, valid from valid_from_ up
+  int valid_from_ = 1;
+  int covered_depth_ = -1;   // depth of the full node that contained the last code, or -1
+  Brick* brick_ = nullptr;   // the brick path_[1] when valid_from_ == 1
+};
+
+}  // namespace umbra

@@ -1,0 +1,49 @@
+#include "umbra/core/grid.hpp"
+
+#include <sstream>
+#include <stdexcept>
+
+namespace umbra {
+
+Grid::Grid(double resolution, int depth_levels)
+    : resolution_(resolution),
+      inverse_resolution_(1.0 / resolution),
+      depth_levels_(depth_levels),
+      key_offset_(0) {
+  if (!(std::isfinite(resolution) && resolution > 0.0)) {
+    throw std::invalid_argument("resolution must be a finite number > 0, got " +
+                                std::to_string(resolution));
+  }
+  if (depth_levels < 1 || depth_levels > kMaxDepthLevels) {
+    throw std::invalid_argument("depth_levels must be in [1, " + std::to_string(kMaxDepthLevels) +
+                                "], got " + std::to_string(depth_levels));
+  }
+  key_offset_ = 1u << (depth_levels - 1);
+}
+
+Key Grid::key(Vec3d c) const {
+  if (auto k = key_checked(c)) return *k;
+  std::ostringstream message;
+  message.precision(9);
+  message << "coordinate (" << c.x << ", " << c.y << ", " << c.z
+          << ") is outside the map, which spans [" << -half_extent() << ", " << half_extent()
+          << ") on every axis (resolution " << resolution_ << ", depth levels " << depth_levels_
+          << ")";
+  throw std::out_of_range(message.str());
+}
+
+Vec3d Grid::min_corner(Key key, int depth) const {
+  Vec3d corner;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::int64_t first = std::int64_t(key[axis] >> depth) << depth;
+    corner[axis] = double(first - std::int64_t(key_offset_)) * resolution_;
+  }
+  return corner;
+}
+
+Vec3d Grid::center(Key key, int depth) const {
+  const double half = 0.5 * node_size(depth);
+  return min_corner(key, depth) + Vec3d{half, half, half};
+}
+
+}  // namespace umbra

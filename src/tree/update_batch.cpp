@@ -1,0 +1,224 @@
+#include "umbra/tree/update_batch.hpp"
+
+#include <algorithm>
+
+namespace umbra {
+
+UpdateBatch::UpdateBatch(int depth_levels) { reset(depth_levels); }
+
+void UpdateBatch::reset(int depth_levels) {
+  UMBRA_ASSERT(depth_levels >= 1 && depth_levels <= kMaxDepthLevels);
+  depth_levels_ = depth_levels;
+  bricks_.clear();
+  inner_.clear();
+  inner_.resize(static_cast<std::size_t>(depth_levels) + 1);
+  [[maybe_unused]] const std::uint32_t root_group = new_group(depth_levels, false);
+  UMBRA_ASSERT(root_group == 0);
+  last_code_ = 0;
+  path_.fill(kNoGroup);
+  path_[depth_levels] = root_group;
+  valid_from_ = depth_levels;
+  covered_depth_ = -1;
+  brick_ = depth_levels == 1 ? &bricks_[root_group] : nullptr;
+}
+
+std::uint32_t UpdateBatch::new_group(int depth, bool full) {
+  if (depth == 1) {
+    const std::uint32_t group = bricks_.allocate();
+    Brick& brick = bricks_[group];
+    brick.miss.fill(full ? 0xFF : 0);
+    brick.hit.fill(0);
+    return group;
+  }
+  const std::uint32_t group = inner_[depth].allocate();
+  Inner& node = inner_[depth][group];
+  node.child.fill(kNoGroup);
+  node.full = full ? 0xFF : 0;
+  return group;
+}
+
+void UpdateBatch::release_group(int depth, std::uint32_t group) {
+  if (depth == 1) {
+    bricks_.release(group);
+  } else {
+    inner_[depth].release(group);
+  }
+}
+
+std::uint32_t UpdateBatch::descend(std::uint64_t code, int depth, Mark mark) {
+  UMBRA_ASSERT(depth >= 1);
+  const int top = morton::highest_differing_depth(code, last_code_);
+  const int start = std::max({top, valid_from_, depth});
+  std::uint32_t group = path_[start];
+  for (int d = start; d > depth; --d) {
+    Inner& node = inner_[d][group];
+    const unsigned slot = morton::slot(code, d);
+    const auto bit = static_cast<std::uint8_t>(1u << slot);
+    std::uint32_t child = node.child[slot];
+    if (node.full & bit) {
+      if (mark == Mark::miss) {  // the whole node already gets a miss
+        last_code_ = code;
+        covered_depth_ = d;
+        valid_from_ = d;
+        return kNoGroup;
+      }
+      // A hit inside a full node: split it into a full child group.
+      // (`node` stays valid: allocation happens in the pool one depth below.)
+      node.full = static_cast<std::uint8_t>(node.full & ~bit);
+      child = new_group(d - 1, true);
+      node.child[slot] = child;
+    } else if (child == kNoGroup) {
+      child = new_group(d - 1, false);
+      node.child[slot] = child;
+    }
+    group = child;
+    path_[d - 1] = group;
+  }
+  last_code_ = code;
+  covered_depth_ = -1;
+  valid_from_ = depth;
+  if (depth == 1) brick_ = &bricks_[group];
+  return group;
+}
+
+void UpdateBatch::add_hit(std::uint64_t code) {
+  const std::uint32_t group = descend(code, 1, Mark::hit);
+  bricks_[group].hit[morton::slot(code, 1)] |= static_cast<std::uint8_t>(1u << morton::slot(code, 0));
+}
+
+void UpdateBatch::add_miss_slow(std::uint64_t code) {
+  const std::uint32_t group = descend(code, 1, Mark::miss);
+  if (group == kNoGroup) return;
+  Brick& brick = bricks_[group];
+  brick.miss[morton::slot(code, 1)] |= static_cast<std::uint8_t>(1u << morton::slot(code, 0));
+  if (is_full(brick)) collapse_upwards(code, 1);
+}
+
+void UpdateBatch::add_miss_node(std::uint64_t code, int depth) {
+  UMBRA_ASSERT(depth >= 0 && depth <= depth_levels_);
+  if (depth == 0) {
+    add_miss(code);
+    return;
+  }
+  const int top = morton::highest_differing_depth(code, last_code_);
+  if (top < covered_depth_ && depth <= covered_depth_) return;
+  const std::uint32_t group = descend(code, depth, Mark::miss);
+  if (group == kNoGroup) return;
+  const unsigned slot = morton::slot(code, depth);
+  if (depth == 1) {
+    Brick& brick = bricks_[group];
+    brick.miss[slot] = 0xFF;
+    if (is_full(brick)) collapse_upwards(code, 1);
+    return;
+  }
+  Inner& node = inner_[depth][group];
+  const auto bit = static_cast<std::uint8_t>(1u << slot);
+  if (!(node.full & bit)) {
+    const std::uint32_t child = node.child[slot];
+    if (child != kNoGroup) {
+      if (!fill_with_misses(depth - 1, child)) return;  // a hit below keeps the node partial
+      release_group(depth - 1, child);
+      node.child[slot] = kNoGroup;
+    }
+    node.full |= bit;
+  }
+  if (node.full == 0xFF) {
+    collapse_upwards(code, depth);
+  } else {
+    covered_depth_ = depth;
+    valid_from_ = depth;
+  }
+}
+
+bool UpdateBatch::fill_with_misses(int depth, std::uint32_t group) {
+  if (depth == 1) {
+    Brick& brick = bricks_[group];
+    brick.miss.fill(0xFF);
+    return is_full(brick);
+  }
+  Inner& node = inner_[depth][group];
+  for (unsigned slot = 0; slot < 8; ++slot) {
+    const auto bit = static_cast<std::uint8_t>(1u << slot);
+    const std::uint32_t child = node.child[slot];
+    if (node.full & bit) continue;
+    if (child == kNoGroup || fill_with_misses(depth - 1, child)) {
+      if (child != kNoGroup) {
+        release_group(depth - 1, child);
+        node.child[slot] = kNoGroup;
+      }
+      node.full |= bit;
+    }
+  }
+  return node.full == 0xFF;
+}
+
+void UpdateBatch::collapse_upwards(std::uint64_t code, int depth) {
+  int d = depth;
+  while (d < depth_levels_) {
+    release_group(d, path_[d]);
+    Inner& parent = inner_[d + 1][path_[d + 1]];
+    const unsigned slot = morton::slot(code, d + 1);
+    parent.child[slot] = kNoGroup;
+    parent.full |= static_cast<std::uint8_t>(1u << slot);
+    ++d;
+    if (parent.full != 0xFF) break;
+  }
+  last_code_ = code;
+  covered_depth_ = d;
+  valid_from_ = d;
+}
+
+void UpdateBatch::merge(const UpdateBatch& other) {
+  UMBRA_ASSERT(other.depth_levels_ == depth_levels_);
+  merge_group(other, depth_levels_, 0, 0);
+}
+
+void UpdateBatch::merge_group(const UpdateBatch& other, int depth, std::uint32_t other_group,
+                              std::uint64_t first_code) {
+  // Slots of the root group beyond 0 are never used, so visiting them is harmless.
+  if (depth == 1) {
+    const Brick& brick = other.bricks_[other_group];
+    for (unsigned node = 0; node < 8; ++node) {
+      const std::uint64_t node_code = first_code | (std::uint64_t{node} << 3);
+      if (brick.miss[node] == 0xFF && brick.hit[node] == 0) {
+        add_miss_node(node_code, 1);
+        continue;
+      }
+      for (unsigned voxel = 0; voxel < 8; ++voxel) {
+        const auto bit = static_cast<std::uint8_t>(1u << voxel);
+        if (brick.hit[node] & bit) {
+          add_hit(node_code | voxel);
+        } else if (brick.miss[node] & bit) {
+          add_miss(node_code | voxel);
+        }
+      }
+    }
+    return;
+  }
+  const Inner& node = other.inner_[depth][other_group];
+  for (unsigned slot = 0; slot < 8; ++slot) {
+    const std::uint64_t code = first_code | (std::uint64_t{slot} << (3 * depth));
+    if (node.full & (1u << slot)) {
+      add_miss_node(code, depth);
+    } else if (node.child[slot] != kNoGroup) {
+      merge_group(other, depth - 1, node.child[slot], code);
+    }
+  }
+}
+
+bool UpdateBatch::empty() const {
+  if (depth_levels_ == 1) {
+    const Brick& root = bricks_[0];
+    return root.miss[0] == 0 && root.hit[0] == 0;
+  }
+  const Inner& root = inner_[depth_levels_][0];
+  return root.child[0] == kNoGroup && root.full == 0;
+}
+
+std::size_t UpdateBatch::memory_bytes() const {
+  std::size_t bytes = sizeof(*this) + bricks_.memory_bytes() + inner_.capacity() * sizeof(inner_[0]);
+  for (const auto& pool : inner_) bytes += pool.memory_bytes();
+  return bytes;
+}
+
+}  // namespace umbra
