@@ -1,1 +1,93 @@
-// placeholder, replaced by its owner
+// Grid: the key rule of DESIGN.md §1, the map's extent, centres.
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "umbra/core/grid.hpp"
+
+namespace umbra {
+namespace {
+
+TEST(Grid, KeyIsFloorOfCoordinateOverResolutionPlusOffset) {
+  std::mt19937 rng(3);
+  for (const int depth_levels : {1, 2, 8, 16, 21}) {
+    for (const double resolution : {0.01, 0.05, 0.1, 0.25, 1.0}) {
+      const Grid grid(resolution, depth_levels);
+      const double half = grid.half_extent();
+      std::uniform_real_distribution<double> coordinate(-half, half);
+      for (int i = 0; i < 500; ++i) {
+        const double c = coordinate(rng);
+        const auto key = grid.axis_key(c);
+        ASSERT_TRUE(key.has_value()) << c;
+        const auto expected = static_cast<std::int64_t>(std::floor(c * (1.0 / resolution))) +
+                              (std::int64_t{1} << (depth_levels - 1));
+        ASSERT_EQ(*key, expected) << "c=" << c << " res=" << resolution;
+      }
+    }
+  }
+}
+
+TEST(Grid, CoordinatesOutsideTheExtentAreRejected) {
+  const Grid grid(0.5, 4);  // 16 keys per axis: [-4, 4) metres
+  EXPECT_EQ(grid.half_extent(), 4.0);
+  EXPECT_TRUE(grid.axis_key(-4.0).has_value());
+  EXPECT_EQ(*grid.axis_key(-4.0), 0u);
+  EXPECT_EQ(*grid.axis_key(3.999), 15u);
+  EXPECT_FALSE(grid.axis_key(4.0).has_value());
+  EXPECT_FALSE(grid.axis_key(-4.001).has_value());
+  EXPECT_FALSE(grid.axis_key(std::numeric_limits<double>::quiet_NaN()).has_value());
+  EXPECT_FALSE(grid.axis_key(std::numeric_limits<double>::infinity()).has_value());
+  EXPECT_FALSE(grid.axis_key(1e300).has_value());
+  EXPECT_FALSE(grid.key_checked(Vec3d{0, 0, 5}).has_value());
+}
+
+TEST(Grid, KeyThrowsWithTheCoordinateAndTheExtent) {
+  const Grid grid(0.5, 4);
+  try {
+    (void)grid.key(Vec3d{1.0, 2.0, 17.25});
+    FAIL() << "expected std::out_of_range";
+  } catch (const std::out_of_range& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("17.25"), std::string::npos) << message;
+    EXPECT_NE(message.find("[-4, 4)"), std::string::npos) << message;
+  }
+}
+
+TEST(Grid, RejectsBadParameters) {
+  EXPECT_THROW(Grid(0.0, 16), std::invalid_argument);
+  EXPECT_THROW(Grid(-0.1, 16), std::invalid_argument);
+  EXPECT_THROW(Grid(std::numeric_limits<double>::quiet_NaN(), 16), std::invalid_argument);
+  EXPECT_THROW(Grid(std::numeric_limits<double>::infinity(), 16), std::invalid_argument);
+  EXPECT_THROW(Grid(0.1, 0), std::invalid_argument);
+  EXPECT_THROW(Grid(0.1, 22), std::invalid_argument);
+  EXPECT_NO_THROW(Grid(0.1, 1));
+  EXPECT_NO_THROW(Grid(0.1, 21));
+}
+
+TEST(Grid, CentresAndCornersAtEveryDepth) {
+  const Grid grid(0.1, 16);
+  const Key key = grid.key(Vec3d{0.05, -0.05, 1.234});
+  const Vec3d centre = grid.center(key);
+  EXPECT_NEAR(centre.x, 0.05, 1e-12);
+  EXPECT_NEAR(centre.y, -0.05, 1e-12);
+  EXPECT_NEAR(centre.z, 1.25, 1e-12);
+  // Depth 2: 0.4 m nodes aligned to multiples of 0.4 m.
+  const Vec3d corner = grid.min_corner(key, 2);
+  EXPECT_NEAR(corner.x, 0.0, 1e-12);
+  EXPECT_NEAR(corner.y, -0.4, 1e-12);
+  EXPECT_NEAR(corner.z, 1.2, 1e-12);
+  EXPECT_NEAR(grid.center(key, 2).z, 1.4, 1e-12);
+  EXPECT_DOUBLE_EQ(grid.node_size(2), 0.4);
+  // Every centre maps back to its own key.
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<std::uint32_t> any_key(0, grid.keys_per_axis() - 1);
+  for (int i = 0; i < 1000; ++i) {
+    const Key k{any_key(rng), any_key(rng), any_key(rng)};
+    ASSERT_EQ(grid.key(grid.center(k)), k);
+  }
+}
+
+}  // namespace
+}  // namespace umbra

@@ -1,1 +1,158 @@
-// placeholder, replaced by its owner
+// OccupancyMap: the user-facing API, its errors and its statistics.
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "umbra/map/occupancy_map.hpp"
+
+namespace umbra {
+namespace {
+
+template <typename Exception, typename Action>
+std::string message_of(Action&& action) {
+  try {
+    action();
+  } catch (const Exception& e) {
+    return e.what();
+  }
+  return "no exception";
+}
+
+TEST(OccupancyMap, ConstructionValidatesEveryParameter) {
+  EXPECT_NE(message_of<std::invalid_argument>([] { OccupancyMap(0.0); }).find("resolution"), std::string::npos);
+  EXPECT_NE(message_of<std::invalid_argument>([] { OccupancyMap(0.1, 25); }).find("depth_levels"), std::string::npos);
+  EXPECT_NE(message_of<std::invalid_argument>([] { OccupancyMap(0.1, 16, SensorModel{0.3, 0.4, 0.1, 0.9}); })
+                .find("p_hit"),
+            std::string::npos);
+  EXPECT_NE(message_of<std::invalid_argument>([] { OccupancyMap(0.1, 16, {}, Thresholds{0.4, 0.6}); })
+                .find("free threshold"),
+            std::string::npos);
+  const OccupancyMap map(MapConfig{0.2, 12, SensorModel{0.8, 0.3, 0.2, 0.9}, Thresholds{0.6, 0.4}});
+  EXPECT_EQ(map.config().resolution, 0.2);
+  EXPECT_EQ(map.config().depth_levels, 12);
+  EXPECT_EQ(map.config().sensor, (SensorModel{0.8, 0.3, 0.2, 0.9}));
+  EXPECT_EQ(map.config().thresholds, (Thresholds{0.6, 0.4}));
+}
+
+TEST(OccupancyMap, SingleVoxelUpdatesAndQueriesAtEveryDepth) {
+  OccupancyMap map(0.1);
+  const Vec3d wall{1.05, 2.05, 0.35};
+  map.update_hit(wall);
+  map.update_miss({1.15, 2.05, 0.35});
+  EXPECT_EQ(map.state(wall), OccupancyState::occupied);
+  EXPECT_EQ(map.state({1.15, 2.05, 0.35}), OccupancyState::free);
+  EXPECT_EQ(map.state({5.0, 5.0, 5.0}), OccupancyState::unknown);
+  EXPECT_NEAR(map.occupancy(wall), 0.7, 1e-6);
+  EXPECT_NEAR(map.occupancy({1.15, 2.05, 0.35}), 0.4, 1e-6);
+  // The 0.2 m node holding both: occupied (max), contains free and unknown.
+  EXPECT_EQ(map.state(wall, 1), OccupancyState::occupied);
+  EXPECT_TRUE(map.contains_occupied(wall, 1));
+  EXPECT_TRUE(map.contains_free({1.15, 2.05, 0.35}, 1));
+  EXPECT_TRUE(map.contains_unknown(wall, 1));
+  EXPECT_FALSE(map.contains_free(wall, 0));
+  EXPECT_EQ(map.state(wall, 16), OccupancyState::occupied) << "the root knows about the obstacle";
+  map.set_log_odds(wall, -1.0f);
+  EXPECT_EQ(map.state(wall), OccupancyState::free);
+  EXPECT_FALSE(map.contains_occupied(wall, 16));
+  map.set_log_odds(wall, 100.0f);
+  EXPECT_EQ(map.log_odds(wall), map.sensor_model().clamp_max_log_odds()) << "set clamps";
+}
+
+TEST(OccupancyMap, BadCoordinatesDepthsAndValuesAreErrors) {
+  OccupancyMap map(0.1, 8);  // [-12.8, 12.8)
+  EXPECT_NE(message_of<std::out_of_range>([&] { map.update_hit({13.0, 0.0, 0.0}); }).find("outside the map"),
+            std::string::npos);
+  EXPECT_THROW((void)map.state({0, 0, -20.0}), std::out_of_range);
+  EXPECT_THROW((void)map.state({std::numeric_limits<double>::quiet_NaN(), 0, 0}), std::out_of_range);
+  EXPECT_NE(message_of<std::out_of_range>([&] { (void)map.state({0, 0, 0}, 9); }).find("depth 9"), std::string::npos);
+  EXPECT_THROW((void)map.state({0, 0, 0}, -1), std::out_of_range);
+  EXPECT_THROW(map.update_log_odds(Vec3d{0, 0, 0}, std::numeric_limits<float>::quiet_NaN()), std::invalid_argument);
+  EXPECT_THROW(map.set_log_odds(Vec3d{0, 0, 0}, std::numeric_limits<float>::infinity()), std::invalid_argument);
+  EXPECT_THROW((void)map.node(Key{256, 0, 0}), std::out_of_range);
+  EXPECT_EQ(map.node_counts().total(), 1u) << "failed calls change nothing";
+}
+
+TEST(OccupancyMap, InsertPointCloudCountsWhatItSkips) {
+  OccupancyMap map(0.1, 8);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<Vec3f> points = {
+      {2.0f, 0.0f, 0.0f},  {0.0f, 2.0f, 0.0f}, {nan, 0.0f, 0.0f},
+      {0.0f, std::numeric_limits<float>::infinity(), 0.0f},
+      {50.0f, 0.0f, 0.0f},                         // outside the map
+      {0.0f, 0.0f, 9.0f},                          // beyond max range: truncated at 5 m
+  };
+  InsertOptions options;
+  options.max_range = 5.0;
+  const InsertStats stats = map.insert_point_cloud({0, 0, 0}, points, options);
+  EXPECT_EQ(stats.points, 6u);
+  EXPECT_EQ(stats.non_finite, 2u);
+  EXPECT_EQ(stats.hits, 2u);
+  EXPECT_EQ(stats.truncated, 2u) << "the 50 m point is beyond max range too";
+  EXPECT_EQ(stats.out_of_bounds, 0u);
+  EXPECT_EQ(map.state({2.0, 0.0, 0.0}), OccupancyState::occupied);
+  EXPECT_EQ(map.state({1.0, 0.0, 0.0}), OccupancyState::free);
+  EXPECT_EQ(map.state({0.0, 0.0, 4.85}), OccupancyState::free);
+  EXPECT_EQ(map.state({0.0, 0.0, 5.15}), OccupancyState::unknown) << "cut at max range, no hit";
+  EXPECT_EQ(map.state({0.0, 0.0, 9.05}), OccupancyState::unknown);
+
+  const InsertStats unlimited = map.insert_point_cloud({0, 0, 0}, std::vector<Vec3f>{{50.0f, 0.0f, 0.0f}});
+  EXPECT_EQ(unlimited.out_of_bounds, 1u);
+  EXPECT_EQ(unlimited.rays, 0u);
+}
+
+TEST(OccupancyMap, BadOriginIsAnErrorAndChangesNothing) {
+  OccupancyMap map(0.1, 8);
+  const std::vector<Vec3f> points = {{1.0f, 0.0f, 0.0f}};
+  EXPECT_THROW(map.insert_point_cloud({20.0f, 0.0f, 0.0f}, points), std::out_of_range);
+  EXPECT_THROW(map.insert_point_cloud({std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f}, points),
+               std::invalid_argument);
+  InsertOptions bad;
+  bad.max_range = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(map.insert_point_cloud({0, 0, 0}, points, bad), std::invalid_argument);
+  EXPECT_EQ(map.node_counts().total(), 1u);
+}
+
+TEST(OccupancyMap, ThresholdsChangeAtRunTime) {
+  OccupancyMap map(0.1);
+  map.update_hit({0.05, 0.05, 0.05});  // p = 0.7
+  map.update_miss({0.15, 0.05, 0.05});  // p = 0.4
+  map.set_thresholds({0.8, 0.3});
+  EXPECT_EQ(map.state({0.05, 0.05, 0.05}), OccupancyState::unknown);
+  EXPECT_EQ(map.state({0.15, 0.05, 0.05}), OccupancyState::unknown);
+  EXPECT_FALSE(map.contains_free({0.0, 0.0, 0.0}, 5));
+  EXPECT_FALSE(map.contains_occupied({0.0, 0.0, 0.0}, 5));
+  map.set_thresholds({0.6, 0.45});
+  EXPECT_EQ(map.state({0.05, 0.05, 0.05}), OccupancyState::occupied);
+  EXPECT_TRUE(map.contains_free({0.0, 0.0, 0.0}, 5));
+  EXPECT_THROW(map.set_thresholds({0.4, 0.6}), std::invalid_argument);
+  EXPECT_EQ(map.thresholds(), (Thresholds{0.6, 0.45}));
+}
+
+TEST(OccupancyMap, LeavesCoverEveryKnownVoxelOnce) {
+  OccupancyMap map(0.1, 10);
+  std::vector<Vec3f> points;
+  for (int i = 0; i < 200; ++i) {
+    const double angle = i * 0.0314;
+    points.push_back({static_cast<float>(3.0 * std::cos(angle)), static_cast<float>(3.0 * std::sin(angle)), 0.5f});
+  }
+  map.insert_point_cloud({0, 0, 0.5f}, points);
+  std::size_t occupied = 0;
+  std::size_t free = 0;
+  std::uint64_t previous_end = 0;
+  map.for_each_leaf([&](const LeafView& leaf) {
+    const std::uint64_t first = morton::encode(leaf.key);
+    EXPECT_GE(first, previous_end) << "Morton order, no overlap";
+    previous_end = first + (std::uint64_t{1} << (3 * leaf.depth));
+    const std::size_t voxels = std::size_t{1} << (3 * leaf.depth);
+    if (leaf.state == OccupancyState::occupied) occupied += voxels;
+    if (leaf.state == OccupancyState::free) free += voxels;
+  });
+  EXPECT_EQ(previous_end, std::uint64_t{1} << 30) << "the leaves tile the whole map";
+  EXPECT_GE(occupied, 150u);
+  EXPECT_GT(free, 1000u);
+  EXPECT_GT(map.memory_bytes(), map.tree().memory_bytes());
+}
+
+}  // namespace
+}  // namespace umbra

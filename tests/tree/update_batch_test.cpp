@@ -1,1 +1,136 @@
-// placeholder, replaced by its owner
+// UpdateBatch against a std::map model: random hits, misses and whole-node
+// misses in any order; hit wins; full groups collapse; merge is a union.
+#include <map>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "umbra/tree/update_batch.hpp"
+
+namespace umbra {
+namespace {
+
+enum class Mark { miss, hit };
+using Model = std::map<std::uint64_t, Mark>;
+
+void add_to_model(Model& model, std::uint64_t code, Mark mark) {
+  auto [it, inserted] = model.emplace(code, mark);
+  if (!inserted && mark == Mark::hit) it->second = Mark::hit;
+}
+
+/// Every voxel the batch marks, expanded from full nodes.
+Model contents(const UpdateBatch& batch) {
+  Model out;
+  auto expand_full = [&](std::uint64_t first, int depth) {
+    const std::uint64_t count = std::uint64_t{1} << (3 * depth);
+    for (std::uint64_t i = 0; i < count; ++i) out[first + i] = Mark::miss;
+  };
+  auto visit = [&](auto& self, int depth, std::uint32_t group, std::uint64_t first) -> void {
+    if (depth == 1) {
+      const UpdateBatch::Brick& brick = batch.brick(group);
+      for (unsigned node = 0; node < 8; ++node) {
+        for (unsigned voxel = 0; voxel < 8; ++voxel) {
+          const std::uint64_t c = first | (std::uint64_t{node} << 3) | voxel;
+          if (brick.hit[node] >> voxel & 1u) {
+            out[c] = Mark::hit;
+          } else if (brick.miss[node] >> voxel & 1u) {
+            out[c] = Mark::miss;
+          }
+        }
+      }
+      return;
+    }
+    const UpdateBatch::Inner& node = batch.inner(depth, group);
+    for (unsigned slot = 0; slot < 8; ++slot) {
+      const std::uint64_t child_first = first | (std::uint64_t{slot} << (3 * depth));
+      if (node.full >> slot & 1u) {
+        EXPECT_EQ(node.child[slot], kNoGroup) << "a full node has no children";
+        expand_full(child_first, depth);
+      } else if (node.child[slot] != kNoGroup) {
+        self(self, depth - 1, node.child[slot], child_first);
+      }
+    }
+  };
+  visit(visit, batch.depth_levels(), 0, 0);
+  return out;
+}
+
+void random_fill(UpdateBatch& batch, Model& model, std::mt19937& rng, int depth_levels, int count) {
+  const std::uint32_t size = 1u << depth_levels;
+  const std::uint32_t region = std::min<std::uint32_t>(size, 8);
+  for (int i = 0; i < count; ++i) {
+    const std::uint64_t c = morton::encode({static_cast<std::uint32_t>(rng() % region),
+                                            static_cast<std::uint32_t>(rng() % region),
+                                            static_cast<std::uint32_t>(rng() % region)});
+    const unsigned what = rng() % 10;
+    if (what == 0) {
+      batch.add_hit(c);
+      add_to_model(model, c, Mark::hit);
+    } else if (what == 1) {
+      const int depth = static_cast<int>(rng() % static_cast<unsigned>(std::min(depth_levels, 3) + 1));
+      batch.add_miss_node(c, depth);
+      const std::uint64_t first = morton::node_begin(c, depth);
+      for (std::uint64_t v = 0; v < (std::uint64_t{1} << (3 * depth)); ++v) add_to_model(model, first + v, Mark::miss);
+    } else {
+      batch.add_miss(c);
+      add_to_model(model, c, Mark::miss);
+    }
+  }
+}
+
+TEST(UpdateBatch, HoldsExactlyTheMarkedVoxelsWithHitsWinning) {
+  for (const int depth_levels : {1, 2, 3, 4, 8, 16}) {
+    for (std::uint32_t seed = 1; seed <= 20; ++seed) {
+      std::mt19937 rng(seed);
+      UpdateBatch batch(depth_levels);
+      Model model;
+      random_fill(batch, model, rng, depth_levels, 600);
+      ASSERT_EQ(contents(batch), model) << "depth levels " << depth_levels << " seed " << seed;
+      ASSERT_FALSE(batch.empty());
+    }
+  }
+}
+
+TEST(UpdateBatch, FullRegionsCollapseAndRelease) {
+  UpdateBatch batch(16);
+  const std::size_t empty = batch.memory_bytes();
+  EXPECT_TRUE(batch.empty());
+  // Miss every voxel of a 16^3 block, voxel by voxel, in raster order.
+  for (std::uint32_t z = 0; z < 16; ++z)
+    for (std::uint32_t y = 0; y < 16; ++y)
+      for (std::uint32_t x = 0; x < 16; ++x) batch.add_miss(morton::encode({x, y, z}));
+  // The block is one full node at depth 4, slot 0 of its group.
+  const Model model = contents(batch);
+  EXPECT_EQ(model.size(), 4096u);
+  std::uint32_t group = 0;
+  for (int depth = 16; depth > 4; --depth) group = batch.inner(depth, group).child[0];
+  EXPECT_EQ(batch.inner(4, group).full, 1u);
+  EXPECT_EQ(batch.inner(4, group).child[0], kNoGroup);
+  EXPECT_LT(batch.memory_bytes(), empty + 64 * 1024);
+  // A hit inside splits the full node again, keeping every other miss.
+  batch.add_hit(morton::encode({5, 6, 7}));
+  const Model split = contents(batch);
+  EXPECT_EQ(split.size(), 4096u);
+  EXPECT_EQ(split.at(morton::encode({5, 6, 7})), Mark::hit);
+  EXPECT_EQ(split.at(morton::encode({5, 6, 8})), Mark::miss);
+  batch.reset(16);
+  EXPECT_TRUE(batch.empty());
+}
+
+TEST(UpdateBatch, MergeIsTheUnion) {
+  for (const int depth_levels : {1, 3, 16}) {
+    for (std::uint32_t seed = 1; seed <= 10; ++seed) {
+      std::mt19937 rng(seed);
+      UpdateBatch a(depth_levels);
+      UpdateBatch b(depth_levels);
+      Model model;
+      random_fill(a, model, rng, depth_levels, 400);
+      random_fill(b, model, rng, depth_levels, 400);
+      a.merge(b);
+      ASSERT_EQ(contents(a), model) << "depth levels " << depth_levels << " seed " << seed;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace umbra

@@ -1,0 +1,175 @@
+#include "support/dense_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <tuple>
+
+namespace umbra::test {
+
+DenseGrid::DenseGrid(double resolution, int depth_levels, float clamp_min, float clamp_max)
+    : resolution_(resolution),
+      depth_levels_(depth_levels),
+      size_(1u << depth_levels),
+      offset_(std::int64_t{1} << (depth_levels - 1)),
+      clamp_min_(clamp_min),
+      clamp_max_(clamp_max),
+      values_(std::size_t{size_} * size_ * size_, 0.0f) {}
+
+void DenseGrid::add(Key key, float delta) {
+  float& v = values_[index(key)];
+  v += delta;
+  if (v < clamp_min_) v = clamp_min_;
+  if (v > clamp_max_) v = clamp_max_;
+}
+
+void DenseGrid::set(Key key, float value) {
+  values_[index(key)] = std::min(std::max(value, clamp_min_), clamp_max_) + 0.0f;
+}
+
+bool DenseGrid::key_of(Vec3f point, Key& key) const {
+  for (int axis = 0; axis < 3; ++axis) {
+    const double scaled = std::floor((1.0 / resolution_) * static_cast<double>(point[axis]));
+    if (!(scaled >= -static_cast<double>(offset_) && scaled < static_cast<double>(offset_))) return false;
+    key[axis] = static_cast<std::uint32_t>(static_cast<std::int64_t>(scaled) + offset_);
+  }
+  return true;
+}
+
+double DenseGrid::centre(std::uint32_t k) const {
+  return (static_cast<double>(static_cast<std::int64_t>(k) - offset_) + 0.5) * resolution_;
+}
+
+bool DenseGrid::ray_keys(Vec3f origin, Vec3f end, std::vector<Key>& keys) const {
+  keys.clear();
+  Key key_origin;
+  Key key_end;
+  if (!key_of(origin, key_origin) || !key_of(end, key_end)) return false;
+  if (key_origin == key_end) return true;
+  keys.push_back(key_origin);
+
+  // OctoMap's computeRayKeys, step by step.
+  float dx = end.x - origin.x;
+  float dy = end.y - origin.y;
+  float dz = end.z - origin.z;
+  const float squared = dx * dx + dy * dy + dz * dz;
+  const auto length = static_cast<float>(std::sqrt(static_cast<double>(squared)));
+  dx /= length;
+  dy /= length;
+  dz /= length;
+  const float direction[3] = {dx, dy, dz};
+  int step[3];
+  double t_max[3];
+  double t_delta[3];
+  std::int64_t current[3] = {key_origin.x, key_origin.y, key_origin.z};
+  for (int i = 0; i < 3; ++i) {
+    if (direction[i] > 0.0) {
+      step[i] = 1;
+    } else if (direction[i] < 0.0) {
+      step[i] = -1;
+    } else {
+      step[i] = 0;
+    }
+    if (step[i] != 0) {
+      double border = centre(static_cast<std::uint32_t>(current[i]));
+      border += static_cast<float>(step[i] * resolution_ * 0.5);
+      t_max[i] = (border - origin[i]) / direction[i];
+      t_delta[i] = resolution_ / std::fabs(direction[i]);
+    } else {
+      t_max[i] = std::numeric_limits<double>::max();
+      t_delta[i] = std::numeric_limits<double>::max();
+    }
+  }
+  for (;;) {
+    int dim;
+    if (t_max[0] < t_max[1]) {
+      dim = t_max[0] < t_max[2] ? 0 : 2;
+    } else {
+      dim = t_max[1] < t_max[2] ? 1 : 2;
+    }
+    current[dim] += step[dim];
+    t_max[dim] += t_delta[dim];
+    if (current[dim] < 0 || current[dim] >= static_cast<std::int64_t>(size_)) return true;
+    const Key k{static_cast<std::uint32_t>(current[0]), static_cast<std::uint32_t>(current[1]),
+                static_cast<std::uint32_t>(current[2])};
+    if (k == key_end) return true;
+    if (std::min(std::min(t_max[0], t_max[1]), t_max[2]) > length) return true;
+    keys.push_back(k);
+  }
+}
+
+void DenseGrid::insert_scan(Vec3f origin, std::span<const Vec3f> points, const DenseScanOptions& options,
+                            float hit, float miss) {
+  using Triple = std::tuple<std::uint32_t, std::uint32_t, std::uint32_t>;
+  auto triple = [](Key k) { return Triple{k.x, k.y, k.z}; };
+  std::vector<Vec3f> ends;
+  if (options.discrete) {
+    std::set<Triple> seen;
+    for (const Vec3f& p : points) {
+      Key k;
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !key_of(p, k)) continue;
+      if (seen.insert(triple(k)).second) {
+        ends.push_back({static_cast<float>(centre(k.x)), static_cast<float>(centre(k.y)),
+                        static_cast<float>(centre(k.z))});
+      }
+    }
+  } else {
+    ends.assign(points.begin(), points.end());
+  }
+  std::set<Triple> free_cells;
+  std::set<Triple> occupied_cells;
+  std::vector<Key> keys;
+  for (const Vec3f& p : ends) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    const float ox = p.x - origin.x;
+    const float oy = p.y - origin.y;
+    const float oz = p.z - origin.z;
+    const double range = std::sqrt(static_cast<double>(ox * ox + oy * oy + oz * oz));
+    if (options.max_range <= 0.0 || range <= options.max_range) {
+      if (ray_keys(origin, p, keys)) {
+        for (const Key& k : keys) free_cells.insert(triple(k));
+      }
+      Key k;
+      if (key_of(p, k)) occupied_cells.insert(triple(k));
+    } else {
+      const auto length = static_cast<float>(range);
+      const float m = static_cast<float>(options.max_range);
+      const Vec3f end{origin.x + ox / length * m, origin.y + oy / length * m, origin.z + oz / length * m};
+      if (ray_keys(origin, end, keys)) {
+        for (const Key& k : keys) free_cells.insert(triple(k));
+      }
+    }
+  }
+  for (const Triple& t : occupied_cells) free_cells.erase(t);
+  for (const Triple& t : free_cells) add(Key{std::get<0>(t), std::get<1>(t), std::get<2>(t)}, miss);
+  for (const Triple& t : occupied_cells) add(Key{std::get<0>(t), std::get<1>(t), std::get<2>(t)}, hit);
+}
+
+float DenseGrid::max_in_node(Key key, int depth) const {
+  const std::uint32_t n = 1u << depth;
+  const Key base{(key.x >> depth) << depth, (key.y >> depth) << depth, (key.z >> depth) << depth};
+  float best = -std::numeric_limits<float>::infinity();
+  for (std::uint32_t z = 0; z < n; ++z)
+    for (std::uint32_t y = 0; y < n; ++y)
+      for (std::uint32_t x = 0; x < n; ++x) best = std::max(best, at({base.x + x, base.y + y, base.z + z}));
+  return best;
+}
+
+bool DenseGrid::any_in_node(Key key, int depth, float free_below, float occupied_above, bool want_free) const {
+  const std::uint32_t n = 1u << depth;
+  const Key base{(key.x >> depth) << depth, (key.y >> depth) << depth, (key.z >> depth) << depth};
+  for (std::uint32_t z = 0; z < n; ++z) {
+    for (std::uint32_t y = 0; y < n; ++y) {
+      for (std::uint32_t x = 0; x < n; ++x) {
+        const float v = at({base.x + x, base.y + y, base.z + z});
+        const bool is_free = v < free_below;
+        const bool is_unknown = !is_free && !(v > occupied_above);
+        if (want_free ? is_free : is_unknown) return true;
+      }
+    }
+  }
+  return false;
+}
+
+}  // namespace umbra::test
