@@ -2,6 +2,8 @@
 add_library(umbra_build_settings INTERFACE)
 target_compile_options(umbra_build_settings INTERFACE
   -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wold-style-cast
+  # GCC 12 warns falsely about std::string concatenation (GCC bug 105329).
+  $<$<CXX_COMPILER_ID:GNU>:-Wno-restrict>
   # The ray walker must round exactly as OctoMap does: no fused multiply-add.
   -ffp-contract=off)
 if(UMBRA_ENABLE_ASSERTS)

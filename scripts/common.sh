@@ -1,0 +1,48 @@
+# Shared by scripts/demo.sh, scripts/test.sh and scripts/bench.sh (sourced).
+# Installs the Debian packages umbra needs (only those missing) and
+# configures a build folder once.
+
+# Everything umbra, its tests and its benchmarks need on Debian 12.
+UMBRA_APT_PACKAGES=(
+  build-essential cmake pkg-config git
+  libzstd-dev libbz2-dev libpng-dev zlib1g-dev  # umbra_io
+  libcli11-dev                                  # the umbra program
+  libgtest-dev libgmock-dev                     # tests
+  liboctomap-dev                                # differential tests and benchmarks only
+  clang                                         # fuzz targets (optional label)
+  bzip2 python3                                 # test helpers
+)
+
+umbra_root() { cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd; }
+
+umbra_install_packages() {
+  local missing=()
+  local package
+  for package in "${UMBRA_APT_PACKAGES[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then
+      missing+=("$package")
+    fi
+  done
+  if ((${#missing[@]} == 0)); then
+    return 0
+  fi
+  local sudo=()
+  if [[ "$(id -u)" != 0 ]]; then
+    sudo=(sudo)
+  fi
+  echo "umbra: installing Debian packages: ${missing[*]}" >&2
+  "${sudo[@]}" apt-get update -q
+  DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+}
+
+# umbra_configure BUILD_DIR [cmake options...]: configures once; later runs
+# keep the existing configuration (so a second run is quick).
+umbra_configure() {
+  local build_dir="$1"
+  shift
+  if [[ ! -f "$build_dir/CMakeCache.txt" ]]; then
+    cmake -S "$(umbra_root)" -B "$build_dir" "$@"
+  fi
+}
+
+umbra_jobs() { nproc 2>/dev/null || echo 2; }

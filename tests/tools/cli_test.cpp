@@ -1,0 +1,200 @@
+// The `umbra` program end to end: demo, build, info, their errors, and the
+// README's quick-start demo command.
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "support/test_support.hpp"
+#include "umbra/io/map_file.hpp"
+#include "umbra/io/scan_graph.hpp"
+#include "umbra/map/map_statistics.hpp"
+
+namespace umbra {
+namespace {
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+CommandResult run(const std::string& command) {
+  CommandResult result;
+  std::FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return result;
+  std::array<char, 4096> buffer{};
+  std::size_t n = 0;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) result.output.append(buffer.data(), n);
+  const int status = ::pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+std::string cli() { return UMBRA_CLI_PATH; }
+
+std::string quoted(const std::filesystem::path& path) { return "'" + path.string() + "'"; }
+
+/// A small room seen from its centre: 6 walls sampled on a grid.
+std::vector<Vec3f> room_scan() {
+  std::vector<Vec3f> points;
+  for (int i = -20; i <= 20; ++i) {
+    for (int j = -20; j <= 20; ++j) {
+      const float a = static_cast<float>(i) * 0.1f;
+      const float b = static_cast<float>(j) * 0.1f;
+      points.push_back({2.05f, a, b});
+      points.push_back({-2.05f, a, b});
+      points.push_back({a, 2.05f, b});
+      points.push_back({a, -2.05f, b});
+      points.push_back({a, b, 2.05f});
+      points.push_back({a, b, -2.05f});
+    }
+  }
+  return points;
+}
+
+void write_xyz(const std::filesystem::path& path, const std::vector<Vec3f>& points) {
+  std::ofstream out(path);
+  out.precision(9);
+  for (const Vec3f& p : points) out << p.x << ' ' << p.y << ' ' << p.z << '\n';
+}
+
+TEST(Cli, DemoWritesAMapAndAPicture) {
+  const auto dir = test::scratch_dir();
+  const CommandResult demo = run(cli() + " demo -o " + quoted(dir / "out"));
+  ASSERT_EQ(demo.exit_code, 0) << demo.output;
+  EXPECT_NE(demo.output.find("occupied voxels"), std::string::npos) << demo.output;
+  ASSERT_TRUE(std::filesystem::exists(dir / "out" / "demo.png"));
+  const OccupancyMap map = load_map(dir / "out" / "demo.umb");
+  const MapStatistics stats = compute_statistics(map);
+  EXPECT_GT(stats.occupied_voxels, 10000u);
+  EXPECT_GT(stats.free_voxels, 100000u);
+}
+
+TEST(Cli, BuildFromXyzMatchesTheLibrary) {
+  const auto dir = test::scratch_dir();
+  const std::vector<Vec3f> points = room_scan();
+  write_xyz(dir / "room.xyz", points);
+  const CommandResult build = run(cli() + " build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "room.umb") +
+                        " --res 0.1 --integrator discrete --origin 0.05,0.05,0.05");
+  ASSERT_EQ(build.exit_code, 0) << build.output;
+  EXPECT_NE(build.output.find("insert ms"), std::string::npos) << build.output;
+
+  OccupancyMap expected(0.1);
+  InsertOptions options;
+  options.integrator = IntegratorKind::discrete;
+  expected.insert_point_cloud({0.05f, 0.05f, 0.05f}, points, options);
+  const OccupancyMap built = load_map(dir / "room.umb");
+  std::vector<std::pair<std::uint64_t, float>> a;
+  std::vector<std::pair<std::uint64_t, float>> b;
+  expected.for_each_leaf([&](const LeafView& l) { a.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds); });
+  built.for_each_leaf([&](const LeafView& l) { b.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds); });
+  EXPECT_EQ(a, b);
+}
+
+TEST(Cli, BuildFromAScanGraphAndInfoAsJson) {
+  const auto dir = test::scratch_dir();
+  Scan first;
+  first.origin = {0.0f, 0.0f, 0.0f};
+  first.points = room_scan();
+  Scan second = first;
+  second.origin = {0.5f, 0.0f, 0.0f};
+  write_scan_graph(dir / "two.graph", {first, second});
+  const CommandResult build = run(cli() + " build " + quoted(dir / "two.graph") + " -o " + quoted(dir / "two.umb") + " --res 0.05");
+  ASSERT_EQ(build.exit_code, 0) << build.output;
+  const CommandResult info = run(cli() + " info --json " + quoted(dir / "two.umb"));
+  ASSERT_EQ(info.exit_code, 0) << info.output;
+  for (const char* key : {"\"resolution\": 0.05", "\"depth_levels\": 16", "\"nodes\"", "\"memory_bytes\"",
+                          "\"occupied_voxels\"", "\"free_voxels\"", "\"occupied_volume_m3\"", "\"free_volume_m3\""}) {
+    EXPECT_NE(info.output.find(key), std::string::npos) << key << " missing in " << info.output;
+  }
+  const MapStatistics stats = compute_statistics(load_map(dir / "two.umb"));
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(info.output, match, std::regex("\"occupied_voxels\": ([0-9]+)")));
+  EXPECT_EQ(std::stoull(match[1]), stats.occupied_voxels);
+  EXPECT_GT(stats.occupied_voxels, 0u);
+  const CommandResult text = run(cli() + " info " + quoted(dir / "two.umb"));
+  EXPECT_EQ(text.exit_code, 0);
+  EXPECT_NE(text.output.find("known space"), std::string::npos) << text.output;
+}
+
+TEST(Cli, BadInputGivesAClearErrorAndNoMap) {
+  const auto dir = test::scratch_dir();
+  {
+    std::ofstream bad(dir / "bad.xyz");
+    bad << "1 2 3\n4 five 6\n";
+  }
+  const CommandResult malformed = run(cli() + " build " + quoted(dir / "bad.xyz") + " -o " + quoted(dir / "bad.umb"));
+  EXPECT_EQ(malformed.exit_code, 1);
+  EXPECT_NE(malformed.output.find("bad.xyz:2"), std::string::npos) << malformed.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.umb"));
+
+  const CommandResult missing = run(cli() + " build " + quoted(dir / "nothing.xyz") + " -o " + quoted(dir / "x.umb"));
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("nothing.xyz"), std::string::npos) << missing.output;
+
+  write_xyz(dir / "ok.xyz", room_scan());
+  const CommandResult origin = run(cli() + " build " + quoted(dir / "ok.xyz") + " -o " + quoted(dir / "ok.umb") + " --origin 1,2");
+  EXPECT_EQ(origin.exit_code, 1);
+  EXPECT_NE(origin.output.find("--origin"), std::string::npos) << origin.output;
+
+  const CommandResult format = run(cli() + " build " + quoted(dir / "ok.xyz") + " -o " + quoted(dir / "ok.map"));
+  EXPECT_EQ(format.exit_code, 1);
+  EXPECT_NE(format.output.find("ok.map"), std::string::npos) << format.output;
+
+  const CommandResult outside = run(cli() + " build " + quoted(dir / "ok.xyz") + " -o " + quoted(dir / "small.umb") +
+                          " --depth-levels 4 --res 0.1");
+  EXPECT_EQ(outside.exit_code, 0) << outside.output;
+  EXPECT_NE(outside.output.find("outside the map"), std::string::npos) << outside.output;
+
+  {
+    std::ofstream junk(dir / "junk.umb");
+    junk << "not a map";
+  }
+  const CommandResult info = run(cli() + " info " + quoted(dir / "junk.umb"));
+  EXPECT_EQ(info.exit_code, 1);
+  EXPECT_NE(info.output.find("junk.umb"), std::string::npos) << info.output;
+}
+
+/// The README's quick start is exactly two commands; the first runs the demo.
+TEST(Readme, QuickStartDemoCommandWorks) {
+  std::ifstream readme(test::source_dir() / "README.md");
+  ASSERT_TRUE(readme) << "README.md is missing";
+  std::stringstream text;
+  text << readme.rdbuf();
+  const std::string content = text.str();
+  const auto start = content.find("## Quick start");
+  ASSERT_NE(start, std::string::npos) << "README needs a '## Quick start' section";
+  const auto block = content.find("```", start);
+  const auto block_end = content.find("```", block + 3);
+  ASSERT_NE(block_end, std::string::npos);
+  std::vector<std::string> commands;
+  std::istringstream lines(content.substr(block + 3, block_end - block - 3));
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.empty() || line == "sh" || line == "bash") continue;
+    std::string command = line.substr(0, line.find('#'));
+    command.erase(command.find_last_not_of(' ') + 1);
+    commands.push_back(command);
+  }
+  ASSERT_EQ(commands.size(), 2u) << "the quick start is exactly two commands";
+  EXPECT_EQ(commands[0], "./scripts/demo.sh");
+  EXPECT_EQ(commands[1], "./scripts/test.sh");
+  // CI runs the second command exactly.
+  std::ifstream ci(test::source_dir() / ".ci" / "run");
+  std::stringstream ci_text;
+  ci_text << ci.rdbuf();
+  EXPECT_NE(ci_text.str().find("\n" + commands[1] + "\n"), std::string::npos) << ".ci/run must call " << commands[1];
+
+  const auto dir = test::scratch_dir();
+  const CommandResult demo = run("cd " + quoted(test::source_dir()) + " && UMBRA_BUILD_DIR=" + quoted(UMBRA_BUILD_DIR) +
+                       " UMBRA_DEMO_OUTPUT=" + quoted(dir) + " " + commands[0]);
+  ASSERT_EQ(demo.exit_code, 0) << demo.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "demo.umb"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "demo.png"));
+}
+
+}  // namespace
+}  // namespace umbra

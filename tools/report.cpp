@@ -1,0 +1,55 @@
+#include "report.hpp"
+
+#include <cinttypes>
+#include <sstream>
+
+namespace umbra::cli {
+
+std::string human_bytes(std::size_t bytes) {
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+  double value = static_cast<double>(bytes);
+  int unit = 0;
+  while (value >= 1024.0 && unit < 4) {
+    value /= 1024.0;
+    ++unit;
+  }
+  char text[32];
+  std::snprintf(text, sizeof text, unit == 0 ? "%.0f %s" : "%.1f %s", value, units[unit]);
+  return text;
+}
+
+void print_statistics(std::FILE* out, const MapStatistics& s) {
+  std::fprintf(out, "  resolution        %g m, %d depth levels\n", s.resolution, s.depth_levels);
+  std::fprintf(out, "  nodes             %zu (inner %zu, inner leaf %zu, leaf %zu)\n", s.nodes.total(),
+               s.nodes.inner, s.nodes.inner_leaf, s.nodes.leaf);
+  std::fprintf(out, "  memory            %s (%zu bytes)\n", human_bytes(s.memory_bytes).c_str(), s.memory_bytes);
+  std::fprintf(out, "  occupied voxels   %" PRIu64 " (%.4f m^3)\n", s.occupied_voxels, s.occupied_volume_m3);
+  std::fprintf(out, "  free voxels       %" PRIu64 " (%.4f m^3)\n", s.free_voxels, s.free_volume_m3);
+  if (s.has_known_space) {
+    std::fprintf(out, "  known space       min (%.3f, %.3f, %.3f) max (%.3f, %.3f, %.3f) m\n", s.known_min.x,
+                 s.known_min.y, s.known_min.z, s.known_max.x, s.known_max.y, s.known_max.z);
+  } else {
+    std::fprintf(out, "  known space       none (the map is empty)\n");
+  }
+}
+
+std::string statistics_json(const MapStatistics& s) {
+  std::ostringstream json;
+  json.precision(17);
+  json << "{\"resolution\": " << s.resolution << ", \"depth_levels\": " << s.depth_levels
+       << ", \"nodes\": " << s.nodes.total() << ", \"inner_nodes\": " << s.nodes.inner
+       << ", \"inner_leaf_nodes\": " << s.nodes.inner_leaf << ", \"leaf_nodes\": " << s.nodes.leaf
+       << ", \"memory_bytes\": " << s.memory_bytes << ", \"occupied_voxels\": " << s.occupied_voxels
+       << ", \"free_voxels\": " << s.free_voxels << ", \"occupied_volume_m3\": " << s.occupied_volume_m3
+       << ", \"free_volume_m3\": " << s.free_volume_m3;
+  if (s.has_known_space) {
+    json << ", \"known_min\": [" << s.known_min.x << ", " << s.known_min.y << ", " << s.known_min.z
+         << "], \"known_max\": [" << s.known_max.x << ", " << s.known_max.y << ", " << s.known_max.z << "]";
+  } else {
+    json << ", \"known_min\": null, \"known_max\": null";
+  }
+  json << "}";
+  return json.str();
+}
+
+}  // namespace umbra::cli
