@@ -19,5 +19,6 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/umbraConfigVersion.cmake
 install(FILES ${PROJECT_BINARY_DIR}/umbraConfig.cmake ${PROJECT_BINARY_DIR}/umbraConfigVersion.cmake
   DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/umbra)
 
+file(RELATIVE_PATH UMBRA_PC_TO_PREFIX "/prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig" "/prefix")
 configure_file(${PROJECT_SOURCE_DIR}/cmake/umbra.pc.in ${PROJECT_BINARY_DIR}/umbra.pc @ONLY)
 install(FILES ${PROJECT_BINARY_DIR}/umbra.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

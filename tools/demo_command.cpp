@@ -56,8 +56,8 @@ int run_demo(const DemoOptions& options) {
   const std::filesystem::path map_path = dir / "demo.umb";
   save_map(map, map_path);
   TopdownOptions picture;
-  picture.min_z = 0.1;  // above the floor and
-  picture.max_z = 2.5;  // below the 3 m ceiling, so walls and furniture show
+  picture.min_z = 0.15;  // above the floor and
+  picture.max_z = 2.78;  // below the 3 m ceiling, so walls and furniture show
   const std::filesystem::path image_path = dir / "demo.png";
   write_png(render_topdown(map, picture), image_path);
   std::printf("wrote %s and %s\n", map_path.c_str(), image_path.c_str());
