@@ -1,6 +1,7 @@
 #include "support/test_support.hpp"
 
 #include <atomic>
+#include <vector>
 #include <unistd.h>
 
 namespace umbra::test {
@@ -10,6 +11,20 @@ std::optional<std::filesystem::path> shared_data(const std::string& relative) {
   if (std::filesystem::exists(path)) return path;
   return std::nullopt;
 }
+
+namespace {
+
+/// Removes the scratch folders of this test process when it exits.
+struct ScratchFolders {
+  std::vector<std::filesystem::path> paths;
+  ~ScratchFolders() {
+    std::error_code ignored;
+    for (const auto& path : paths) std::filesystem::remove_all(path, ignored);
+  }
+};
+ScratchFolders g_scratch_folders;
+
+}  // namespace
 
 std::filesystem::path scratch_dir() {
   static std::atomic<int> counter{0};
@@ -23,6 +38,7 @@ std::filesystem::path scratch_dir() {
                                      std::to_string(counter++) + "-" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  g_scratch_folders.paths.push_back(dir);
   return dir;
 }
 
