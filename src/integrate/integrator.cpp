@@ -80,7 +80,8 @@ InsertStats Integrator::insert(OccupancyTree& tree, const Grid& grid, const Sens
 void Integrator::trace(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
                        double max_range, InsertStats& stats) {
   const bool limited = max_range > 0.0;
-  auto add_miss = [this](std::uint64_t code) { batch_.add_miss(code); };
+  UpdateBatch::MissCollector misses(batch_);
+  auto add_miss = [&misses](std::uint64_t code) { misses.add(code); };
   for (const Vec3f& p : points) {
     if (!p.is_finite()) {
       ++stats.non_finite;
@@ -106,6 +107,7 @@ void Integrator::trace(const Grid& grid, Vec3f origin, std::span<const Vec3f> po
     }
     ++stats.rays;
     walk_ray(grid, origin, p, add_miss);
+    misses.flush();  // the batch must see this ray's misses before its hit moves the cached path
     batch_.add_hit(morton::encode(*end_key));
     ++stats.hits;
   }

@@ -255,6 +255,26 @@ void OccupancyTree::set_thresholds(LogOddsThresholds thresholds) {
   refresh_all();
 }
 
+void OccupancyTree::set_range(LogOddsRange range) {
+  range_ = range;
+  clamp_below(depth_levels_, inner_[depth_levels_][0], 0);
+}
+
+void OccupancyTree::clamp_below(int depth, InnerGroup& group, unsigned slot) {
+  const std::uint32_t child = group.child[slot];
+  if (child == kNoGroup) {
+    set_childless(group, slot, range_.clamp(group.log_odds[slot]));
+    return;
+  }
+  if (depth == 1) {
+    for (float& v : leaves_[child].log_odds) v = range_.clamp(v);
+  } else {
+    InnerGroup& children = inner_[depth - 1][child];
+    for (unsigned i = 0; i < 8; ++i) clamp_below(depth - 1, children, i);
+  }
+  refresh(depth, group, slot, auto_prune_);
+}
+
 void OccupancyTree::set_auto_prune(bool on) {
   auto_prune_ = on;
   if (on) prune();

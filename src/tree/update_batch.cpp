@@ -20,6 +20,7 @@ void UpdateBatch::reset(int depth_levels) {
   valid_from_ = depth_levels;
   covered_depth_ = -1;
   brick_ = depth_levels == 1 ? &bricks_[root_group] : nullptr;
+  group2_ = depth_levels == 2 ? &inner_[2][root_group] : nullptr;
 }
 
 std::uint32_t UpdateBatch::new_group(int depth, bool full) {
@@ -60,6 +61,7 @@ std::uint32_t UpdateBatch::descend(std::uint64_t code, int depth, Mark mark) {
         last_code_ = code;
         covered_depth_ = d;
         valid_from_ = d;
+        if (d == 2) group2_ = &node;
         return kNoGroup;
       }
       // A hit inside a full node: split it into a full child group.
@@ -78,6 +80,7 @@ std::uint32_t UpdateBatch::descend(std::uint64_t code, int depth, Mark mark) {
   covered_depth_ = -1;
   valid_from_ = depth;
   if (depth == 1) brick_ = &bricks_[group];
+  if (depth <= 2 && depth_levels_ >= 2) group2_ = &inner_[2][path_[2]];
   return group;
 }
 
@@ -86,12 +89,9 @@ void UpdateBatch::add_hit(std::uint64_t code) {
   bricks_[group].hit[morton::slot(code, 1)] |= static_cast<std::uint8_t>(1u << morton::slot(code, 0));
 }
 
-void UpdateBatch::add_miss_slow(std::uint64_t code) {
-  const std::uint32_t group = descend(code, 1, Mark::miss);
-  if (group == kNoGroup) return;
-  Brick& brick = bricks_[group];
-  brick.miss[morton::slot(code, 1)] |= static_cast<std::uint8_t>(1u << morton::slot(code, 0));
-  if (is_full(brick)) collapse_upwards(code, 1);
+void UpdateBatch::add_misses_slow(std::uint64_t code, std::uint64_t voxels) {
+  if (descend(code, 1, Mark::miss) == kNoGroup) return;
+  or_misses(code, voxels);
 }
 
 void UpdateBatch::add_miss_node(std::uint64_t code, int depth) {

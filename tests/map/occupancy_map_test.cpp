@@ -156,3 +156,22 @@ TEST(OccupancyMap, LeavesCoverEveryKnownVoxelOnce) {
 
 }  // namespace
 }  // namespace umbra
+
+namespace umbra {
+namespace {
+
+TEST(OccupancyMap, NarrowingTheClampingRangeClampsStoredValues) {
+  OccupancyMap map(0.1);
+  for (int i = 0; i < 10; ++i) map.update_hit({0.05, 0.05, 0.05});
+  for (int i = 0; i < 10; ++i) map.update_miss({0.15, 0.05, 0.05});
+  const SensorModel narrow{0.7, 0.4, 0.3, 0.8};
+  map.set_sensor_model(narrow);
+  EXPECT_EQ(map.log_odds({0.05, 0.05, 0.05}), narrow.clamp_max_log_odds());
+  EXPECT_EQ(map.log_odds({0.15, 0.05, 0.05}), narrow.clamp_min_log_odds());
+  EXPECT_EQ(map.log_odds({0.05, 0.05, 0.05}, 16), narrow.clamp_max_log_odds()) << "inner maxima follow";
+  EXPECT_EQ(map.tree().check_invariants(), "");
+  EXPECT_THROW(map.set_sensor_model(SensorModel{0.7, 0.4, 0.6, 0.8}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace umbra

@@ -61,7 +61,8 @@ class OccupancyMap {
 
   // --- sensor model and thresholds ----------------------------------------
   [[nodiscard]] const SensorModel& sensor_model() const { return sensor_; }
-  /// Applies to future updates; stored values are not re-clamped (as in OctoMap).
+  /// Applies to future updates; stored values outside the new clamping range
+  /// are clamped into it (OctoMap would leave them until their next update).
   void set_sensor_model(const SensorModel& sensor);
   [[nodiscard]] const Thresholds& thresholds() const { return thresholds_; }
   /// Changes the occupied / free thresholds; every indicator is updated at once.

@@ -145,8 +145,11 @@ class OccupancyTree {
   // --- indicators, pruning -----------------------------------------------
   /// New thresholds; every indicator is recomputed at once.
   void set_thresholds(LogOddsThresholds thresholds);
-  /// New clamping range for future updates (stored values are left alone, as in OctoMap).
-  void set_range(LogOddsRange range) { range_ = range; }
+  /// New clamping range. Stored values outside it are clamped into it (and
+  /// the tree refreshed and pruned), so every value always lies in the range.
+  /// OctoMap leaves them until their next update; the difference shows only
+  /// when the range is narrowed on a non-empty map.
+  void set_range(LogOddsRange range);
   /// With automatic pruning on (the default) eight equal childless children
   /// are merged into their parent as soon as they become equal. Switching it
   /// on prunes the whole tree.
@@ -201,6 +204,7 @@ class OccupancyTree {
   void apply_everywhere(int depth, InnerGroup& group, unsigned slot, float delta);
   void prune_below(int depth, InnerGroup& group, unsigned slot);
   void refresh_below(int depth, InnerGroup& group, unsigned slot);
+  void clamp_below(int depth, InnerGroup& group, unsigned slot);
   template <typename Change>
   void modify_voxel(std::uint64_t code, Change change);
   std::string check_node(int depth, std::uint32_t group, unsigned slot, std::vector<std::vector<bool>>& seen) const;

@@ -40,6 +40,8 @@ namespace umbra {
 
 class UpdateBatch {
  public:
+  class MissCollector;
+
   struct Inner {
     std::array<std::uint32_t, 8> child;  // group one depth below, kNoGroup: nothing there (unless `full`)
     std::uint8_t full;                   // bit i: node i's whole region gets a miss
@@ -48,6 +50,9 @@ class UpdateBatch {
     std::array<std::uint8_t, 8> miss;  // miss[i] bit j: voxel j of depth-1 node i gets a miss ...
     std::array<std::uint8_t, 8> hit;   // ... unless this bit is set: then it gets a hit
   };
+  // Read as one little-endian uint64, bit (8 i + j) of `miss` is voxel
+  // 8 i + j of the brick, i.e. the low 6 bits of its Morton code.
+  static_assert(std::endian::native == std::endian::little, "Brick masks are read as little-endian words");
 
   explicit UpdateBatch(int depth_levels = 16);
 
@@ -58,20 +63,41 @@ class UpdateBatch {
   void add_hit(std::uint64_t code);
 
   /// The finest voxel `code` gets a miss, unless it gets a hit.
-  void add_miss(std::uint64_t code) {
-    // Inline fast paths, because rays call this for every voxel: still inside
-    // the full node that covered the previous code, or in the same brick.
+  void add_miss(std::uint64_t code) { add_misses_in_brick(code, std::uint64_t{1} << (code & 63)); }
+
+  /// Misses for several voxels of one brick (the 4x4x4 voxels of the depth-2
+  /// node containing `code`): bit i of `voxels` stands for the voxel whose
+  /// code is (code & ~63) + i. Rays collect the voxels they pass in one brick
+  /// and hand them over together (see MissCollector).
+  void add_misses_in_brick(std::uint64_t code, std::uint64_t voxels) {
+    // Inline fast paths: still inside the full node that covered the
+    // previous code; the same brick; a sibling brick in the same group.
     const int top = morton::highest_differing_depth(code, last_code_);
     if (top < covered_depth_) return;
     if (top <= 1 && valid_from_ == 1) {
-      last_code_ = code;
-      Brick& brick = *brick_;
-      const unsigned node = morton::slot(code, 1);
-      brick.miss[node] |= static_cast<std::uint8_t>(1u << morton::slot(code, 0));
-      if (brick.miss[node] == 0xFF && is_full(brick)) collapse_upwards(code, 1);
+      or_misses(code, voxels);
       return;
     }
-    add_miss_slow(code);
+    if (top == 2 && valid_from_ <= 2) {
+      const Inner& group = *group2_;
+      const unsigned slot = morton::slot(code, 2);
+      const std::uint32_t child = group.child[slot];
+      if ((group.full >> slot & 1u) != 0) {
+        last_code_ = code;
+        covered_depth_ = 2;
+        valid_from_ = 2;
+        return;
+      }
+      if (child != kNoGroup) {
+        path_[1] = child;
+        brick_ = &bricks_[child];
+        valid_from_ = 1;
+        covered_depth_ = -1;
+        or_misses(code, voxels);
+        return;
+      }
+    }
+    add_misses_slow(code, voxels);
   }
 
   /// Every voxel of the depth-`depth` node containing `code` gets a miss
@@ -97,7 +123,15 @@ class UpdateBatch {
 
  private:
   enum class Mark { hit, miss };
-  void add_miss_slow(std::uint64_t code);
+  void add_misses_slow(std::uint64_t code, std::uint64_t voxels);
+  /// ORs misses into the cached brick (which holds `code`).
+  void or_misses(std::uint64_t code, std::uint64_t voxels) {
+    last_code_ = code;
+    Brick& brick = *brick_;
+    const std::uint64_t misses = std::bit_cast<std::uint64_t>(brick.miss) | voxels;
+    brick.miss = std::bit_cast<std::array<std::uint8_t, 8>>(misses);
+    if (misses == ~std::uint64_t{0} && is_full(brick)) collapse_upwards(code, 1);
+  }
   /// Walks the cached path down to the group at `depth` (>= 1) on the path of
   /// `code` and returns it, or kNoGroup when a full node above already covers
   /// it (only for misses: a hit splits full nodes on its way down).
@@ -120,7 +154,37 @@ class UpdateBatch {
   std::array<std::uint32_t, kMaxDepthLevels + 1> path_{};  // group per depth, valid from valid_from_ up
   int valid_from_ = 1;
   int covered_depth_ = -1;   // depth of the full node that contained the last code, or -1
-  Brick* brick_ = nullptr;   // the brick path_[1] when valid_from_ == 1
+  // Pointers to the cached path's groups at depths 1 and 2, valid while
+  // valid_from_ <= 1 resp. <= 2. Only descend() allocates, and it renews them.
+  Brick* brick_ = nullptr;
+  Inner* group2_ = nullptr;
+};
+
+/// Collects a ray's misses brick by brick and hands each brick's voxels to
+/// the batch at once: per voxel it only sets a bit in a register.
+class UpdateBatch::MissCollector {
+ public:
+  explicit MissCollector(UpdateBatch& batch) : batch_(batch) {}
+  MissCollector(const MissCollector&) = delete;
+  MissCollector& operator=(const MissCollector&) = delete;
+  ~MissCollector() { flush(); }
+
+  void add(std::uint64_t code) {
+    if ((code ^ brick_code_) >> 6 != 0) {
+      flush();
+      brick_code_ = code;
+    }
+    voxels_ |= std::uint64_t{1} << (code & 63);
+  }
+  void flush() {
+    if (voxels_ != 0) batch_.add_misses_in_brick(brick_code_, voxels_);
+    voxels_ = 0;
+  }
+
+ private:
+  UpdateBatch& batch_;
+  std::uint64_t brick_code_ = 0;
+  std::uint64_t voxels_ = 0;
 };
 
 }  // namespace umbra
