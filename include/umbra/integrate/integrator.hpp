@@ -73,8 +73,18 @@ class Integrator {
   /// Adds the rays to `points` to the batch; the shared part of both integrators.
   void trace(const Grid& grid, Vec3f origin, std::span<const Vec3f> points, double max_range,
              InsertStats& stats);
+  /// Walks one ray and adds its misses to the batch, a brick at a time.
+  void add_ray_misses(const Grid& grid, Vec3f origin, Key origin_key, Vec3f end, Key end_key);
+
+  /// A run of a ray's voxels inside one brick (4x4x4 voxels, see UpdateBatch):
+  /// bit i of `voxels` is voxel (code & ~63) + i.
+  struct BrickRun {
+    std::uint64_t code;
+    std::uint64_t voxels;
+  };
 
   UpdateBatch batch_;
+  std::vector<BrickRun> runs_;  // one ray's runs; capacity kept between rays
 };
 
 }  // namespace umbra

@@ -88,18 +88,14 @@ void step_ray(RayState& ray, Visit& visit) {
 }  // namespace detail
 
 /// Calls visit(code) for each voxel from the voxel of `origin` up to, not
-/// including, the voxel of `end`. Returns false (visiting nothing) when
-/// either end lies outside the map.
+/// including, the voxel of `end`; `origin_key` and `end_key` are their keys
+/// (grid.key_checked of each, computed once by callers that trace many rays).
 template <typename Visit>
-bool walk_ray(const Grid& grid, Vec3f origin, Vec3f end, Visit&& visit) {
-  const std::optional<Key> origin_key = grid.key_checked(origin);
-  const std::optional<Key> end_key = grid.key_checked(end);
-  if (!origin_key || !end_key) return false;
-  if (*origin_key == *end_key) return true;
-
+void walk_ray(const Grid& grid, Vec3f origin, Key origin_key, Vec3f end, Key end_key, Visit&& visit) {
+  if (origin_key == end_key) return;
   detail::RayState ray;
-  ray.code = morton::encode(*origin_key);
-  ray.end_code = morton::encode(*end_key);
+  ray.code = morton::encode(origin_key);
+  ray.end_code = morton::encode(end_key);
   visit(ray.code);
 
   Vec3f direction = end - origin;
@@ -114,8 +110,8 @@ bool walk_ray(const Grid& grid, Vec3f origin, Vec3f end, Visit&& visit) {
   // guarded loop.
   bool near_edge = false;
   for (int axis = 0; axis < 3; ++axis) {
-    const std::uint32_t k0 = (*origin_key)[axis];
-    const std::uint32_t k1 = (*end_key)[axis];
+    const std::uint32_t k0 = origin_key[axis];
+    const std::uint32_t k1 = end_key[axis];
     near_edge |= std::min(k0, k1) == 0 || std::int64_t{std::max(k0, k1)} + 1 >= ray.key_limit;
     ray.key[axis] = k0;
     const float d = direction[axis];
@@ -138,6 +134,17 @@ bool walk_ray(const Grid& grid, Vec3f origin, Vec3f end, Visit&& visit) {
   } else {
     detail::step_ray<false>(ray, visit);
   }
+}
+
+/// Calls visit(code) for each voxel from the voxel of `origin` up to, not
+/// including, the voxel of `end`. Returns false (visiting nothing) when
+/// either end lies outside the map.
+template <typename Visit>
+bool walk_ray(const Grid& grid, Vec3f origin, Vec3f end, Visit&& visit) {
+  const std::optional<Key> origin_key = grid.key_checked(origin);
+  const std::optional<Key> end_key = grid.key_checked(end);
+  if (!origin_key || !end_key) return false;
+  walk_ray(grid, origin, *origin_key, end, *end_key, visit);
   return true;
 }
 

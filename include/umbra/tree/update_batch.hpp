@@ -40,8 +40,6 @@ namespace umbra {
 
 class UpdateBatch {
  public:
-  class MissCollector;
-
   struct Inner {
     std::array<std::uint32_t, 8> child;  // group one depth below, kNoGroup: nothing there (unless `full`)
     std::uint8_t full;                   // bit i: node i's whole region gets a miss
@@ -68,7 +66,7 @@ class UpdateBatch {
   /// Misses for several voxels of one brick (the 4x4x4 voxels of the depth-2
   /// node containing `code`): bit i of `voxels` stands for the voxel whose
   /// code is (code & ~63) + i. Rays collect the voxels they pass in one brick
-  /// and hand them over together (see MissCollector).
+  /// and hand them over together (see Integrator::trace).
   void add_misses_in_brick(std::uint64_t code, std::uint64_t voxels) {
     // Inline fast paths: still inside the full node that covered the
     // previous code; the same brick; a sibling brick in the same group.
@@ -158,33 +156,6 @@ class UpdateBatch {
   // valid_from_ <= 1 resp. <= 2. Only descend() allocates, and it renews them.
   Brick* brick_ = nullptr;
   Inner* group2_ = nullptr;
-};
-
-/// Collects a ray's misses brick by brick and hands each brick's voxels to
-/// the batch at once: per voxel it only sets a bit in a register.
-class UpdateBatch::MissCollector {
- public:
-  explicit MissCollector(UpdateBatch& batch) : batch_(batch) {}
-  MissCollector(const MissCollector&) = delete;
-  MissCollector& operator=(const MissCollector&) = delete;
-  ~MissCollector() { flush(); }
-
-  void add(std::uint64_t code) {
-    if ((code ^ brick_code_) >> 6 != 0) {
-      flush();
-      brick_code_ = code;
-    }
-    voxels_ |= std::uint64_t{1} << (code & 63);
-  }
-  void flush() {
-    if (voxels_ != 0) batch_.add_misses_in_brick(brick_code_, voxels_);
-    voxels_ = 0;
-  }
-
- private:
-  UpdateBatch& batch_;
-  std::uint64_t brick_code_ = 0;
-  std::uint64_t voxels_ = 0;
 };
 
 }  // namespace umbra
