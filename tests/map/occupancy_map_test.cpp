@@ -175,3 +175,36 @@ TEST(OccupancyMap, NarrowingTheClampingRangeClampsStoredValues) {
 
 }  // namespace
 }  // namespace umbra
+
+#include <malloc.h>
+
+namespace umbra {
+namespace {
+
+std::size_t heap_bytes_in_use() {
+  const struct mallinfo2 info = ::mallinfo2();
+  return info.uordblks + info.hblkhd;  // small chunks + mmapped chunks
+}
+
+TEST(OccupancyMap, ReportedMemoryIsWhatTheHeapReallyHolds) {
+  std::vector<Vec3f> points;
+  for (int i = 0; i < 20000; ++i) {
+    const double a = i * 0.000314;
+    const double b = (i % 100) * 0.01;
+    points.push_back({static_cast<float>(8.0 * std::cos(a * 10)), static_cast<float>(8.0 * std::sin(a * 10)),
+                      static_cast<float>(-1.0 + 2.0 * b)});
+  }
+  const std::size_t before = heap_bytes_in_use();
+  auto map = std::make_unique<OccupancyMap>(0.05);
+  map->insert_point_cloud({0, 0, 0}, points);
+  const std::size_t reported = map->memory_bytes();
+  const std::size_t held = heap_bytes_in_use() - before;
+  // The heap also holds malloc's per-chunk headers and page rounding (at
+  // most a page per block of thousands of groups), nothing else.
+  EXPECT_GT(reported, 1'000'000u);
+  EXPECT_NEAR(static_cast<double>(held), static_cast<double>(reported), 0.01 * static_cast<double>(reported))
+      << "reported " << reported << " bytes, the heap holds " << held;
+}
+
+}  // namespace
+}  // namespace umbra

@@ -66,8 +66,10 @@ class Integrator {
   InsertStats insert(OccupancyTree& tree, const Grid& grid, const SensorModel& sensor, Vec3f origin,
                      std::span<const Vec3f> points, const InsertOptions& options);
 
-  /// Bytes held between scans (normally only the empty batch's root).
-  [[nodiscard]] std::size_t memory_bytes() const { return batch_.memory_bytes(); }
+  /// Bytes held between scans: the empty batch and the longest ray's runs.
+  [[nodiscard]] std::size_t memory_bytes() const {
+    return batch_.memory_bytes() + runs_.capacity() * sizeof(BrickRun);
+  }
 
  private:
   /// Adds the rays to `points` to the batch; the shared part of both integrators.
