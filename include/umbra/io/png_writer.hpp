@@ -14,7 +14,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "umbra/io/scan_source.hpp"  // Rgb
+#include "umbra/core/color.hpp"
 
 namespace umbra {
 

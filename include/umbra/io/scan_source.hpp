@@ -20,17 +20,11 @@
 #include <string>
 #include <vector>
 
+#include "umbra/core/color.hpp"
 #include "umbra/core/vec3.hpp"
 #include "umbra/io/format_error.hpp"
 
 namespace umbra {
-
-struct Rgb {
-  std::uint8_t r = 0;
-  std::uint8_t g = 0;
-  std::uint8_t b = 0;
-  friend bool operator==(Rgb, Rgb) = default;
-};
 
 struct Scan {
   Vec3f origin;               ///< sensor origin, map frame

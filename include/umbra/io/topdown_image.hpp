@@ -21,7 +21,7 @@
 #include <optional>
 
 #include "umbra/io/png_writer.hpp"
-#include "umbra/io/scan_source.hpp"  // Rgb
+#include "umbra/core/color.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {
