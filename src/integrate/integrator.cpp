@@ -32,9 +32,40 @@ InsertStats& InsertStats::operator+=(const InsertStats& other) {
   return *this;
 }
 
+namespace {
+
+/// The colour samples of a scan: the points that give a hit, in scan order,
+/// then stably sorted by voxel (so each voxel blends its samples in order).
+std::vector<OccupancyTree::ColorSample> color_samples(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
+                                                      std::span<const Rgb> colors, const InsertOptions& options) {
+  std::vector<OccupancyTree::ColorSample> samples;
+  samples.reserve(points.size());
+  const bool limited = options.max_range > 0.0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].is_finite()) continue;
+    const std::optional<Key> key = grid.key_checked(points[i]);
+    if (!key) continue;
+    // The hit is decided by the end point the ray goes to: the point itself,
+    // or the centre of its voxel for the discrete integrator.
+    const Vec3f end = options.integrator == IntegratorKind::discrete ? grid.center_f(*key) : points[i];
+    if (limited && octomap_norm(end - origin) > options.max_range) continue;
+    samples.push_back({morton::encode(*key), colors[i]});
+  }
+  std::stable_sort(samples.begin(), samples.end(),
+                   [](const OccupancyTree::ColorSample& a, const OccupancyTree::ColorSample& b) { return a.code < b.code; });
+  return samples;
+}
+
+}  // namespace
+
 InsertStats Integrator::insert(OccupancyTree& tree, const Grid& grid, const SensorModel& sensor,
-                               Vec3f origin, std::span<const Vec3f> points,
+                               Vec3f origin, std::span<const Vec3f> points, std::span<const Rgb> colors,
                                const InsertOptions& options) {
+  if (!colors.empty() && colors.size() != points.size()) {
+    throw std::invalid_argument("one colour per point expected: " + std::to_string(colors.size()) + " colours, " +
+                                std::to_string(points.size()) + " points");
+  }
+  if (!colors.empty() && !tree.has_color()) throw std::invalid_argument("colours given to a map without colour");
   options.validate();
   if (!origin.is_finite()) {
     throw std::invalid_argument("sensor origin is not finite: (" + std::to_string(origin.x) + ", " +
@@ -74,6 +105,7 @@ InsertStats Integrator::insert(OccupancyTree& tree, const Grid& grid, const Sens
 
   tree.apply(batch_, sensor.hit_log_odds(), sensor.miss_log_odds());
   batch_.reset(grid.depth_levels());  // give the scan's scratch memory back
+  if (!colors.empty()) tree.add_colors(color_samples(grid, origin, points, colors, options));
   return stats;
 }
 

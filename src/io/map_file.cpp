@@ -27,6 +27,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <span>
 #include <sstream>
 #include <stdexcept>
@@ -47,7 +48,9 @@ constexpr std::size_t kHeaderBytes = 124;
 constexpr std::size_t kChecksumBytes = 4;
 /// Flag bit 0: saved with auto-pruning off; equal childless siblings may be present.
 constexpr std::uint32_t kFlagUnpruned = 1u;
-constexpr std::uint32_t kKnownFlags = kFlagUnpruned;
+/// Flag bit 1: a coloured map; a colour frame follows the values frame.
+constexpr std::uint32_t kFlagColor = 2u;
+constexpr std::uint32_t kKnownFlags = kFlagUnpruned | kFlagColor;
 
 /// Byte offsets of the header fields.
 namespace at {
@@ -176,7 +179,7 @@ std::array<std::uint8_t, kHeaderBytes> encode_header(const MapFileInfo& info) {
   std::array<std::uint8_t, kHeaderBytes> h{};
   std::copy(kMagic.begin(), kMagic.end(), h.begin());
   put_u32(&h[at::version], info.version);
-  put_u32(&h[at::flags], info.auto_prune ? 0u : kFlagUnpruned);
+  put_u32(&h[at::flags], (info.auto_prune ? 0u : kFlagUnpruned) | (info.config.color ? kFlagColor : 0u));
   put_f64(&h[at::resolution], info.config.resolution);
   put_u32(&h[at::depth_levels], static_cast<std::uint32_t>(info.config.depth_levels));
   put_u32(&h[at::reserved], 0);
@@ -233,6 +236,7 @@ MapFileInfo decode_header(const std::string& file, std::span<const std::uint8_t>
     throw fail(at::flags, "unsupported flags " + hex32(flags) + " (this build knows " + hex32(kKnownFlags) + ")");
   }
   info.auto_prune = (flags & kFlagUnpruned) == 0;
+  info.config.color = (flags & kFlagColor) != 0;
 
   MapConfig& config = info.config;
   config.resolution = get_f64(&head[at::resolution]);
@@ -321,6 +325,20 @@ MapFileInfo decode_header(const std::string& file, std::span<const std::uint8_t>
                                         std::to_string(kMaxZstdExpansion * info.values_compressed_bytes));
   }
   info.file_bytes = kHeaderBytes + info.structure_compressed_bytes + info.values_compressed_bytes + kChecksumBytes;
+  if (info.config.color && file_size > info.file_bytes) {
+    // The colour frame is what lies between the values frame and the checksum.
+    info.colors_compressed_bytes = file_size - info.file_bytes;
+    if (info.childless_nodes > kMaxZstdExpansion * info.colors_compressed_bytes / 4) {
+      throw fail(at::childless_nodes, "colour stream needs " + std::to_string(info.childless_nodes) +
+                                          " x 4 bytes, but its " + std::to_string(info.colors_compressed_bytes) +
+                                          " compressed bytes can expand to at most " +
+                                          std::to_string(kMaxZstdExpansion * info.colors_compressed_bytes));
+    }
+    info.file_bytes = file_size;
+  } else if (info.config.color) {
+    throw fail(file_size, "truncated: flag bit 1 says a colour frame follows the values frame, but the file ends "
+                          "with the values frame (" + std::to_string(file_size) + " bytes)");
+  }
   if (file_size < info.file_bytes) {
     throw fail(file_size, "truncated: header declares " + std::to_string(info.file_bytes) + " bytes, file has " +
                               std::to_string(file_size));
@@ -609,8 +627,10 @@ class FrameReader {
 /// Writes the two node streams of a tree in depth-first order (see the spec).
 class TreeEncoder {
  public:
-  TreeEncoder(const OccupancyTree& tree, LogOddsRange range, bool pruned, FrameWriter& structure, FrameWriter& values)
-      : tree_(tree), range_(range), pruned_(pruned), structure_(structure), values_(values) {}
+  /// `colors` is null for a map without colour.
+  TreeEncoder(const OccupancyTree& tree, LogOddsRange range, bool pruned, FrameWriter& structure, FrameWriter& values,
+              FrameWriter* colors)
+      : tree_(tree), range_(range), pruned_(pruned), structure_(structure), values_(values), colors_(colors) {}
 
   void run() {
     const NodeRef root = tree_.root();
@@ -623,15 +643,13 @@ class TreeEncoder {
  private:
   void encode(NodeRef node, std::uint64_t code) {
     if (!tree_.has_children(node)) {
-      put_value(tree_.log_odds(node), node.depth, code);
+      put_childless(node, code);
       return;
     }
     ++inner_nodes_;
     const int child_depth = node.depth - 1;
     if (child_depth == 0) {
-      for (unsigned slot = 0; slot < 8; ++slot) {
-        put_value(tree_.log_odds(tree_.child(node, slot)), 0, code | std::uint64_t{slot});
-      }
+      for (unsigned slot = 0; slot < 8; ++slot) put_childless(tree_.child(node, slot), code | std::uint64_t{slot});
       check_not_prunable(node, code);
       return;
     }
@@ -646,15 +664,23 @@ class TreeEncoder {
     if (mask == 0) check_not_prunable(node, code);
   }
 
-  void put_value(float value, int depth, std::uint64_t code) {
+  void put_childless(NodeRef node, std::uint64_t code) {
+    const float value = tree_.log_odds(node);
     // Written so that NaN fails too. Such a file could not be loaded: refuse it now.
     if (!(value >= range_.min && value <= range_.max)) {
       throw std::invalid_argument("save_map: log-odds value " + float_text(value) + " at the " +
-                                  node_text(depth, code) + " is outside the sensor model's clamping range [" +
+                                  node_text(node.depth, code) + " is outside the sensor model's clamping range [" +
                                   number(range_.min) + ", " + number(range_.max) +
                                   "] (was the sensor model changed after the value was stored?)");
     }
     values_.put_float(value);
+    if (colors_ != nullptr) {
+      const Rgb rgb = tree_.color(node).value_or(Rgb{});
+      colors_->put_byte(rgb.r);
+      colors_->put_byte(rgb.g);
+      colors_->put_byte(rgb.b);
+      colors_->put_byte(tree_.color_weight(node));
+    }
     ++childless_nodes_;
   }
 
@@ -671,6 +697,7 @@ class TreeEncoder {
   bool pruned_;
   FrameWriter& structure_;
   FrameWriter& values_;
+  FrameWriter* colors_;
   std::uint64_t inner_nodes_ = 0;
   std::uint64_t childless_nodes_ = 0;
 };
@@ -680,13 +707,16 @@ class TreeEncoder {
 /// Rebuilds a tree from the two node streams, checking every mask and value.
 class TreeDecoder {
  public:
-  TreeDecoder(OccupancyTree& tree, const MapFileInfo& info, FrameReader& structure, FrameReader& values)
+  /// `colors` is null for a map without colour.
+  TreeDecoder(OccupancyTree& tree, const MapFileInfo& info, FrameReader& structure, FrameReader& values,
+              FrameReader* colors)
       : tree_(tree),
         range_(LogOddsRange::from(info.config.sensor)),
         pruned_(info.auto_prune),
         declared_inner_(info.inner_nodes),
         structure_(structure),
-        values_(values) {}
+        values_(values),
+        colors_(colors) {}
 
   void run() {
     std::uint8_t root = 0;
@@ -702,12 +732,14 @@ class TreeDecoder {
     }
     structure_.finish("node structure has unused bytes after the tree ends");
     values_.finish("unused values after the tree ends");
+    if (colors_ != nullptr) colors_->finish("unused colours after the tree ends");
   }
 
  private:
   void decode(NodeRef node, std::uint64_t code, bool has_children) {
     if (!has_children) {
       tree_.set_childless_value(node, next_value(node.depth, code));
+      read_color(node, code);
       return;
     }
     if (++inner_seen_ > declared_inner_) {
@@ -728,12 +760,37 @@ class TreeDecoder {
     for (unsigned slot = 0; slot < 8; ++slot) {
       decode(tree_.child(node, slot), code | (std::uint64_t{slot} << (3 * child_depth)), (mask >> slot & 1u) != 0);
     }
-    if (mask == 0 && pruned_) {
-      const float first = tree_.log_odds(tree_.child(node, 0));
-      bool same = true;
-      for (unsigned slot = 1; slot < 8; ++slot) same &= tree_.log_odds(tree_.child(node, slot)) == first;
-      if (same) fail_prunable(node, code, first);
+    if (mask == 0 && pruned_) check_not_prunable(node, code);
+  }
+
+  /// A file marked pruned must not hold eight childless children that are
+  /// equal (in value, and in colour when it has colour).
+  void check_not_prunable(NodeRef node, std::uint64_t code) const {
+    const NodeRef first = tree_.child(node, 0);
+    for (unsigned slot = 1; slot < 8; ++slot) {
+      const NodeRef other = tree_.child(node, slot);
+      if (tree_.log_odds(other) != tree_.log_odds(first) || tree_.color(other) != tree_.color(first) ||
+          tree_.color_weight(other) != tree_.color_weight(first)) {
+        return;
+      }
     }
+    fail_prunable(node, code, tree_.log_odds(first));
+  }
+
+  void read_color(NodeRef node, std::uint64_t code) {
+    if (colors_ == nullptr) return;
+    std::array<std::uint8_t, 4> bytes;
+    if (!colors_->read(bytes.data(), bytes.size())) {
+      colors_->fail("ends early at the " + node_text(node.depth, code) + ": " + colors_->why_ended());
+    }
+    const Rgb rgb{bytes[0], bytes[1], bytes[2]};
+    const std::uint8_t weight = bytes[3];
+    if (weight == 0 && rgb != Rgb{}) {
+      colors_->fail("the " + node_text(node.depth, code) + " has weight 0 (no colour) but colour (" +
+                    std::to_string(rgb.r) + ", " + std::to_string(rgb.g) + ", " + std::to_string(rgb.b) +
+                    "); an uncoloured node is stored as 0 0 0 0");
+    }
+    tree_.set_childless_color(node, rgb, weight);
   }
 
   void decode_leaf_group(NodeRef node, std::uint64_t code) {
@@ -742,15 +799,13 @@ class TreeDecoder {
       values_.fail("ends early at the children of the " + node_text(node.depth, code) + ": " + values_.why_ended());
     }
     const std::uint32_t group = tree_.child(node, 0).group;
-    bool same = true;
-    const float first = std::bit_cast<float>(get_u32(&bytes[0]));
     for (unsigned slot = 0; slot < 8; ++slot) {
       const float value = std::bit_cast<float>(get_u32(&bytes[4 * slot]));
       check_value(value, 0, code | std::uint64_t{slot});
-      same &= value == first;
       tree_.set_childless_value(NodeRef{group, static_cast<std::uint8_t>(slot), 0}, value);
+      read_color(NodeRef{group, static_cast<std::uint8_t>(slot), 0}, code | std::uint64_t{slot});
     }
-    if (same && pruned_) fail_prunable(node, code, first);
+    if (pruned_) check_not_prunable(node, code);
   }
 
   float next_value(int depth, std::uint64_t code) {
@@ -787,6 +842,7 @@ class TreeDecoder {
   std::uint64_t inner_seen_ = 0;
   FrameReader& structure_;
   FrameReader& values_;
+  FrameReader* colors_;
 };
 
 }  // namespace
@@ -797,12 +853,17 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path) {
   // Encode first: a map that cannot be saved throws before any file exists.
   std::vector<std::uint8_t> structure_frame;
   std::vector<std::uint8_t> values_frame;
+  std::vector<std::uint8_t> colors_frame;
   FrameWriter structure(structure_frame);
   FrameWriter values(values_frame);
-  TreeEncoder encoder(map.tree(), LogOddsRange::from(map.sensor_model()), map.auto_prune(), structure, values);
+  std::optional<FrameWriter> colors;
+  if (map.has_color()) colors.emplace(colors_frame);
+  TreeEncoder encoder(map.tree(), LogOddsRange::from(map.sensor_model()), map.auto_prune(), structure, values,
+                      colors ? &*colors : nullptr);
   encoder.run();
   structure.finish();
   values.finish();
+  if (colors) colors->finish();
 
   MapFileInfo info;
   info.config = map.config();
@@ -816,6 +877,8 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path) {
   std::uint32_t crc = crc32_of(header);
   crc = static_cast<std::uint32_t>(crc32_z(crc, structure_frame.data(), structure_frame.size()));
   crc = static_cast<std::uint32_t>(crc32_z(crc, values_frame.data(), values_frame.size()));
+  // (zlib returns the initial value for a null buffer, so an empty frame must be skipped.)
+  if (!colors_frame.empty()) crc = static_cast<std::uint32_t>(crc32_z(crc, colors_frame.data(), colors_frame.size()));
   std::array<std::uint8_t, kChecksumBytes> trailer{};
   put_u32(trailer.data(), crc);
 
@@ -828,6 +891,7 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path) {
     if (fault_hook()) fault_hook()();
     write_all(fd.get(), path, temp, structure_frame);
     write_all(fd.get(), path, temp, values_frame);
+    write_all(fd.get(), path, temp, colors_frame);
     write_all(fd.get(), path, temp, trailer);
     if (::fsync(fd.get()) != 0) throw_save(path, "cannot flush temporary file", temp, errno);
     if (const int error = fd.close(); error != 0) throw_save(path, "cannot close temporary file", temp, error);
@@ -892,7 +956,14 @@ OccupancyMap load_map(const std::filesystem::path& path) {
   FrameReader values(name, values_at, "values stream",
                      all.subspan(static_cast<std::size_t>(values_at), static_cast<std::size_t>(info.values_compressed_bytes)),
                      4 * info.childless_nodes);
-  TreeDecoder(map.tree(), info, structure, values).run();
+  std::optional<FrameReader> colors;
+  if (info.config.color) {
+    const std::uint64_t colors_at = values_at + info.values_compressed_bytes;
+    colors.emplace(name, colors_at, "colour stream",
+                   all.subspan(static_cast<std::size_t>(colors_at), static_cast<std::size_t>(info.colors_compressed_bytes)),
+                   4 * info.childless_nodes);
+  }
+  TreeDecoder(map.tree(), info, structure, values, colors ? &*colors : nullptr).run();
   map.tree().refresh_all();
   // Switching it off only sets the flag; a pruned file was checked to hold no equal childless siblings.
   if (!info.auto_prune) map.set_auto_prune(false);

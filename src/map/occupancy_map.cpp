@@ -13,18 +13,19 @@ void MapConfig::validate() const {
 }
 
 OccupancyMap::OccupancyMap(const MapConfig& config)
-    : OccupancyMap(config.resolution, config.depth_levels, config.sensor, config.thresholds) {}
+    : grid_(config.resolution, config.depth_levels),
+      sensor_((config.sensor.validate(), config.sensor)),
+      thresholds_((config.thresholds.validate(), config.thresholds)),
+      tree_(config.depth_levels, LogOddsRange::from(config.sensor), LogOddsThresholds::from(config.thresholds),
+            config.color),
+      integrator_() {}
 
 OccupancyMap::OccupancyMap(double resolution, int depth_levels, const SensorModel& sensor,
                            const Thresholds& thresholds)
-    : grid_(resolution, depth_levels),
-      sensor_((sensor.validate(), sensor)),
-      thresholds_((thresholds.validate(), thresholds)),
-      tree_(depth_levels, LogOddsRange::from(sensor), LogOddsThresholds::from(thresholds)),
-      integrator_() {}
+    : OccupancyMap(MapConfig{resolution, depth_levels, sensor, thresholds, false}) {}
 
 MapConfig OccupancyMap::config() const {
-  return {grid_.resolution(), grid_.depth_levels(), sensor_, thresholds_};
+  return {grid_.resolution(), grid_.depth_levels(), sensor_, thresholds_, tree_.has_color()};
 }
 
 void OccupancyMap::set_sensor_model(const SensorModel& sensor) {
@@ -67,7 +68,42 @@ void OccupancyMap::set_log_odds(Key key, float log_odds) {
 
 InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
                                              const InsertOptions& options) {
-  return integrator_.insert(tree_, grid_, sensor_, origin, points, options);
+  return integrator_.insert(tree_, grid_, sensor_, origin, points, {}, options);
+}
+
+InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
+                                             std::span<const Rgb> colors, const InsertOptions& options) {
+  if (!colors.empty() && !has_color()) {
+    throw std::invalid_argument("colours given, but the map was made without colour (MapConfig::color)");
+  }
+  if (!colors.empty() && colors.size() != points.size()) {
+    throw std::invalid_argument("colours given for " + std::to_string(colors.size()) + " points, the scan has " +
+                                std::to_string(points.size()));
+  }
+  return integrator_.insert(tree_, grid_, sensor_, origin, points, colors, options);
+}
+
+namespace {
+void require_color(const OccupancyMap& map) {
+  if (!map.has_color()) throw std::logic_error("the map was made without colour (MapConfig::color)");
+}
+}  // namespace
+
+std::optional<Rgb> OccupancyMap::color(Vec3d coordinate, int depth) const {
+  return tree_.color(summary(coordinate, depth).node);
+}
+
+std::optional<Rgb> OccupancyMap::color(Key key, int depth) const { return tree_.color(node(key, depth).node); }
+
+void OccupancyMap::add_color(Vec3d coordinate, Rgb rgb) {
+  require_color(*this);
+  tree_.add_color(morton::encode(grid_.key(coordinate)), rgb);
+}
+
+void OccupancyMap::set_color(Key key, Rgb rgb) {
+  require_color(*this);
+  (void)node(key, 0);  // checks the key
+  tree_.set_color(morton::encode(key), rgb);
 }
 
 void OccupancyMap::check_depth(int depth) const {

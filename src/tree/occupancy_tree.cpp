@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <tuple>
 
 namespace umbra {
 namespace {
@@ -12,13 +13,39 @@ void assign_bit(std::uint8_t& mask, unsigned slot, bool value) {
   mask = static_cast<std::uint8_t>(value ? (mask | bit(slot)) : (mask & ~bit(slot)));
 }
 
+/// Rounded average of the coloured entries of a colour group (weight 0: none).
+std::pair<Rgb, std::uint8_t> average_color(const OccupancyTree::ColorGroup& colors) {
+  unsigned r = 0;
+  unsigned g = 0;
+  unsigned b = 0;
+  unsigned n = 0;
+  for (unsigned i = 0; i < 8; ++i) {
+    if (colors.weight[i] == 0) continue;
+    r += colors.rgb[i].r;
+    g += colors.rgb[i].g;
+    b += colors.rgb[i].b;
+    ++n;
+  }
+  if (n == 0) return {Rgb{}, 0};
+  auto mean = [n](unsigned sum) { return static_cast<std::uint8_t>((sum + n / 2) / n); };
+  return {Rgb{mean(r), mean(g), mean(b)}, 1};
+}
+
+bool same_colors(const OccupancyTree::ColorGroup& colors) {
+  for (unsigned i = 1; i < 8; ++i) {
+    if (colors.rgb[i] != colors.rgb[0] || colors.weight[i] != colors.weight[0]) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
-OccupancyTree::OccupancyTree(int depth_levels, LogOddsRange range, LogOddsThresholds thresholds)
+OccupancyTree::OccupancyTree(int depth_levels, LogOddsRange range, LogOddsThresholds thresholds, bool with_color)
     : depth_levels_(depth_levels), range_(range), thresholds_(thresholds) {
   if (depth_levels < 1 || depth_levels > kMaxDepthLevels) {
     throw std::invalid_argument("depth_levels must be in [1, 21], got " + std::to_string(depth_levels));
   }
+  if (with_color) colors_.resize(static_cast<std::size_t>(depth_levels) + 1);
   clear();
 }
 
@@ -26,8 +53,13 @@ void OccupancyTree::clear() {
   leaves_.clear();
   inner_.clear();
   inner_.resize(static_cast<std::size_t>(depth_levels_) + 1);
+  for (auto& pool : colors_) pool.clear();
   [[maybe_unused]] const std::uint32_t root_group = new_inner_group(depth_levels_, 0.0f);
   UMBRA_ASSERT(root_group == 0);
+  if (has_color()) {
+    [[maybe_unused]] const std::uint32_t root_colors = new_color_group(depth_levels_, Rgb{}, 0);
+    UMBRA_ASSERT(root_colors == 0);
+  }
 }
 
 // --- groups ---------------------------------------------------------------
@@ -49,12 +81,22 @@ std::uint32_t OccupancyTree::new_inner_group(int depth, float value) {
   return index;
 }
 
+std::uint32_t OccupancyTree::new_color_group(int depth, Rgb rgb, std::uint8_t weight) {
+  // Colour pools allocate and release in lockstep with the node pools, so
+  // their free lists and high-water marks, hence their indices, agree.
+  const std::uint32_t index = colors_[depth].allocate();
+  colors_[depth][index].rgb.fill(rgb);
+  colors_[depth][index].weight.fill(weight);
+  return index;
+}
+
 void OccupancyTree::release_group(int depth, std::uint32_t group) {
   if (depth == 0) {
     leaves_.release(group);
   } else {
     inner_[depth].release(group);
   }
+  if (has_color()) colors_[depth].release(group);
 }
 
 void OccupancyTree::set_childless(InnerGroup& group, unsigned slot, float value) const {
@@ -65,16 +107,24 @@ void OccupancyTree::set_childless(InnerGroup& group, unsigned slot, float value)
   assign_bit(group.all_same, slot, false);
 }
 
-void OccupancyTree::expand(int depth, InnerGroup& group, unsigned slot) {
-  UMBRA_ASSERT(depth >= 1 && group.child[slot] == kNoGroup);
-  const float value = group.log_odds[slot];
-  // `group` lives in the pool of `depth`; allocating one depth below never moves it.
-  group.child[slot] = depth == 1 ? new_leaf_group(value) : new_inner_group(depth - 1, value);
-  assign_bit(group.all_same, slot, true);
+void OccupancyTree::expand(int depth, std::uint32_t group, unsigned slot) {
+  InnerGroup& node = inner_[depth][group];
+  UMBRA_ASSERT(depth >= 1 && node.child[slot] == kNoGroup);
+  const float value = node.log_odds[slot];
+  // `node` lives in the pool of `depth`; allocating one depth below never moves it.
+  const std::uint32_t child = depth == 1 ? new_leaf_group(value) : new_inner_group(depth - 1, value);
+  node.child[slot] = child;
+  assign_bit(node.all_same, slot, true);
+  if (has_color()) {
+    const ColorGroup& parent = colors_[depth][group];
+    [[maybe_unused]] const std::uint32_t colors = new_color_group(depth - 1, parent.rgb[slot], parent.weight[slot]);
+    UMBRA_ASSERT(colors == child);
+  }
 }
 
-void OccupancyTree::refresh(int depth, InnerGroup& group, unsigned slot, bool allow_prune) {
-  const std::uint32_t child = group.child[slot];
+void OccupancyTree::refresh(int depth, std::uint32_t group, unsigned slot, bool allow_prune) {
+  InnerGroup& node = inner_[depth][group];
+  const std::uint32_t child = node.child[slot];
   UMBRA_ASSERT(child != kNoGroup);
   float max;
   bool any_free;
@@ -101,16 +151,27 @@ void OccupancyTree::refresh(int depth, InnerGroup& group, unsigned slot, bool al
     any_free = children.contains_free != 0;
     any_unknown = children.contains_unknown != 0;
   }
+  if (has_color()) {
+    const ColorGroup& child_colors = colors_[depth - 1][child];
+    ColorGroup& colors = colors_[depth][group];
+    same &= same_colors(child_colors);
+    if (same && allow_prune) {
+      colors.rgb[slot] = child_colors.rgb[0];
+      colors.weight[slot] = child_colors.weight[0];
+    } else {
+      std::tie(colors.rgb[slot], colors.weight[slot]) = average_color(child_colors);
+    }
+  }
   if (same && allow_prune) {
     release_group(depth - 1, child);
-    group.child[slot] = kNoGroup;
-    set_childless(group, slot, max);
+    node.child[slot] = kNoGroup;
+    set_childless(node, slot, max);
     return;
   }
-  group.log_odds[slot] = max;
-  assign_bit(group.contains_free, slot, any_free);
-  assign_bit(group.contains_unknown, slot, any_unknown);
-  assign_bit(group.all_same, slot, same);
+  node.log_odds[slot] = max;
+  assign_bit(node.contains_free, slot, any_free);
+  assign_bit(node.contains_unknown, slot, any_unknown);
+  assign_bit(node.all_same, slot, same);
 }
 
 // --- reading ----------------------------------------------------------------
@@ -120,17 +181,27 @@ NodeSummary OccupancyTree::find(std::uint64_t code, int depth) const {
   std::uint32_t group = 0;
   for (int d = depth_levels_;; --d) {
     if (d == 0) {
-      const float value = leaves_[group].log_odds[morton::slot(code, 0)];
-      return {value, thresholds_.is_free(value), thresholds_.is_unknown(value), false, 0};
+      const unsigned slot = morton::slot(code, 0);
+      const float value = leaves_[group].log_odds[slot];
+      return {value, thresholds_.is_free(value), thresholds_.is_unknown(value), false, 0,
+              NodeRef{group, static_cast<std::uint8_t>(slot), 0}};
     }
     const InnerGroup& node = inner_[d][group];
     const unsigned slot = morton::slot(code, d);
     if (d == depth || node.child[slot] == kNoGroup) {
       return {node.log_odds[slot], (node.contains_free & bit(slot)) != 0,
-              (node.contains_unknown & bit(slot)) != 0, node.child[slot] != kNoGroup, d};
+              (node.contains_unknown & bit(slot)) != 0, node.child[slot] != kNoGroup, d,
+              NodeRef{group, static_cast<std::uint8_t>(slot), static_cast<std::int8_t>(d)}};
     }
     group = node.child[slot];
   }
+}
+
+std::optional<Rgb> OccupancyTree::color(NodeRef node) const {
+  if (!has_color()) return std::nullopt;
+  const ColorGroup& colors = colors_[node.depth][node.group];
+  if (colors.weight[node.slot] == 0) return std::nullopt;
+  return colors.rgb[node.slot];
 }
 
 bool OccupancyTree::contains_free(NodeRef node) const {
@@ -143,41 +214,102 @@ bool OccupancyTree::contains_unknown(NodeRef node) const {
   return (inner_[node.depth][node.group].contains_unknown & bit(node.slot)) != 0;
 }
 
-// --- writing ----------------------------------------------------------------
+// --- writing single voxels ---------------------------------------------------
 
-template <typename Change>
-void OccupancyTree::modify_voxel(std::uint64_t code, Change change) {
-  std::array<std::uint32_t, kMaxDepthLevels + 1> path{};
+std::uint32_t OccupancyTree::descend_splitting(std::uint64_t code, Path& path) {
   std::uint32_t group = 0;
   path[depth_levels_] = group;
   for (int d = depth_levels_; d >= 1; --d) {
-    InnerGroup& node = inner_[d][group];
     const unsigned slot = morton::slot(code, d);
-    if (node.child[slot] == kNoGroup) {
-      // An inner leaf covers the voxel: split it only if the voxel changes.
-      if (change(node.log_odds[slot]) == node.log_odds[slot]) return;
-      expand(d, node, slot);
-    }
-    group = node.child[slot];
+    if (inner_[d][group].child[slot] == kNoGroup) expand(d, group, slot);
+    group = inner_[d][group].child[slot];
     path[d - 1] = group;
   }
-  float& value = leaves_[group].log_odds[morton::slot(code, 0)];
-  const float changed = change(value);
-  if (changed == value) return;
-  value = changed;
-  for (int d = 1; d <= depth_levels_; ++d) {
-    refresh(d, inner_[d][path[d]], morton::slot(code, d), auto_prune_);
-  }
+  return group;
+}
+
+void OccupancyTree::refresh_path(std::uint64_t code, const Path& path) {
+  for (int d = 1; d <= depth_levels_; ++d) refresh(d, path[d], morton::slot(code, d), auto_prune_);
 }
 
 void OccupancyTree::update(std::uint64_t code, float delta) {
-  modify_voxel(code, [&](float v) { return range_.add(v, delta); });
+  const NodeSummary covering = find(code, 0);
+  if (range_.add(covering.log_odds, delta) == covering.log_odds) return;  // already clamped: nothing to split
+  Path path;
+  float& value = leaves_[descend_splitting(code, path)].log_odds[morton::slot(code, 0)];
+  value = range_.add(value, delta);
+  refresh_path(code, path);
 }
 
 void OccupancyTree::set(std::uint64_t code, float log_odds) {
   const float value = range_.clamp(log_odds) + 0.0f;  // + 0.0f turns -0 into +0
-  modify_voxel(code, [&](float) { return value; });
+  if (find(code, 0).log_odds == value) return;  // the childless node covering it has the value already
+  Path path;
+  leaves_[descend_splitting(code, path)].log_odds[morton::slot(code, 0)] = value;
+  refresh_path(code, path);
 }
+
+void OccupancyTree::blend(Rgb& rgb, std::uint8_t& weight, Rgb sample) {
+  if (weight == 0) {
+    rgb = sample;
+    weight = 1;
+    return;
+  }
+  const unsigned n = weight;
+  auto mix = [n](std::uint8_t old, std::uint8_t add) {
+    return static_cast<std::uint8_t>((old * n + add + (n + 1) / 2) / (n + 1));
+  };
+  rgb = {mix(rgb.r, sample.r), mix(rgb.g, sample.g), mix(rgb.b, sample.b)};
+  if (weight < 255) ++weight;
+}
+
+void OccupancyTree::add_color(std::uint64_t code, Rgb rgb) {
+  const ColorSample sample{code, rgb};
+  add_colors(std::span<const ColorSample>(&sample, 1));
+}
+
+void OccupancyTree::set_color(std::uint64_t code, Rgb rgb, std::uint8_t weight) {
+  if (!has_color()) throw std::logic_error("set_color: the tree has no colour");
+  if (weight == 0) throw std::invalid_argument("set_color: weight must be at least 1");
+  Path path;
+  const std::uint32_t group = descend_splitting(code, path);
+  ColorGroup& colors = colors_[0][group];
+  colors.rgb[morton::slot(code, 0)] = rgb;
+  colors.weight[morton::slot(code, 0)] = weight;
+  refresh_path(code, path);
+}
+
+void OccupancyTree::add_colors(std::span<const ColorSample> samples) {
+  if (!has_color()) throw std::logic_error("add_colors: the tree has no colour");
+  if (samples.empty()) return;
+  UMBRA_ASSERT(std::is_sorted(samples.begin(), samples.end(),
+                              [](const ColorSample& a, const ColorSample& b) { return a.code < b.code; }));
+  add_colors_below(depth_levels_, 0, 0, samples);
+}
+
+void OccupancyTree::add_colors_below(int depth, std::uint32_t group, unsigned slot,
+                                     std::span<const ColorSample> samples) {
+  // Every sample lies in node (depth, group, slot); they are sorted, so each
+  // child's samples are one contiguous run.
+  if (inner_[depth][group].child[slot] == kNoGroup) expand(depth, group, slot);
+  const std::uint32_t child = inner_[depth][group].child[slot];
+  std::size_t begin = 0;
+  while (begin < samples.size()) {
+    const unsigned child_slot = morton::slot(samples[begin].code, depth - 1);
+    std::size_t end = begin + 1;
+    while (end < samples.size() && morton::slot(samples[end].code, depth - 1) == child_slot) ++end;
+    if (depth == 1) {
+      ColorGroup& colors = colors_[0][child];
+      for (std::size_t i = begin; i < end; ++i) blend(colors.rgb[child_slot], colors.weight[child_slot], samples[i].rgb);
+    } else {
+      add_colors_below(depth - 1, child, child_slot, samples.subspan(begin, end - begin));
+    }
+    begin = end;
+  }
+  refresh(depth, group, slot, auto_prune_);
+}
+
+// --- applying a scan ------------------------------------------------------------
 
 void OccupancyTree::apply(const UpdateBatch& batch, float hit, float miss) {
   if (batch.depth_levels() != depth_levels_) {
@@ -198,30 +330,27 @@ void OccupancyTree::apply_group(int depth, std::uint32_t group, const UpdateBatc
     const bool full = (todo.full & bit(slot)) != 0;
     const std::uint32_t todo_child = todo.child[slot];
     if (!full && todo_child == kNoGroup) continue;
-    // Recursion below only allocates and releases in deeper pools: `node` stays valid.
-    InnerGroup& node = inner_[depth][group];
     if (full) {
-      apply_everywhere(depth, node, slot, miss);
+      apply_everywhere(depth, group, slot, miss);
       continue;
     }
-    if (node.child[slot] == kNoGroup) expand(depth, node, slot);
-    apply_group(depth - 1, node.child[slot], batch, todo_child, hit, miss);
-    refresh(depth, node, slot, auto_prune_);
+    if (inner_[depth][group].child[slot] == kNoGroup) expand(depth, group, slot);
+    apply_group(depth - 1, inner_[depth][group].child[slot], batch, todo_child, hit, miss);
+    refresh(depth, group, slot, auto_prune_);
   }
 }
 
 void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& todo, float hit, float miss) {
-  InnerGroup& node = inner_[1][group];
   for (unsigned slot = 0; slot < 8; ++slot) {
     const std::uint8_t misses = todo.miss[slot];
     const std::uint8_t hits = todo.hit[slot];
     if ((misses | hits) == 0) continue;
     if (misses == 0xFF && hits == 0) {
-      apply_everywhere(1, node, slot, miss);  // an inner leaf stays one node
+      apply_everywhere(1, group, slot, miss);  // an inner leaf stays one node
       continue;
     }
-    if (node.child[slot] == kNoGroup) expand(1, node, slot);
-    auto& values = leaves_[node.child[slot]].log_odds;
+    if (inner_[1][group].child[slot] == kNoGroup) expand(1, group, slot);
+    auto& values = leaves_[inner_[1][group].child[slot]].log_odds;
     for (unsigned i = 0; i < 8; ++i) {
       if (hits & bit(i)) {
         values[i] = range_.add(values[i], hit);
@@ -229,21 +358,21 @@ void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& t
         values[i] = range_.add(values[i], miss);
       }
     }
-    refresh(1, node, slot, auto_prune_);
+    refresh(1, group, slot, auto_prune_);
   }
 }
 
-void OccupancyTree::apply_everywhere(int depth, InnerGroup& group, unsigned slot, float delta) {
-  const std::uint32_t child = group.child[slot];
+void OccupancyTree::apply_everywhere(int depth, std::uint32_t group, unsigned slot, float delta) {
+  InnerGroup& node = inner_[depth][group];
+  const std::uint32_t child = node.child[slot];
   if (child == kNoGroup) {
-    set_childless(group, slot, range_.add(group.log_odds[slot], delta));
+    set_childless(node, slot, range_.add(node.log_odds[slot], delta));
     return;
   }
   if (depth == 1) {
     for (float& v : leaves_[child].log_odds) v = range_.add(v, delta);
   } else {
-    InnerGroup& children = inner_[depth - 1][child];
-    for (unsigned i = 0; i < 8; ++i) apply_everywhere(depth - 1, children, i, delta);
+    for (unsigned i = 0; i < 8; ++i) apply_everywhere(depth - 1, child, i, delta);
   }
   refresh(depth, group, slot, auto_prune_);
 }
@@ -257,20 +386,20 @@ void OccupancyTree::set_thresholds(LogOddsThresholds thresholds) {
 
 void OccupancyTree::set_range(LogOddsRange range) {
   range_ = range;
-  clamp_below(depth_levels_, inner_[depth_levels_][0], 0);
+  clamp_below(depth_levels_, 0, 0);
 }
 
-void OccupancyTree::clamp_below(int depth, InnerGroup& group, unsigned slot) {
-  const std::uint32_t child = group.child[slot];
+void OccupancyTree::clamp_below(int depth, std::uint32_t group, unsigned slot) {
+  InnerGroup& node = inner_[depth][group];
+  const std::uint32_t child = node.child[slot];
   if (child == kNoGroup) {
-    set_childless(group, slot, range_.clamp(group.log_odds[slot]));
+    set_childless(node, slot, range_.clamp(node.log_odds[slot]));
     return;
   }
   if (depth == 1) {
     for (float& v : leaves_[child].log_odds) v = range_.clamp(v);
   } else {
-    InnerGroup& children = inner_[depth - 1][child];
-    for (unsigned i = 0; i < 8; ++i) clamp_below(depth - 1, children, i);
+    for (unsigned i = 0; i < 8; ++i) clamp_below(depth - 1, child, i);
   }
   refresh(depth, group, slot, auto_prune_);
 }
@@ -280,29 +409,28 @@ void OccupancyTree::set_auto_prune(bool on) {
   if (on) prune();
 }
 
-void OccupancyTree::prune() { prune_below(depth_levels_, inner_[depth_levels_][0], 0); }
+void OccupancyTree::prune() { prune_below(depth_levels_, 0, 0); }
 
-void OccupancyTree::prune_below(int depth, InnerGroup& group, unsigned slot) {
-  const std::uint32_t child = group.child[slot];
+void OccupancyTree::prune_below(int depth, std::uint32_t group, unsigned slot) {
+  const std::uint32_t child = inner_[depth][group].child[slot];
   if (child == kNoGroup) return;
   if (depth > 1) {
-    InnerGroup& children = inner_[depth - 1][child];
-    for (unsigned i = 0; i < 8; ++i) prune_below(depth - 1, children, i);
+    for (unsigned i = 0; i < 8; ++i) prune_below(depth - 1, child, i);
   }
   refresh(depth, group, slot, true);
 }
 
-void OccupancyTree::refresh_all() { refresh_below(depth_levels_, inner_[depth_levels_][0], 0); }
+void OccupancyTree::refresh_all() { refresh_below(depth_levels_, 0, 0); }
 
-void OccupancyTree::refresh_below(int depth, InnerGroup& group, unsigned slot) {
-  const std::uint32_t child = group.child[slot];
+void OccupancyTree::refresh_below(int depth, std::uint32_t group, unsigned slot) {
+  InnerGroup& node = inner_[depth][group];
+  const std::uint32_t child = node.child[slot];
   if (child == kNoGroup) {
-    set_childless(group, slot, group.log_odds[slot]);
+    set_childless(node, slot, node.log_odds[slot]);
     return;
   }
   if (depth > 1) {
-    InnerGroup& children = inner_[depth - 1][child];
-    for (unsigned i = 0; i < 8; ++i) refresh_below(depth - 1, children, i);
+    for (unsigned i = 0; i < 8; ++i) refresh_below(depth - 1, child, i);
   }
   refresh(depth, group, slot, false);
 }
@@ -313,7 +441,7 @@ void OccupancyTree::subdivide(NodeRef node) {
   if (node.depth < 1 || has_children(node)) {
     throw std::logic_error("subdivide: node must be childless and above the finest depth");
   }
-  expand(node.depth, inner_[node.depth][node.group], node.slot);
+  expand(node.depth, node.group, node.slot);
 }
 
 void OccupancyTree::set_childless_value(NodeRef node, float log_odds) {
@@ -323,6 +451,14 @@ void OccupancyTree::set_childless_value(NodeRef node, float log_odds) {
   }
   if (has_children(node)) throw std::logic_error("set_childless_value: node has children");
   set_childless(inner_[node.depth][node.group], node.slot, log_odds);
+}
+
+void OccupancyTree::set_childless_color(NodeRef node, Rgb rgb, std::uint8_t weight) {
+  if (!has_color()) throw std::logic_error("set_childless_color: the tree has no colour");
+  if (has_children(node)) throw std::logic_error("set_childless_color: node has children");
+  ColorGroup& colors = colors_[node.depth][node.group];
+  colors.rgb[node.slot] = weight == 0 ? Rgb{} : rgb;
+  colors.weight[node.slot] = weight;
 }
 
 // --- statistics, checks -----------------------------------------------------------
@@ -342,8 +478,10 @@ NodeCounts OccupancyTree::count_nodes() const {
 }
 
 std::size_t OccupancyTree::memory_bytes() const {
-  std::size_t bytes = sizeof(*this) + leaves_.memory_bytes() + inner_.capacity() * sizeof(inner_[0]);
+  std::size_t bytes = sizeof(*this) + leaves_.memory_bytes() + inner_.capacity() * sizeof(inner_[0]) +
+                      colors_.capacity() * sizeof(GroupPool<ColorGroup>);
   for (const auto& pool : inner_) bytes += pool.memory_bytes();
+  for (const auto& pool : colors_) bytes += pool.memory_bytes();
   return bytes;
 }
 
@@ -357,6 +495,9 @@ std::string OccupancyTree::check_invariants() const {
     if (used != in_pool) {
       return "depth " + std::to_string(d) + ": " + std::to_string(in_pool) + " groups in use, " +
              std::to_string(used) + " reachable";
+    }
+    if (has_color() && colors_[d].size() != in_pool) {
+      return "depth " + std::to_string(d) + ": colour pool out of step with the node pool";
     }
   }
   return {};
@@ -406,6 +547,15 @@ std::string OccupancyTree::check_node(int depth, std::uint32_t group_index, unsi
       any_free |= (children.contains_free & bit(i)) != 0;
       any_unknown |= (children.contains_unknown & bit(i)) != 0;
       same &= children.child[i] == kNoGroup && children.log_odds[i] == children.log_odds[0];
+    }
+  }
+  if (has_color()) {
+    const ColorGroup& child_colors = colors_[depth - 1][child];
+    same &= same_colors(child_colors);
+    const auto [rgb, weight] = average_color(child_colors);
+    const ColorGroup& colors = colors_[depth][group_index];
+    if (colors.weight[slot] != weight || (weight != 0 && colors.rgb[slot] != rgb)) {
+      return where + "colour is not the average of the coloured children";
     }
   }
   if (value != max) return where + "value is not the maximum of the children";

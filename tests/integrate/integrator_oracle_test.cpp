@@ -154,5 +154,71 @@ std::vector<OracleCase> oracle_cases() {
 
 INSTANTIATE_TEST_SUITE_P(Configurations, IntegratorOracle, testing::ValuesIn(oracle_cases()), case_name);
 
+class ColorOracle : public testing::TestWithParam<OracleCase> {};
+
+TEST_P(ColorOracle, EveryVoxelAndNodeColourMatchesTheDenseGrid) {
+  const OracleCase c = GetParam();
+  std::mt19937 rng(c.seed);
+  MapConfig config{c.resolution, c.depth_levels, SensorModel{}, Thresholds{}, true};
+  OccupancyMap map(config);
+  map.set_auto_prune(c.auto_prune);
+  const SensorModel& sensor = config.sensor;
+  test::DenseGrid oracle(c.resolution, c.depth_levels, sensor.clamp_min_log_odds(), sensor.clamp_max_log_odds());
+  const double half = map.grid().half_extent();
+  std::uniform_real_distribution<float> inside(-0.9f * static_cast<float>(half), 0.9f * static_cast<float>(half));
+  InsertOptions options;
+  options.integrator = c.integrator;
+  options.max_range = c.max_range > 0 ? c.max_range * half : c.max_range;
+  const test::DenseScanOptions dense_options{c.integrator == IntegratorKind::discrete, options.max_range};
+  // Few colours, so that equal neighbours (and merges) happen.
+  const Rgb palette[] = {{255, 0, 0}, {0, 255, 0}, {10, 20, 30}, {200, 200, 200}};
+  for (int scan = 0; scan < 4; ++scan) {
+    const Vec3f origin{inside(rng), inside(rng), inside(rng)};
+    const std::vector<Vec3f> points = random_scan(rng, half, origin);
+    std::vector<Rgb> colors;
+    for (std::size_t i = 0; i < points.size(); ++i) colors.push_back(palette[rng() % 4]);
+    map.insert_point_cloud(origin, points, colors, options);
+    oracle.insert_scan(origin, points, dense_options, sensor.hit_log_odds(), sensor.miss_log_odds(), colors);
+    ASSERT_EQ(map.tree().check_invariants(), "") << "after scan " << scan;
+  }
+  std::size_t coloured = 0;
+  for (int depth = 0; depth <= c.depth_levels; ++depth) {
+    const std::uint32_t nodes = oracle.size() >> depth;
+    for (std::uint32_t z = 0; z < nodes; ++z) {
+      for (std::uint32_t y = 0; y < nodes; ++y) {
+        for (std::uint32_t x = 0; x < nodes; ++x) {
+          const Key key{x << depth, y << depth, z << depth};
+          const test::DenseGrid::Color expected = oracle.node_color(key, depth);
+          const std::optional<Rgb> actual = map.color(key, depth);
+          ASSERT_EQ(actual.has_value(), expected.weight != 0) << "depth " << depth << " key " << x << "," << y << "," << z;
+          if (!actual) continue;
+          ++coloured;
+          ASSERT_EQ(*actual, expected.rgb) << "depth " << depth << " key " << x << "," << y << "," << z;
+          if (depth == 0) {
+            ASSERT_EQ(map.node(key, 0).log_odds, oracle.at(key));
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(coloured, 50u);
+}
+
+std::vector<OracleCase> color_cases() {
+  std::vector<OracleCase> cases;
+  std::uint32_t seed = 100;
+  for (const int depth_levels : {2, 4, 5}) {
+    for (const IntegratorKind integrator : {IntegratorKind::simple, IntegratorKind::discrete}) {
+      for (const bool auto_prune : {true, false}) {
+        cases.push_back({depth_levels, depth_levels <= 3 ? 0.5 : 0.1, integrator, depth_levels == 4 ? 0.7 : -1.0,
+                         auto_prune, seed++});
+      }
+    }
+  }
+  return cases;
+}
+
+INSTANTIATE_TEST_SUITE_P(Configurations, ColorOracle, testing::ValuesIn(color_cases()), case_name);
+
 }  // namespace
 }  // namespace umbra

@@ -184,11 +184,27 @@ std::vector<std::uint64_t> shape(const OccupancyTree& tree) {
   return out;
 }
 
+/// Every node's colour and weight in depth-first order (empty without colour).
+std::vector<std::uint32_t> colours(const OccupancyTree& tree) {
+  std::vector<std::uint32_t> out;
+  if (!tree.has_color()) return out;
+  auto walk = [&](auto& self, NodeRef node) -> void {
+    const Rgb rgb = tree.color(node).value_or(Rgb{});
+    out.push_back(std::uint32_t{rgb.r} << 24 | std::uint32_t{rgb.g} << 16 | std::uint32_t{rgb.b} << 8 |
+                  tree.color_weight(node));
+    if (!tree.has_children(node)) return;
+    for (unsigned slot = 0; slot < 8; ++slot) self(self, tree.child(node, slot));
+  };
+  walk(walk, tree.root());
+  return out;
+}
+
 void expect_same_config(const MapConfig& a, const MapConfig& b) {
   EXPECT_EQ(std::bit_cast<std::uint64_t>(a.resolution), std::bit_cast<std::uint64_t>(b.resolution));
   EXPECT_EQ(a.depth_levels, b.depth_levels);
   EXPECT_EQ(a.sensor, b.sensor);
   EXPECT_EQ(a.thresholds, b.thresholds);
+  EXPECT_EQ(a.color, b.color);
 }
 
 void expect_same_map(const OccupancyMap& saved, const OccupancyMap& loaded) {
@@ -201,6 +217,7 @@ void expect_same_map(const OccupancyMap& saved, const OccupancyMap& loaded) {
   EXPECT_EQ(a.leaf, b.leaf);
   EXPECT_TRUE(leaves(saved) == leaves(loaded)) << "childless nodes differ";
   EXPECT_TRUE(shape(saved.tree()) == shape(loaded.tree())) << "tree shape, inner values or indicators differ";
+  EXPECT_TRUE(colours(saved.tree()) == colours(loaded.tree())) << "colours differ";
   EXPECT_EQ(loaded.tree().check_invariants(), "");
 }
 
@@ -553,7 +570,7 @@ TEST(MapFile, EveryHeaderFieldIsValidated) {
     std::string expected;
   };
   const std::vector<Case> cases = {
-      {kAtFlags, 2, 4, kAtFlags, "unsupported flags 0x00000002 (this build knows 0x00000001)"},
+      {kAtFlags, 4, 4, kAtFlags, "unsupported flags 0x00000004 (this build knows 0x00000003)"},
       {kAtResolution, f64(std::nan("")), 8, kAtResolution, "resolution must be a finite number > 0, found nan"},
       {kAtResolution, f64(0.0), 8, kAtResolution, "resolution must be a finite number > 0, found 0"},
       {kAtResolution, f64(-0.05), 8, kAtResolution, "found -0.05"},
@@ -944,6 +961,65 @@ TEST(MapFile, ReadMapInfoReadsTheHeaderOfALargeFileWithoutTheBody) {
   EXPECT_EQ(info.file_bytes, bytes.size());
   EXPECT_EQ(kHeader + info.structure_compressed_bytes + info.values_compressed_bytes + 4, bytes.size());
   EXPECT_CONTAINS(load_error(bytes, path), "checksum mismatch");
+}
+
+}  // namespace
+}  // namespace umbra
+
+namespace umbra {
+namespace {
+
+OccupancyMap coloured_map(int depth_levels, bool auto_prune, std::uint32_t seed) {
+  MapConfig config = depth_config(depth_levels);
+  config.color = true;
+  OccupancyMap map(config);
+  map.set_auto_prune(auto_prune);
+  std::mt19937 rng(seed);
+  const float h = std::min(static_cast<float>(map.grid().half_extent()) * 0.9f, 3.0f);
+  std::uniform_real_distribution<float> coordinate(-h, h);
+  const Rgb palette[] = {{255, 0, 0}, {0, 0, 255}, {7, 8, 9}};
+  for (int scan = 0; scan < 3; ++scan) {
+    std::vector<Vec3f> points;
+    std::vector<Rgb> rgb;
+    for (int i = 0; i < 200; ++i) {
+      points.push_back({coordinate(rng), coordinate(rng), coordinate(rng)});
+      rgb.push_back(palette[rng() % 3]);
+    }
+    map.insert_point_cloud({0, 0, 0}, points, rgb);
+  }
+  return map;
+}
+
+TEST(MapFile, ColouredMapsRoundTripExactly) {
+  const fs::path dir = test::scratch_dir();
+  for (const int depth_levels : {1, 3, 8, 16}) {
+    for (const bool auto_prune : {true, false}) {
+      SCOPED_TRACE("depth levels " + std::to_string(depth_levels) + (auto_prune ? " pruned" : " unpruned"));
+      const OccupancyMap map = coloured_map(depth_levels, auto_prune, static_cast<std::uint32_t>(depth_levels));
+      ASSERT_TRUE(map.has_color());
+      const fs::path path = dir / "coloured.umb";
+      save_map(map, path);
+      const OccupancyMap loaded = load_map(path);
+      EXPECT_TRUE(loaded.has_color());
+      EXPECT_TRUE(read_map_info(path).config.color);
+      expect_same_map(map, loaded);
+      if (depth_levels == 8) {
+        EXPECT_GT(colours(map.tree()).size(), 100u);
+      }
+    }
+  }
+}
+
+TEST(MapFile, EveryTruncationOfAColouredFileIsReported) {
+  const fs::path dir = test::scratch_dir();
+  const OccupancyMap map = coloured_map(3, true, 5);
+  save_map(map, dir / "whole.umb");
+  const Bytes whole = read_bytes(dir / "whole.umb");
+  for (std::size_t length = 0; length < whole.size(); ++length) {
+    const std::string message = load_error(Bytes(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(length)),
+                                           dir / "cut.umb");
+    ASSERT_FALSE(message.empty()) << "length " << length;
+  }
 }
 
 }  // namespace

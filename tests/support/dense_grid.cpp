@@ -15,7 +15,42 @@ DenseGrid::DenseGrid(double resolution, int depth_levels, float clamp_min, float
       offset_(std::int64_t{1} << (depth_levels - 1)),
       clamp_min_(clamp_min),
       clamp_max_(clamp_max),
-      values_(std::size_t{size_} * size_ * size_, 0.0f) {}
+      values_(std::size_t{size_} * size_ * size_, 0.0f),
+      colors_(values_.size()) {}
+
+void DenseGrid::blend(Key key, Rgb sample) {
+  Color& c = colors_[index(key)];
+  if (c.weight == 0) {
+    c = {sample, 1};
+    return;
+  }
+  const unsigned n = c.weight;
+  auto mix = [n](unsigned old, unsigned add) { return static_cast<std::uint8_t>((old * n + add + (n + 1) / 2) / (n + 1)); };
+  c.rgb = {mix(c.rgb.r, sample.r), mix(c.rgb.g, sample.g), mix(c.rgb.b, sample.b)};
+  if (c.weight < 255) ++c.weight;
+}
+
+DenseGrid::Color DenseGrid::node_color(Key key, int depth) const {
+  if (depth == 0) return color_at(key);
+  const Key base{(key.x >> depth) << depth, (key.y >> depth) << depth, (key.z >> depth) << depth};
+  const std::uint32_t half = 1u << (depth - 1);
+  unsigned r = 0;
+  unsigned g = 0;
+  unsigned b = 0;
+  unsigned n = 0;
+  for (std::uint32_t i = 0; i < 8; ++i) {
+    const Color c = node_color({base.x + (i & 1) * half, base.y + (i >> 1 & 1) * half, base.z + (i >> 2 & 1) * half},
+                               depth - 1);
+    if (c.weight == 0) continue;
+    r += c.rgb.r;
+    g += c.rgb.g;
+    b += c.rgb.b;
+    ++n;
+  }
+  if (n == 0) return {};
+  auto mean = [n](unsigned sum) { return static_cast<std::uint8_t>((sum + n / 2) / n); };
+  return {Rgb{mean(r), mean(g), mean(b)}, 1};
+}
 
 void DenseGrid::add(Key key, float delta) {
   float& v = values_[index(key)];
@@ -100,7 +135,7 @@ bool DenseGrid::ray_keys(Vec3f origin, Vec3f end, std::vector<Key>& keys) const 
 }
 
 void DenseGrid::insert_scan(Vec3f origin, std::span<const Vec3f> points, const DenseScanOptions& options,
-                            float hit, float miss) {
+                            float hit, float miss, std::span<const Rgb> colors) {
   using Triple = std::tuple<std::uint32_t, std::uint32_t, std::uint32_t>;
   auto triple = [](Key k) { return Triple{k.x, k.y, k.z}; };
   std::vector<Vec3f> ends;
@@ -144,6 +179,21 @@ void DenseGrid::insert_scan(Vec3f origin, std::span<const Vec3f> points, const D
   for (const Triple& t : occupied_cells) free_cells.erase(t);
   for (const Triple& t : free_cells) add(Key{std::get<0>(t), std::get<1>(t), std::get<2>(t)}, miss);
   for (const Triple& t : occupied_cells) add(Key{std::get<0>(t), std::get<1>(t), std::get<2>(t)}, hit);
+  // Colours: each point whose ray ends in a hit, in scan order.
+  for (std::size_t i = 0; i < colors.size(); ++i) {
+    const Vec3f& p = points[i];
+    Key k;
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !key_of(p, k)) continue;
+    const Vec3f end = options.discrete ? Vec3f{static_cast<float>(centre(k.x)), static_cast<float>(centre(k.y)),
+                                               static_cast<float>(centre(k.z))}
+                                       : p;
+    const float ox = end.x - origin.x;
+    const float oy = end.y - origin.y;
+    const float oz = end.z - origin.z;
+    const double range = std::sqrt(static_cast<double>(ox * ox + oy * oy + oz * oz));
+    if (options.max_range > 0.0 && range > options.max_range) continue;
+    blend(k, colors[i]);
+  }
 }
 
 float DenseGrid::max_in_node(Key key, int depth) const {

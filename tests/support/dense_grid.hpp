@@ -11,6 +11,7 @@
 #include <span>
 #include <vector>
 
+#include "umbra/core/color.hpp"
 #include "umbra/core/morton.hpp"
 #include "umbra/core/vec3.hpp"
 
@@ -33,9 +34,22 @@ class DenseGrid {
   /// The voxels OctoMap's computeRayKeys visits from origin to end (end voxel
   /// excluded); false when either end is outside the grid.
   [[nodiscard]] bool ray_keys(Vec3f origin, Vec3f end, std::vector<Key>& keys) const;
-  /// OctoMap's insertPointCloud on this grid.
+  /// OctoMap's insertPointCloud on this grid; with `colors` (one per point),
+  /// every point that gives a hit also blends its colour into its voxel.
   void insert_scan(Vec3f origin, std::span<const Vec3f> points, const DenseScanOptions& options,
-                   float hit, float miss);
+                   float hit, float miss, std::span<const Rgb> colors = {});
+
+  /// A voxel's colour: running average of its samples, weight = samples
+  /// (saturating at 255, then each new sample weighs 1/256); weight 0: none.
+  struct Color {
+    Rgb rgb;
+    std::uint8_t weight = 0;
+  };
+  [[nodiscard]] Color color_at(Key key) const { return colors_[index(key)]; }
+  void blend(Key key, Rgb sample);
+  /// A coarser node's colour: the rounded average of its coloured children
+  /// (recursively), or none.
+  [[nodiscard]] Color node_color(Key key, int depth) const;
 
   /// Brute-force summaries of the depth-`depth` node containing `key`.
   [[nodiscard]] float max_in_node(Key key, int depth) const;
@@ -55,6 +69,7 @@ class DenseGrid {
   float clamp_min_;
   float clamp_max_;
   std::vector<float> values_;
+  std::vector<Color> colors_;
 };
 
 }  // namespace umbra::test

@@ -9,7 +9,9 @@
 // Within one scan a voxel is updated at most once and a hit wins over a miss.
 // A point farther than max_range (when max_range > 0) gives only a miss ray
 // truncated at max_range. NaN / infinite points are skipped and counted; so
-// are points outside the map (OctoMap drops their rays too).
+// are points outside the map (OctoMap drops their rays too). With colours,
+// every point that gives a hit adds its colour to its voxel (for the discrete
+// integrator: every point of an end voxel whose ray gives a hit).
 //
 // Data flow: points -> ray walk -> UpdateBatch (de-duplicated hit/miss
 // marks, no hashing) -> OccupancyTree::apply (one walk over the tree). The
@@ -61,10 +63,12 @@ struct InsertStats {
 class Integrator {
  public:
   /// Integrates one scan into `tree`, whose voxels are laid out by `grid`.
+  /// `colors` is empty or holds one colour per point (the tree must have
+  /// colour then): every point that gives a hit adds its colour to its voxel.
   /// Throws std::invalid_argument for a non-finite origin and
   /// std::out_of_range for an origin outside the map; the tree is unchanged then.
   InsertStats insert(OccupancyTree& tree, const Grid& grid, const SensorModel& sensor, Vec3f origin,
-                     std::span<const Vec3f> points, const InsertOptions& options);
+                     std::span<const Vec3f> points, std::span<const Rgb> colors, const InsertOptions& options);
 
   /// Bytes held between scans: the empty batch and the longest ray's runs.
   [[nodiscard]] std::size_t memory_bytes() const {

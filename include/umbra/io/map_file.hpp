@@ -47,6 +47,7 @@ struct MapFileInfo {
   std::uint64_t structure_bytes = 0;        ///< decompressed size of the child-mask stream
   std::uint64_t structure_compressed_bytes = 0;
   std::uint64_t values_compressed_bytes = 0;
+  std::uint64_t colors_compressed_bytes = 0;  ///< 0 unless config.color
   std::uint64_t file_bytes = 0;             ///< total size of the file
 };
 

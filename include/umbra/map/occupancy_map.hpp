@@ -16,8 +16,10 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 
+#include "umbra/core/color.hpp"
 #include "umbra/core/grid.hpp"
 #include "umbra/core/log_odds.hpp"
 #include "umbra/core/vec3.hpp"
@@ -32,6 +34,7 @@ struct MapConfig {
   int depth_levels = 16;    ///< 1..21; 16 is OctoMap's depth
   SensorModel sensor;
   Thresholds thresholds;
+  bool color = false;       ///< keep an RGB colour per voxel
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -43,11 +46,13 @@ struct LeafView {
   int depth;        ///< 0 for a voxel, > 0 for an inner leaf covering 8^depth voxels
   float log_odds;
   OccupancyState state;
+  std::optional<Rgb> color;  ///< only in a map with colour, for coloured nodes
 };
 
 class OccupancyMap {
  public:
   explicit OccupancyMap(const MapConfig& config);
+  /// A map without colour.
   explicit OccupancyMap(double resolution, int depth_levels = 16, const SensorModel& sensor = {},
                         const Thresholds& thresholds = {});
 
@@ -78,9 +83,26 @@ class OccupancyMap {
   void update_log_odds(Key key, float delta);
   void set_log_odds(Key key, float log_odds);
 
+  // --- colour (maps made with MapConfig::color) ---------------------------
+  [[nodiscard]] bool has_color() const { return tree_.has_color(); }
+  /// Colour of the depth-`depth` node containing the coordinate: a voxel's
+  /// running average of the points that fell in it, a coarser node's the
+  /// average of its coloured children; nothing when uncoloured.
+  [[nodiscard]] std::optional<Rgb> color(Vec3d coordinate, int depth = 0) const;
+  [[nodiscard]] std::optional<Rgb> color(Key key, int depth = 0) const;
+  /// One more colour sample for the voxel (running average).
+  void add_color(Vec3d coordinate, Rgb rgb);
+  /// Sets the voxel's colour outright.
+  void set_color(Key key, Rgb rgb);
+
   // --- inserting scans ----------------------------------------------------
   /// Integrates one scan (see integrate/integrator.hpp for the exact rules).
   InsertStats insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
+                                 const InsertOptions& options = {});
+  /// The same with one colour per point: every point that gives a hit adds
+  /// its colour to its voxel. Throws std::invalid_argument when the map has
+  /// no colour or the sizes differ.
+  InsertStats insert_point_cloud(Vec3f origin, std::span<const Vec3f> points, std::span<const Rgb> colors,
                                  const InsertOptions& options = {});
 
   // --- reading ------------------------------------------------------------
@@ -98,8 +120,9 @@ class OccupancyMap {
   /// Calls visit(const LeafView&) for every childless node, in Morton order.
   template <typename Visit>
   void for_each_leaf(Visit&& visit) const {
-    tree_.for_each_leaf([&](std::uint64_t code, int depth, float value) {
-      visit(LeafView{morton::decode(code), depth, value, tree_.thresholds().classify(value)});
+    tree_.for_each_leaf([&](NodeRef node, std::uint64_t code) {
+      const float value = tree_.log_odds(node);
+      visit(LeafView{morton::decode(code), node.depth, value, tree_.thresholds().classify(value), tree_.color(node)});
     });
   }
 

@@ -21,10 +21,18 @@
 // childless node F and U describe its own value and S is 0. Leaves carry no
 // bits: their state is their value. "Contains occupied" is max > threshold.
 //
+// Colour (optional, chosen at construction): a ColorGroup pool parallel to
+// every node pool, allocated and released in lockstep so that a node's colour
+// sits at the same (depth, group, slot). A voxel's colour is the running
+// average of the samples it received (`weight` counts them, saturating at
+// 255, after which each new sample weighs 1/256); a node with children has
+// the rounded average of its coloured children. Equal children merge only if
+// their colours and weights are equal too.
+//
 // Invariants (check_invariants() verifies them all): every value lies in the
-// clamping range; inner values, F, U and S equal a recomputation from the
-// children; with automatic pruning on, no node has S set (eight equal
-// childless children are merged into their parent at once).
+// clamping range; inner values, F, U, S and colours equal a recomputation
+// from the children; with automatic pruning on, no node has S set (eight
+// equal childless children are merged into their parent at once).
 //
 // Costs: a single-voxel update descends from the root and refreshes the
 // depth_levels ancestors on the way back; apply(UpdateBatch) updates a whole
@@ -38,9 +46,12 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "umbra/core/color.hpp"
 #include "umbra/core/log_odds.hpp"
 #include "umbra/core/morton.hpp"
 #include "umbra/tree/group_pool.hpp"
@@ -76,6 +87,7 @@ struct NodeSummary {
   bool contains_unknown = false;
   bool has_children = false;
   int depth = 0;                ///< depth of the node found (>= the asked depth when an inner leaf covers it)
+  NodeRef node;                 ///< where it is
 };
 
 class OccupancyTree {
@@ -90,15 +102,27 @@ class OccupancyTree {
     std::uint8_t contains_unknown;
     std::uint8_t all_same;
   };
+  struct ColorGroup {
+    std::array<Rgb, 8> rgb;
+    std::array<std::uint8_t, 8> weight;  // 0: no colour
+  };
   static_assert(sizeof(LeafGroup) == 32, "a leaf group is 8 floats");
   static_assert(sizeof(InnerGroup) == 68, "an inner group is 8 floats, 8 indices, 3 bit masks");
+  static_assert(sizeof(ColorGroup) == 32, "a colour group is 8 RGB triples and 8 weights");
 
-  OccupancyTree(int depth_levels, LogOddsRange range, LogOddsThresholds thresholds);
+  /// One colour observation of a finest voxel.
+  struct ColorSample {
+    std::uint64_t code;
+    Rgb rgb;
+  };
+
+  OccupancyTree(int depth_levels, LogOddsRange range, LogOddsThresholds thresholds, bool with_color = false);
 
   [[nodiscard]] int depth_levels() const { return depth_levels_; }
   [[nodiscard]] NodeRef root() const { return {0, 0, static_cast<std::int8_t>(depth_levels_)}; }
   [[nodiscard]] const LogOddsRange& range() const { return range_; }
   [[nodiscard]] const LogOddsThresholds& thresholds() const { return thresholds_; }
+  [[nodiscard]] bool has_color() const { return !colors_.empty(); }
 
   // --- reading -----------------------------------------------------------
   /// The node at `depth` on the path to finest voxel `code` (or the inner
@@ -117,6 +141,12 @@ class OccupancyTree {
     return node.depth == 0 ? leaves_[node.group].log_odds[node.slot]
                            : inner_[node.depth][node.group].log_odds[node.slot];
   }
+  /// The node's colour; nothing when it has none or the tree has no colour.
+  [[nodiscard]] std::optional<Rgb> color(NodeRef node) const;
+  /// Samples behind a voxel's colour (0: none); 1 for a coloured inner node.
+  [[nodiscard]] std::uint8_t color_weight(NodeRef node) const {
+    return has_color() ? colors_[node.depth][node.group].weight[node.slot] : 0;
+  }
   [[nodiscard]] bool contains_free(NodeRef node) const;
   [[nodiscard]] bool contains_unknown(NodeRef node) const;
   /// True when the node has eight childless children of one value (only
@@ -125,8 +155,8 @@ class OccupancyTree {
     return node.depth > 0 && (inner_[node.depth][node.group].all_same >> node.slot & 1u);
   }
 
-  /// Calls visit(code, depth, log_odds) for every childless node, in Morton
-  /// order; `code` is the node's first finest voxel.
+  /// Calls visit(node, code) for every childless node, in Morton order;
+  /// `code` is the node's first finest voxel.
   template <typename Visit>
   void for_each_leaf(Visit&& visit) const {
     visit_leaves(root(), 0, visit);
@@ -139,6 +169,13 @@ class OccupancyTree {
   void set(std::uint64_t code, float log_odds);
   /// Applies one scan's updates: `hit` to the batch's hit voxels, `miss` to its misses.
   void apply(const UpdateBatch& batch, float hit, float miss);
+  /// Adds one colour sample to finest voxel `code` (the tree must have colour).
+  void add_color(std::uint64_t code, Rgb rgb);
+  /// Adds colour samples in one walk; sorted by code, each voxel's samples
+  /// in the order they were observed (a stable sort keeps it).
+  void add_colors(std::span<const ColorSample> samples);
+  /// Sets the colour of finest voxel `code` with `weight` samples behind it (>= 1).
+  void set_color(std::uint64_t code, Rgb rgb, std::uint8_t weight = 1);
   /// Empties the tree (everything unknown).
   void clear();
 
@@ -164,6 +201,8 @@ class OccupancyTree {
   /// Sets a childless node's value without touching its ancestors; call
   /// refresh_all() when done.
   void set_childless_value(NodeRef node, float log_odds);
+  /// Sets a childless node's colour (weight 0: no colour); then refresh_all().
+  void set_childless_color(NodeRef node, Rgb rgb, std::uint8_t weight);
   /// Recomputes every inner value and indicator bottom up (no pruning).
   void refresh_all();
 
@@ -178,7 +217,7 @@ class OccupancyTree {
   template <typename Visit>
   void visit_leaves(NodeRef node, std::uint64_t first_code, Visit& visit) const {
     if (!has_children(node)) {
-      visit(first_code, static_cast<int>(node.depth), log_odds(node));
+      visit(node, first_code);
       return;
     }
     const int child_depth = node.depth - 1;
@@ -189,24 +228,34 @@ class OccupancyTree {
     }
   }
 
+  // Nodes are passed as (depth, group index, slot); references into a pool
+  // are taken only where nothing allocates in that pool meanwhile.
   std::uint32_t new_leaf_group(float value);
   std::uint32_t new_inner_group(int depth, float value);
+  std::uint32_t new_color_group(int depth, Rgb rgb, std::uint8_t weight);
   void release_group(int depth, std::uint32_t group);
-  /// Value and indicator bits of a childless slot.
+  /// Value and indicator bits of a childless slot (its colour is kept).
   void set_childless(InnerGroup& group, unsigned slot, float value) const;
-  /// Gives childless node (depth, group[slot]) eight children with its value.
-  void expand(int depth, InnerGroup& group, unsigned slot);
-  /// Recomputes node (depth, group[slot]) from its children; prunes when allowed.
-  void refresh(int depth, InnerGroup& group, unsigned slot, bool allow_prune);
+  /// Gives a childless node eight children with its value and colour.
+  void expand(int depth, std::uint32_t group, unsigned slot);
+  /// Recomputes a node with children from them; prunes when allowed.
+  void refresh(int depth, std::uint32_t group, unsigned slot, bool allow_prune);
   void apply_group(int depth, std::uint32_t group, const UpdateBatch& batch, std::uint32_t batch_group,
                    float hit, float miss);
   void apply_brick(std::uint32_t group, const UpdateBatch::Brick& todo, float hit, float miss);
-  void apply_everywhere(int depth, InnerGroup& group, unsigned slot, float delta);
-  void prune_below(int depth, InnerGroup& group, unsigned slot);
-  void refresh_below(int depth, InnerGroup& group, unsigned slot);
-  void clamp_below(int depth, InnerGroup& group, unsigned slot);
-  template <typename Change>
-  void modify_voxel(std::uint64_t code, Change change);
+  void apply_everywhere(int depth, std::uint32_t group, unsigned slot, float delta);
+  void prune_below(int depth, std::uint32_t group, unsigned slot);
+  void refresh_below(int depth, std::uint32_t group, unsigned slot);
+  void clamp_below(int depth, std::uint32_t group, unsigned slot);
+  using Path = std::array<std::uint32_t, kMaxDepthLevels + 1>;
+  /// Walks to finest voxel `code`, splitting inner leaves on the way; returns
+  /// its leaf group and fills path[d] with the group at depth d.
+  std::uint32_t descend_splitting(std::uint64_t code, Path& path);
+  /// Refreshes (and prunes) every ancestor of `code` along `path`, bottom up.
+  void refresh_path(std::uint64_t code, const Path& path);
+  void add_colors_below(int depth, std::uint32_t group, unsigned slot, std::span<const ColorSample> samples);
+  /// Running average of a voxel's colour with one more sample.
+  static void blend(Rgb& rgb, std::uint8_t& weight, Rgb sample);
   std::string check_node(int depth, std::uint32_t group, unsigned slot, std::vector<std::vector<bool>>& seen) const;
 
   int depth_levels_;
@@ -215,6 +264,7 @@ class OccupancyTree {
   bool auto_prune_ = true;
   GroupPool<LeafGroup> leaves_;
   std::vector<GroupPool<InnerGroup>> inner_;  // index = depth; [0] is unused
+  std::vector<GroupPool<ColorGroup>> colors_;  // index = depth; empty without colour
 };
 
 }  // namespace umbra
