@@ -623,7 +623,7 @@ TEST(ScanSource, FormatComesFromTheExtension) {
   // An explicit known format wins.
   EXPECT_EQ(scan_format_for("points.graph", "xyz"), "xyz");
   EXPECT_EQ(scan_format_for("points.pts", "graph"), "graph");
-  for (const char* name : {"cloud.pcd", "scan.bz2", "noextension", "graph", "x.graph.gz"}) {
+  for (const char* name : {"cloud.las", "scan.bz2", "noextension", "graph", "x.graph.gz"}) {
     try {
       (void)scan_format_for(name);
       ADD_FAILURE() << name << ": expected std::invalid_argument";
@@ -635,7 +635,7 @@ TEST(ScanSource, FormatComesFromTheExtension) {
       }
     }
   }
-  EXPECT_THROW((void)scan_format_for("a.xyz", "pcd"), std::invalid_argument);
+  EXPECT_THROW((void)scan_format_for("a.xyz", "las"), std::invalid_argument);
 }
 
 TEST(ScanSource, MissingFilesAreRuntimeErrorsNamingTheFile) {

@@ -20,12 +20,12 @@ std::filesystem::path source_dir();
 
 }  // namespace umbra::test
 
-/// Declares `path` as the shared data file `relative`, or skips the test with
-/// a message saying what is missing.
-#define UMBRA_REQUIRE_SHARED_DATA(path, relative)                                              \
-  const auto path##_found = ::umbra::test::shared_data(relative);                              \
-  if (!path##_found) {                                                                         \
+/// Declares `variable` as the path of the shared data file `relative`, or
+/// skips the test with a message saying what is missing.
+#define UMBRA_REQUIRE_SHARED_DATA(variable, relative)                                          \
+  const auto variable##_found = ::umbra::test::shared_data(relative);                          \
+  if (!variable##_found) {                                                                     \
     GTEST_SKIP() << "shared data file " << (relative)                                         \
                  << " not found (looked in " UMBRA_SHARED_DATA_DIR "); skipping this test";    \
   }                                                                                            \
-  const std::filesystem::path path = *path##_found
+  const ::std::filesystem::path variable = *variable##_found

@@ -5,9 +5,28 @@
 // optionally one colour per point. Readers pick the format from the file
 // extension unless ScanSourceOptions::format names it.
 //
-// Formats: OctoMap ScanGraph (.graph, poses inside), ASCII "x y z" per line
-// (.xyz, .dat, .txt, and any of them compressed as .bz2; the sensor sits at
-// ScanSourceOptions::origin).
+// Formats (format name: what open_scan_source accepts):
+//   graph  OctoMap ScanGraph, .graph: many scans, poses inside.
+//   xyz    ASCII "x y z [r g b]" per line, .xyz .dat .txt (each also .bz2):
+//          one scan at ScanSourceOptions::origin.
+//   ply    PLY, .ply (ascii, binary little/big endian): one scan at
+//          ScanSourceOptions::origin; colours from red/green/blue.
+//   pcd    PCL point cloud, .pcd (ascii, binary, binary_compressed): one
+//          scan; a non-identity VIEWPOINT is the sensor pose (points are
+//          in the sensor frame and are transformed by it, origin = its
+//          translation), else the points are taken as they are and the
+//          origin is ScanSourceOptions::origin. Colours from rgb/rgba.
+//   kitti  KITTI velodyne scans (float32 x y z reflectance): a folder of
+//          .bin files with ScanSourceOptions::poses (KITTI odometry poses,
+//          one 3x4 camera pose per scan) and optionally calibration
+//          (calib.txt, its Tr velodyne-to-camera); or one .bin file, which
+//          without poses is one scan at ScanSourceOptions::origin.
+//   tum    TUM RGB-D: the sequence folder (holding depth/ and rgb/ and one
+//          *assoc*.txt association file, or ScanSourceOptions::association)
+//          or the association file itself with format "tum"; every row
+//          whose depth and colour images exist is one scan, back-projected
+//          with ScanSourceOptions::depth_camera, origin = the camera position.
+// See ply_file.hpp, pcd_file.hpp, kitti_sequence.hpp and tum_sequence.hpp.
 //
 // Errors: malformed files throw umbra::FormatError naming the file and the
 // line or byte offset; a missing file throws std::runtime_error naming it.
@@ -44,17 +63,44 @@ class ScanSource {
   [[nodiscard]] virtual double progress() const = 0;
 };
 
+/// A pinhole depth camera (TUM RGB-D and other depth images): pixel (u, v)
+/// with raw depth value d lies at z = d / depth_scale metres in front of the
+/// camera, x = (u - cx) z / fx to the right, y = (v - cy) z / fy down (the
+/// optical frame). Defaults: the TUM fr2 Kinect, depth in 1/5000 m.
+struct DepthCamera {
+  double fx = 580.8;
+  double fy = 581.8;
+  double cx = 308.8;
+  double cy = 253.0;
+  double depth_scale = 5000.0;  ///< raw depth units per metre
+};
+
 struct ScanSourceOptions {
-  std::string format;  ///< "graph", "xyz"; empty: chosen by extension
-  Vec3f origin{};      ///< sensor origin for formats that carry none (xyz)
+  std::string format;  ///< "graph", "xyz", "ply", "pcd", "kitti", "tum"; empty: chosen by the name
+  Vec3f origin{};      ///< sensor origin for formats that carry none (xyz, ply, pcd without viewpoint, lone .bin)
+  /// kitti: the poses file (KITTI odometry: 12 numbers per line, the 3x4
+  /// row-major pose of camera 0 in the world, one line per scan).
+  std::filesystem::path poses;
+  /// kitti: calib.txt whose "Tr:" line maps velodyne to camera 0 (also
+  /// "Tr_velo_to_cam:", or "R:" + "T:" lines); empty: identity, i.e. the
+  /// poses are velodyne poses.
+  std::filesystem::path calibration;
+  /// tum: the association file when opening a folder (relative paths are
+  /// taken relative to the folder); empty: the folder's one *assoc*.txt.
+  std::filesystem::path association;
+  DepthCamera depth_camera;  ///< tum: intrinsics and depth scale
 };
 
 /// Opens `path`; throws std::runtime_error / FormatError as described above.
 std::unique_ptr<ScanSource> open_scan_source(const std::filesystem::path& path,
                                              const ScanSourceOptions& options = {});
 
-/// The format name open_scan_source would use for `path` ("graph", "xyz"), or
-/// throws std::invalid_argument listing the known extensions.
+/// The format name open_scan_source would use for `path`, or throws
+/// std::invalid_argument listing the known extensions. By name (after
+/// removing a trailing .bz2, any case): .graph graph; .xyz .dat .txt xyz;
+/// .ply ply; .pcd pcd; .bin kitti. Otherwise an existing folder holding
+/// depth/ and rgb/ is tum, one holding .bin files is kitti. A known
+/// `format` wins over all of this.
 std::string scan_format_for(const std::filesystem::path& path, const std::string& format = "");
 
 }  // namespace umbra

@@ -1,0 +1,213 @@
+// Internal helpers shared by the PLY, PCD, KITTI and TUM readers (not installed).
+//
+// InputFile opens a regular file (std::runtime_error "cannot open FILE:
+// reason" otherwise) and reads at offsets with pread; ByteReader streams its
+// bytes through one reusable buffer and hands out pointers to whole records
+// (no per-record allocation, a file that ends early is reported by a null
+// pointer so the caller can name what was expected at which byte offset);
+// LineReader splits text into lines without copying them and counts them.
+// The number parsers wrap std::from_chars; the scalar loaders decode
+// little- or big-endian integers and IEEE floats of 1, 2, 4 or 8 bytes; Pose
+// is a rigid (or affine) 3x4 transform kept in double and applied to float
+// points with one rounding per coordinate.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "umbra/core/vec3.hpp"
+
+namespace umbra::io_detail {
+
+std::string errno_text(int error);
+
+/// `text` quoted for an error message: control bytes shown as '?', at most 80 characters.
+std::string quote(std::string_view text);
+
+/// True when the file name ends in ".bz2" (any case).
+bool has_bz2_suffix(const std::filesystem::path& path);
+
+/// A regular file opened for reading (binary), with its size fixed at open.
+class InputFile {
+ public:
+  /// Throws std::runtime_error("cannot open FILE: reason") for a missing file,
+  /// a directory or anything else that is not a readable regular file.
+  explicit InputFile(const std::filesystem::path& path);
+  InputFile(const InputFile&) = delete;
+  InputFile& operator=(const InputFile&) = delete;
+  ~InputFile();
+
+  [[nodiscard]] const std::string& name() const { return name_; }
+  [[nodiscard]] std::uint64_t size() const { return size_; }
+
+  /// Reads up to `capacity` bytes at `offset`; fewer only at the end of the
+  /// file. Throws std::runtime_error when the system reports an error.
+  std::size_t read_at(std::uint64_t offset, void* out, std::size_t capacity);
+
+ private:
+  std::string name_;
+  int descriptor_ = -1;
+  std::uint64_t size_ = 0;
+};
+
+/// Sequential binary reading through one buffer.
+class ByteReader {
+ public:
+  ByteReader(InputFile& file, std::uint64_t offset, std::size_t buffer_bytes = std::size_t{1} << 20);
+
+  /// The next `count` bytes, contiguous, valid until the next call; null when
+  /// the file ends before them (the position is then unchanged).
+  const unsigned char* take(std::size_t count) {
+    if (end_ - begin_ < count && !fill(count)) return nullptr;
+    const unsigned char* bytes = buffer_.data() + begin_;
+    begin_ += count;
+    return bytes;
+  }
+
+  /// Skips `count` bytes; false (position unchanged) when the file is shorter.
+  bool skip(std::uint64_t count);
+
+  /// File offset of the next byte take() returns.
+  [[nodiscard]] std::uint64_t offset() const { return buffer_end_offset_ - (end_ - begin_); }
+  /// Bytes left in the file after offset().
+  [[nodiscard]] std::uint64_t remaining() const { return file_.size() - offset(); }
+
+ private:
+  bool fill(std::size_t count);
+
+  InputFile& file_;
+  std::vector<unsigned char> buffer_;
+  std::size_t begin_ = 0;                // next unread byte in buffer_
+  std::size_t end_ = 0;                  // one past the last valid byte in buffer_
+  std::uint64_t buffer_end_offset_ = 0;  // file offset of buffer_[end_]
+};
+
+/// Splits a file (from some offset on) into lines.
+class LineReader {
+ public:
+  /// Reads from `offset`; the first line returned gets number `first_line`.
+  /// Lines longer than `max_line_bytes` are a FormatError ("is this a text file?").
+  LineReader(InputFile& file, std::uint64_t offset, std::uint64_t first_line = 1,
+             std::size_t max_line_bytes = std::size_t{1} << 20);
+
+  /// The next line without its '\n' and trailing '\r'; false at the end of
+  /// the file. The view stays valid until the next call.
+  bool next(std::string_view& line);
+
+  /// Number of the line last returned (0 before the first).
+  [[nodiscard]] std::uint64_t line_number() const { return line_number_; }
+  /// File offset just past the line last returned (its '\n' included).
+  [[nodiscard]] std::uint64_t offset() const { return buffer_end_offset_ - (end_ - begin_); }
+
+ private:
+  InputFile& file_;
+  std::size_t max_line_bytes_;
+  std::vector<char> buffer_;
+  std::size_t begin_ = 0;
+  std::size_t end_ = 0;
+  std::uint64_t buffer_end_offset_ = 0;
+  std::uint64_t line_number_ = 0;
+  bool at_end_ = false;
+};
+
+/// Whitespace-separated tokens of one line.
+class Tokens {
+ public:
+  explicit Tokens(std::string_view line) : line_(line) {}
+  /// The next token; empty at the end of the line.
+  std::string_view next() {
+    while (position_ < line_.size() && is_space(line_[position_])) ++position_;
+    const std::size_t start = position_;
+    while (position_ < line_.size() && !is_space(line_[position_])) ++position_;
+    return line_.substr(start, position_ - start);
+  }
+  /// True when only whitespace is left.
+  bool at_end() {
+    while (position_ < line_.size() && is_space(line_[position_])) ++position_;
+    return position_ == line_.size();
+  }
+  /// Number of tokens left (does not consume them).
+  [[nodiscard]] std::size_t count_left() const;
+
+  static bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+ private:
+  std::string_view line_;
+  std::size_t position_ = 0;
+};
+
+/// Parses a whole token as a float (decimal or scientific, optional '+',
+/// "nan", "inf"); values beyond float range become +-inf as strtof would.
+bool parse_float(std::string_view token, float& value);
+/// The same for double.
+bool parse_double(std::string_view token, double& value);
+/// A whole token as a non-negative decimal integer.
+bool parse_unsigned(std::string_view token, std::uint64_t& value);
+/// A whole token as a decimal integer with optional sign.
+bool parse_signed(std::string_view token, std::int64_t& value);
+
+/// The numeric types of the binary point formats.
+enum class ScalarKind : std::uint8_t { signed_integer, unsigned_integer, floating_point };
+
+struct ScalarType {
+  ScalarKind kind = ScalarKind::floating_point;
+  std::uint8_t bytes = 4;  ///< 1, 2, 4 or 8 (floating point: 4 or 8)
+};
+
+/// The raw bits of a `bytes`-byte field (1..8), little- or big-endian.
+inline std::uint64_t load_bits(const unsigned char* data, std::size_t bytes, bool big_endian) {
+  std::uint64_t bits = 0;
+  if (big_endian) {
+    for (std::size_t i = 0; i < bytes; ++i) bits = (bits << 8) | data[i];
+  } else {
+    for (std::size_t i = bytes; i-- > 0;) bits = (bits << 8) | data[i];
+  }
+  return bits;
+}
+
+/// The value of a binary scalar as double (exact for every type but 64-bit integers).
+double load_scalar(const unsigned char* data, ScalarType type, bool big_endian);
+
+/// The value of a text token of the given type, as double; false when the
+/// token is not a number of that kind (integers must be integers in range).
+bool parse_scalar(std::string_view token, ScalarType type, double& value);
+
+/// A 3x4 transform [R | t] in double: world = R p + t.
+struct Pose {
+  std::array<std::array<double, 4>, 3> m{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}}};
+
+  /// From a translation and a quaternion (w, x, y, z), normalised here.
+  /// Throws std::invalid_argument for a non-finite value or a zero quaternion.
+  static Pose from_translation_quaternion(double tx, double ty, double tz, double qw, double qx, double qy,
+                                          double qz);
+
+  [[nodiscard]] Vec3f translation() const {
+    return {static_cast<float>(m[0][3]), static_cast<float>(m[1][3]), static_cast<float>(m[2][3])};
+  }
+  [[nodiscard]] bool is_identity() const;
+
+  [[nodiscard]] Vec3f apply(Vec3f p) const {
+    const double x = p.x;
+    const double y = p.y;
+    const double z = p.z;
+    return {static_cast<float>(m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3]),
+            static_cast<float>(m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3]),
+            static_cast<float>(m[2][0] * x + m[2][1] * y + m[2][2] * z + m[2][3])};
+  }
+  /// Same, for a point given in double.
+  [[nodiscard]] Vec3f apply(double x, double y, double z) const {
+    return {static_cast<float>(m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3]),
+            static_cast<float>(m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3]),
+            static_cast<float>(m[2][0] * x + m[2][1] * y + m[2][2] * z + m[2][3])};
+  }
+
+  /// this * other (apply `other` first).
+  [[nodiscard]] Pose operator*(const Pose& other) const;
+};
+
+}  // namespace umbra::io_detail
