@@ -68,7 +68,7 @@ void OccupancyMap::set_log_odds(Key key, float log_odds) {
 
 InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
                                              const InsertOptions& options) {
-  return integrator_.insert(tree_, grid_, sensor_, origin, points, {}, options);
+  return integrator_.insert(tree_, grid_, sensor_, origin, points, {}, options, bounding_box_);
 }
 
 InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
@@ -80,7 +80,12 @@ InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f
     throw std::invalid_argument("colours given for " + std::to_string(colors.size()) + " points, the scan has " +
                                 std::to_string(points.size()));
   }
-  return integrator_.insert(tree_, grid_, sensor_, origin, points, colors, options);
+  return integrator_.insert(tree_, grid_, sensor_, origin, points, colors, options, bounding_box_);
+}
+
+void OccupancyMap::set_bounding_box(const std::optional<Aabb>& box) {
+  if (box) box->validate();
+  bounding_box_ = box;
 }
 
 namespace {

@@ -197,6 +197,32 @@ NodeSummary OccupancyTree::find(std::uint64_t code, int depth) const {
   }
 }
 
+OccupancyTree::Cursor::Cursor(const OccupancyTree& tree) : tree_(tree), valid_from_(tree.depth_levels_) {
+  path_[tree.depth_levels_] = 0;
+}
+
+float OccupancyTree::Cursor::max_log_odds(std::uint64_t code, int depth) {
+  // Groups at depths >= the highest differing depth are shared with the last path.
+  const int top = morton::highest_differing_depth(code, last_code_);
+  int d = std::max({top, valid_from_, depth});
+  last_code_ = code;
+  std::uint32_t group = path_[d];
+  for (;; --d) {
+    if (d == 0) {
+      valid_from_ = 0;
+      return tree_.leaves_[group].log_odds[morton::slot(code, 0)];
+    }
+    const InnerGroup& node = tree_.inner_[d][group];
+    const unsigned slot = morton::slot(code, d);
+    if (d == depth || node.child[slot] == kNoGroup) {
+      valid_from_ = d;
+      return node.log_odds[slot];
+    }
+    group = node.child[slot];
+    path_[d - 1] = group;
+  }
+}
+
 std::optional<Rgb> OccupancyTree::color(NodeRef node) const {
   if (!has_color()) return std::nullopt;
   const ColorGroup& colors = colors_[node.depth][node.group];

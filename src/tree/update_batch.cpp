@@ -6,6 +6,27 @@ namespace umbra {
 
 UpdateBatch::UpdateBatch(int depth_levels) { reset(depth_levels); }
 
+UpdateBatch::UpdateBatch(const UpdateBatch& other) { *this = other; }
+
+UpdateBatch& UpdateBatch::operator=(const UpdateBatch& other) {
+  if (this == &other) return *this;
+  depth_levels_ = other.depth_levels_;
+  bricks_ = other.bricks_;
+  inner_ = other.inner_;
+  reset_cache();
+  return *this;
+}
+
+void UpdateBatch::reset_cache() {
+  last_code_ = 0;
+  path_.fill(kNoGroup);
+  path_[depth_levels_] = 0;
+  valid_from_ = depth_levels_;
+  covered_depth_ = -1;
+  brick_ = depth_levels_ == 1 ? &bricks_[0] : nullptr;
+  group2_ = depth_levels_ == 2 ? &inner_[2][0] : nullptr;
+}
+
 void UpdateBatch::reset(int depth_levels) {
   UMBRA_ASSERT(depth_levels >= 1 && depth_levels <= kMaxDepthLevels);
   depth_levels_ = depth_levels;
@@ -14,13 +35,7 @@ void UpdateBatch::reset(int depth_levels) {
   inner_.resize(static_cast<std::size_t>(depth_levels) + 1);
   [[maybe_unused]] const std::uint32_t root_group = new_group(depth_levels, false);
   UMBRA_ASSERT(root_group == 0);
-  last_code_ = 0;
-  path_.fill(kNoGroup);
-  path_[depth_levels] = root_group;
-  valid_from_ = depth_levels;
-  covered_depth_ = -1;
-  brick_ = depth_levels == 1 ? &bricks_[root_group] : nullptr;
-  group2_ = depth_levels == 2 ? &inner_[2][root_group] : nullptr;
+  reset_cache();
 }
 
 std::uint32_t UpdateBatch::new_group(int depth, bool full) {
@@ -29,12 +44,15 @@ std::uint32_t UpdateBatch::new_group(int depth, bool full) {
     Brick& brick = bricks_[group];
     brick.miss.fill(full ? 0xFF : 0);
     brick.hit.fill(0);
+    brick.keep = 0;
     return group;
   }
   const std::uint32_t group = inner_[depth].allocate();
   Inner& node = inner_[depth][group];
   node.child.fill(kNoGroup);
   node.full = full ? 0xFF : 0;
+  node.hits = 0;
+  node.keep = 0;
   return group;
 }
 
@@ -87,6 +105,10 @@ std::uint32_t UpdateBatch::descend(std::uint64_t code, int depth, Mark mark) {
 void UpdateBatch::add_hit(std::uint64_t code) {
   const std::uint32_t group = descend(code, 1, Mark::hit);
   bricks_[group].hit[morton::slot(code, 1)] |= static_cast<std::uint8_t>(1u << morton::slot(code, 0));
+  // Every group on the path now holds a hit (path_ is valid from depth 1 up).
+  for (int d = 2; d <= depth_levels_; ++d) {
+    inner_[d][path_[d]].hits |= static_cast<std::uint8_t>(1u << morton::slot(code, d));
+  }
 }
 
 void UpdateBatch::add_misses_slow(std::uint64_t code, std::uint64_t voxels) {
@@ -94,29 +116,39 @@ void UpdateBatch::add_misses_slow(std::uint64_t code, std::uint64_t voxels) {
   or_misses(code, voxels);
 }
 
-void UpdateBatch::add_miss_node(std::uint64_t code, int depth) {
+void UpdateBatch::add_miss_node(std::uint64_t code, int depth) { miss_node(code, depth, false); }
+
+bool UpdateBatch::add_miss_node_unless_hit(std::uint64_t code, int depth) { return miss_node(code, depth, true); }
+
+bool UpdateBatch::miss_node(std::uint64_t code, int depth, bool unless_hit) {
   UMBRA_ASSERT(depth >= 0 && depth <= depth_levels_);
   if (depth == 0) {
+    if (unless_hit && descend(code, 1, Mark::miss) != kNoGroup &&
+        (bricks_[path_[1]].hit[morton::slot(code, 1)] >> morton::slot(code, 0) & 1u) != 0) {
+      return false;
+    }
     add_miss(code);
-    return;
+    return true;
   }
   const int top = morton::highest_differing_depth(code, last_code_);
-  if (top < covered_depth_ && depth <= covered_depth_) return;
+  if (top < covered_depth_ && depth <= covered_depth_) return true;
   const std::uint32_t group = descend(code, depth, Mark::miss);
-  if (group == kNoGroup) return;
+  if (group == kNoGroup) return true;  // a full node above covers it
   const unsigned slot = morton::slot(code, depth);
   if (depth == 1) {
     Brick& brick = bricks_[group];
+    if (unless_hit && (brick.hit[slot] != 0 || (brick.keep >> slot & 1u) != 0)) return false;
     brick.miss[slot] = 0xFF;
     if (is_full(brick)) collapse_upwards(code, 1);
-    return;
+    return true;
   }
   Inner& node = inner_[depth][group];
   const auto bit = static_cast<std::uint8_t>(1u << slot);
+  if (unless_hit && ((node.hits | node.keep) & bit) != 0) return false;
   if (!(node.full & bit)) {
     const std::uint32_t child = node.child[slot];
     if (child != kNoGroup) {
-      if (!fill_with_misses(depth - 1, child)) return;  // a hit below keeps the node partial
+      if (!fill_with_misses(depth - 1, child)) return true;  // a hit below keeps the node partial
       release_group(depth - 1, child);
       node.child[slot] = kNoGroup;
     }
@@ -127,6 +159,20 @@ void UpdateBatch::add_miss_node(std::uint64_t code, int depth) {
   } else {
     covered_depth_ = depth;
     valid_from_ = depth;
+  }
+  return true;
+}
+
+void UpdateBatch::keep_fine(std::uint64_t code, int depth) {
+  UMBRA_ASSERT(depth >= 1 && depth <= depth_levels_);
+  // Descending as a hit does splits any full node on the way, which is right:
+  // a kept node must stay open for voxel-by-voxel misses.
+  const std::uint32_t group = descend(code, depth, Mark::hit);
+  const auto bit = static_cast<std::uint8_t>(1u << morton::slot(code, depth));
+  if (depth == 1) {
+    bricks_[group].keep |= bit;
+  } else {
+    inner_[depth][group].keep |= bit;
   }
 }
 
@@ -168,30 +214,20 @@ void UpdateBatch::collapse_upwards(std::uint64_t code, int depth) {
   valid_from_ = d;
 }
 
-void UpdateBatch::merge(const UpdateBatch& other) {
+void UpdateBatch::merge(const UpdateBatch& other, bool with_hits) {
   UMBRA_ASSERT(other.depth_levels_ == depth_levels_);
-  merge_group(other, depth_levels_, 0, 0);
+  merge_group(other, depth_levels_, 0, 0, with_hits);
 }
 
 void UpdateBatch::merge_group(const UpdateBatch& other, int depth, std::uint32_t other_group,
-                              std::uint64_t first_code) {
+                              std::uint64_t first_code, bool with_hits) {
   // Slots of the root group beyond 0 are never used, so visiting them is harmless.
   if (depth == 1) {
     const Brick& brick = other.bricks_[other_group];
-    for (unsigned node = 0; node < 8; ++node) {
-      const std::uint64_t node_code = first_code | (std::uint64_t{node} << 3);
-      if (brick.miss[node] == 0xFF && brick.hit[node] == 0) {
-        add_miss_node(node_code, 1);
-        continue;
-      }
-      for (unsigned voxel = 0; voxel < 8; ++voxel) {
-        const auto bit = static_cast<std::uint8_t>(1u << voxel);
-        if (brick.hit[node] & bit) {
-          add_hit(node_code | voxel);
-        } else if (brick.miss[node] & bit) {
-          add_miss(node_code | voxel);
-        }
-      }
+    if (const auto misses = std::bit_cast<std::uint64_t>(brick.miss); misses != 0) add_misses_in_brick(first_code, misses);
+    if (!with_hits) return;
+    for (auto hits = std::bit_cast<std::uint64_t>(brick.hit); hits != 0; hits &= hits - 1) {
+      add_hit(first_code | static_cast<std::uint64_t>(std::countr_zero(hits)));
     }
     return;
   }
@@ -201,9 +237,26 @@ void UpdateBatch::merge_group(const UpdateBatch& other, int depth, std::uint32_t
     if (node.full & (1u << slot)) {
       add_miss_node(code, depth);
     } else if (node.child[slot] != kNoGroup) {
-      merge_group(other, depth - 1, node.child[slot], code);
+      merge_group(other, depth - 1, node.child[slot], code, with_hits);
     }
   }
+}
+
+bool UpdateBatch::holds_hit(std::uint64_t code, int depth) const {
+  std::uint32_t group = 0;
+  for (int d = depth_levels_; d >= 1; --d) {
+    const unsigned slot = morton::slot(code, d);
+    if (d == 1) {
+      const Brick& brick = bricks_[group];
+      return depth == 1 ? brick.hit[slot] != 0 : (brick.hit[slot] >> morton::slot(code, 0) & 1u) != 0;
+    }
+    const Inner& node = inner_[d][group];
+    if ((node.hits >> slot & 1u) == 0) return false;
+    if (d == depth) return true;
+    group = node.child[slot];
+    if (group == kNoGroup) return false;
+  }
+  return false;
 }
 
 bool UpdateBatch::empty() const {

@@ -43,6 +43,7 @@ Model contents(const UpdateBatch& batch) {
     const UpdateBatch::Inner& node = batch.inner(depth, group);
     for (unsigned slot = 0; slot < 8; ++slot) {
       const std::uint64_t child_first = first | (std::uint64_t{slot} << (3 * depth));
+
       if (node.full >> slot & 1u) {
         EXPECT_EQ(node.child[slot], kNoGroup) << "a full node has no children";
         expand_full(child_first, depth);
@@ -55,6 +56,25 @@ Model contents(const UpdateBatch& batch) {
   return out;
 }
 
+/// Every inner node's `hits` bit says whether its region holds a hit of `model`.
+void expect_hit_bits(const UpdateBatch& batch, const Model& model) {
+  auto visit = [&](auto& self, int depth, std::uint32_t group, std::uint64_t first) -> void {
+    if (depth == 1) return;
+    const UpdateBatch::Inner& node = batch.inner(depth, group);
+    for (unsigned slot = 0; slot < 8; ++slot) {
+      const std::uint64_t child_first = first | (std::uint64_t{slot} << (3 * depth));
+      const std::uint64_t count = std::uint64_t{1} << (3 * depth);
+      bool holds_hit = false;
+      for (auto it = model.lower_bound(child_first); it != model.end() && it->first < child_first + count; ++it) {
+        holds_hit |= it->second == Mark::hit;
+      }
+      ASSERT_EQ((node.hits >> slot & 1u) != 0, holds_hit) << "depth " << depth << " slot " << slot;
+      if (node.child[slot] != kNoGroup) self(self, depth - 1, node.child[slot], child_first);
+    }
+  };
+  visit(visit, batch.depth_levels(), 0, 0);
+}
+
 void random_fill(UpdateBatch& batch, Model& model, std::mt19937& rng, int depth_levels, int count) {
   const std::uint32_t size = 1u << depth_levels;
   const std::uint32_t region = std::min<std::uint32_t>(size, 8);
@@ -62,8 +82,21 @@ void random_fill(UpdateBatch& batch, Model& model, std::mt19937& rng, int depth_
     const std::uint64_t c = morton::encode({static_cast<std::uint32_t>(rng() % region),
                                             static_cast<std::uint32_t>(rng() % region),
                                             static_cast<std::uint32_t>(rng() % region)});
-    const unsigned what = rng() % 10;
-    if (what == 0) {
+    const unsigned what = rng() % 12;
+    if (what >= 10) {
+      // Whole-node miss unless the node holds a hit.
+      const int depth = static_cast<int>(rng() % static_cast<unsigned>(std::min(depth_levels, 3) + 1));
+      const std::uint64_t first = morton::node_begin(c, depth);
+      const std::uint64_t voxels = std::uint64_t{1} << (3 * depth);
+      bool holds_hit = false;
+      for (auto it = model.lower_bound(first); it != model.end() && it->first < first + voxels; ++it) {
+        holds_hit |= it->second == Mark::hit;
+      }
+      ASSERT_EQ(batch.add_miss_node_unless_hit(c, depth), !holds_hit);
+      if (!holds_hit) {
+        for (std::uint64_t v = 0; v < voxels; ++v) add_to_model(model, first + v, Mark::miss);
+      }
+    } else if (what == 0) {
       batch.add_hit(c);
       add_to_model(model, c, Mark::hit);
     } else if (what == 1) {
@@ -86,6 +119,7 @@ TEST(UpdateBatch, HoldsExactlyTheMarkedVoxelsWithHitsWinning) {
       Model model;
       random_fill(batch, model, rng, depth_levels, 600);
       ASSERT_EQ(contents(batch), model) << "depth levels " << depth_levels << " seed " << seed;
+      expect_hit_bits(batch, model);
       ASSERT_FALSE(batch.empty());
     }
   }
@@ -124,10 +158,13 @@ TEST(UpdateBatch, MergeIsTheUnion) {
       UpdateBatch a(depth_levels);
       UpdateBatch b(depth_levels);
       Model model;
+      Model model_b;
       random_fill(a, model, rng, depth_levels, 400);
-      random_fill(b, model, rng, depth_levels, 400);
+      random_fill(b, model_b, rng, depth_levels, 400);
+      for (const auto& [code, mark] : model_b) add_to_model(model, code, mark);
       a.merge(b);
       ASSERT_EQ(contents(a), model) << "depth levels " << depth_levels << " seed " << seed;
+      expect_hit_bits(a, model);
     }
   }
 }

@@ -1,6 +1,7 @@
 // Integrator: turns one scan (sensor origin + points) into map updates.
 //
-// Semantics are OctoMap's insertPointCloud (DESIGN.md §1):
+// Semantics of the simple and discrete integrators are OctoMap's
+// insertPointCloud (DESIGN.md §1), voxel for voxel:
 //  - simple:   a ray from the origin to every point; the voxels before the
 //              end voxel get a miss, the end voxel a hit
 //              (insertPointCloud(..., discretize = false));
@@ -9,33 +10,55 @@
 // Within one scan a voxel is updated at most once and a hit wins over a miss.
 // A point farther than max_range (when max_range > 0) gives only a miss ray
 // truncated at max_range. NaN / infinite points are skipped and counted; so
-// are points outside the map (OctoMap drops their rays too). With colours,
-// every point that gives a hit adds its colour to its voxel (for the discrete
-// integrator: every point of an end voxel whose ray gives a hit).
+// are points outside the map (OctoMap drops their rays too).
+//
+// The fast integrator (the UFOMap paper's "fast discrete"): end points as for
+// discrete; free space is cleared a depth-`clear_depth` node at a time, and
+// only the last `fine_steps` coarse nodes before the end point (and the end
+// node) are traced voxel by voxel; `fine_steps = 0` clears coarse nodes only.
+// A coarse node the map says holds an obstacle, or that holds a hit of this
+// scan, is never cleared whole: the ray is traced through it voxel by voxel.
+// Hits are always at the finest depth.
+//
+// Bounding box (OccupancyMap::set_bounding_box): rays are clipped to it
+// (begin and end move towards each other; a clipped end gives no hit), and
+// only voxels in the box change; points outside still clear space inside.
+//
+// Colours: every point that gives a hit adds its colour to its voxel (for the
+// discrete and fast integrators: every point of an end voxel whose ray gives
+// a hit).
+//
+// Threads: the rays are split over a thread pool, each worker tracing into
+// its own UpdateBatch; the batches are merged and applied once. The map is
+// the same for every thread count (a test checks it).
 //
 // Data flow: points -> ray walk -> UpdateBatch (de-duplicated hit/miss
 // marks, no hashing) -> OccupancyTree::apply (one walk over the tree). The
-// batch is kept between scans only as a member to avoid re-creating it; its
-// memory is released after every scan so that the peak while inserting stays
-// close to the map itself.
+// batches' memory is released after every scan so that the peak while
+// inserting stays close to the map itself.
 #pragma once
 
 #include <cstddef>
+#include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "umbra/core/aabb.hpp"
+#include "umbra/core/color.hpp"
 #include "umbra/core/grid.hpp"
 #include "umbra/core/log_odds.hpp"
+#include "umbra/core/thread_pool.hpp"
 #include "umbra/core/vec3.hpp"
+#include "umbra/integrate/ray_tracer.hpp"
 #include "umbra/tree/occupancy_tree.hpp"
-#include "umbra/tree/update_batch.hpp"
 
 namespace umbra {
 
-enum class IntegratorKind { simple, discrete };
+enum class IntegratorKind { simple, discrete, fast };
 
-/// "simple" / "discrete"; throws std::invalid_argument for anything else.
+/// "simple" / "discrete" / "fast"; throws std::invalid_argument for anything else.
 IntegratorKind parse_integrator_kind(const std::string& name);
 const char* to_string(IntegratorKind kind);
 
@@ -43,54 +66,58 @@ struct InsertOptions {
   IntegratorKind integrator = IntegratorKind::simple;
   /// Metres; <= 0 means unlimited (OctoMap's default -1).
   double max_range = -1.0;
+  /// fast: depth of the nodes cleared whole; -1: the depth whose nodes are
+  /// closest to 16 cm (the UFOMap paper's setting).
+  int clear_depth = -1;
+  /// fast: coarse nodes before the end point traced voxel by voxel; 0: none.
+  int fine_steps = 2;
+  /// Threads tracing rays; 0: all cores.
+  unsigned threads = 0;
 
-  /// Throws std::invalid_argument when max_range is NaN.
-  void validate() const;
+  /// Throws std::invalid_argument naming the bad field (NaN max_range,
+  /// clear_depth above the map's depth levels, negative fine_steps).
+  void validate(int depth_levels) const;
+  /// The clear depth used for a map with this grid.
+  [[nodiscard]] int resolved_clear_depth(const Grid& grid) const;
 };
 
 /// What happened to the points of one scan.
 struct InsertStats {
   std::size_t points = 0;          ///< points given
-  std::size_t rays = 0;            ///< rays traced (after per-voxel de-duplication when discrete)
-  std::size_t hits = 0;            ///< end points that were marked occupied
+  std::size_t rays = 0;            ///< rays traced (after per-voxel de-duplication when discrete / fast)
+  std::size_t hits = 0;            ///< rays whose end voxel got a hit
   std::size_t truncated = 0;       ///< rays beyond max_range, cut there, without a hit
   std::size_t non_finite = 0;      ///< NaN / infinite points, skipped
   std::size_t out_of_bounds = 0;   ///< points (or truncated ends) outside the map, skipped
+  std::size_t outside_box = 0;     ///< rays that miss the bounding box entirely, skipped
 
   InsertStats& operator+=(const InsertStats& other);
 };
 
 class Integrator {
  public:
+  Integrator();
+  ~Integrator();
+  Integrator(Integrator&&) noexcept;
+  Integrator& operator=(Integrator&&) noexcept;
+
   /// Integrates one scan into `tree`, whose voxels are laid out by `grid`.
   /// `colors` is empty or holds one colour per point (the tree must have
-  /// colour then): every point that gives a hit adds its colour to its voxel.
-  /// Throws std::invalid_argument for a non-finite origin and
-  /// std::out_of_range for an origin outside the map; the tree is unchanged then.
+  /// colour then). `box`: clip rays to it. Throws std::invalid_argument for
+  /// a non-finite origin or bad options and std::out_of_range for an origin
+  /// outside the map; the tree is unchanged then.
   InsertStats insert(OccupancyTree& tree, const Grid& grid, const SensorModel& sensor, Vec3f origin,
-                     std::span<const Vec3f> points, std::span<const Rgb> colors, const InsertOptions& options);
+                     std::span<const Vec3f> points, std::span<const Rgb> colors, const InsertOptions& options,
+                     const std::optional<Aabb>& box = std::nullopt);
 
-  /// Bytes held between scans: the empty batch and the longest ray's runs.
-  [[nodiscard]] std::size_t memory_bytes() const {
-    return batch_.memory_bytes() + runs_.capacity() * sizeof(BrickRun);
-  }
+  /// Bytes held between scans: the tracers' scratch buffers and empty batches.
+  [[nodiscard]] std::size_t memory_bytes() const;
 
  private:
-  /// Adds the rays to `points` to the batch; the shared part of both integrators.
-  void trace(const Grid& grid, Vec3f origin, std::span<const Vec3f> points, double max_range,
-             InsertStats& stats);
-  /// Walks one ray and adds its misses to the batch, a brick at a time.
-  void add_ray_misses(const Grid& grid, Vec3f origin, Key origin_key, Vec3f end, Key end_key);
+  void ensure_workers(unsigned threads);
 
-  /// A run of a ray's voxels inside one brick (4x4x4 voxels, see UpdateBatch):
-  /// bit i of `voxels` is voxel (code & ~63) + i.
-  struct BrickRun {
-    std::uint64_t code;
-    std::uint64_t voxels;
-  };
-
-  UpdateBatch batch_;
-  std::vector<BrickRun> runs_;  // one ray's runs; capacity kept between rays
+  std::unique_ptr<ThreadPool> pool_;
+  std::vector<std::unique_ptr<RayTracer>> tracers_;  // one per worker
 };
 
 }  // namespace umbra

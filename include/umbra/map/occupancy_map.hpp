@@ -95,6 +95,13 @@ class OccupancyMap {
   /// Sets the voxel's colour outright.
   void set_color(Key key, Rgb rgb);
 
+  // --- bounding box ---------------------------------------------------------
+  /// Limits future insertions to a box: rays are clipped to it and only its
+  /// voxels change (points outside still clear the space inside). Nothing: no
+  /// limit. Throws std::invalid_argument for a box with min > max.
+  void set_bounding_box(const std::optional<Aabb>& box);
+  [[nodiscard]] const std::optional<Aabb>& bounding_box() const { return bounding_box_; }
+
   // --- inserting scans ----------------------------------------------------
   /// Integrates one scan (see integrate/integrator.hpp for the exact rules).
   InsertStats insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
@@ -152,6 +159,7 @@ class OccupancyMap {
   Thresholds thresholds_;
   OccupancyTree tree_;
   Integrator integrator_;
+  std::optional<Aabb> bounding_box_;
 };
 
 }  // namespace umbra

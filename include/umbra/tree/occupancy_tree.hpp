@@ -155,6 +155,25 @@ class OccupancyTree {
     return node.depth > 0 && (inner_[node.depth][node.group].all_same >> node.slot & 1u);
   }
 
+  /// Cursor: repeated lookups along a path (a ray) at the cost of the part
+  /// of the path that changed, by caching the groups of the last lookup.
+  /// It reads the tree: any change to the tree makes it stale (make a new
+  /// one). Not thread-safe; use one cursor per thread (the tree itself may
+  /// be read by many).
+  class Cursor {
+   public:
+    explicit Cursor(const OccupancyTree& tree);
+    /// Value (the maximum) of the node at `depth` on the path to `code`, or of
+    /// the inner leaf above it that covers it.
+    float max_log_odds(std::uint64_t code, int depth);
+
+   private:
+    const OccupancyTree& tree_;
+    std::uint64_t last_code_ = 0;
+    std::array<std::uint32_t, kMaxDepthLevels + 1> path_{};  // group per depth, valid from valid_from_ up
+    int valid_from_;
+  };
+
   /// Calls visit(node, code) for every childless node, in Morton order;
   /// `code` is the node's first finest voxel.
   template <typename Visit>

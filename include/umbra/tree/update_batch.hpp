@@ -23,7 +23,9 @@
 // Adding codes in ray order is cheap: the path of the previous code is
 // cached, and a new code only descends from the highest depth at which the
 // two paths differ. The tree applies a batch in one depth-first walk
-// (OccupancyTree::apply).
+// (OccupancyTree::apply). Inner groups also remember which nodes hold a hit,
+// so that the fast integrator can avoid clearing a coarse node wholesale
+// when this scan saw a surface inside it.
 //
 // Not thread-safe; use one batch per thread and merge() them.
 #pragma once
@@ -43,16 +45,24 @@ class UpdateBatch {
   struct Inner {
     std::array<std::uint32_t, 8> child;  // group one depth below, kNoGroup: nothing there (unless `full`)
     std::uint8_t full;                   // bit i: node i's whole region gets a miss
+    std::uint8_t hits;                   // bit i: node i's region holds a hit
+    std::uint8_t keep;                   // bit i: never clear node i whole (see keep_fine)
   };
   struct Brick {
     std::array<std::uint8_t, 8> miss;  // miss[i] bit j: voxel j of depth-1 node i gets a miss ...
     std::array<std::uint8_t, 8> hit;   // ... unless this bit is set: then it gets a hit
+    std::uint8_t keep;                 // bit i: never clear depth-1 node i whole (see keep_fine)
   };
   // Read as one little-endian uint64, bit (8 i + j) of `miss` is voxel
   // 8 i + j of the brick, i.e. the low 6 bits of its Morton code.
   static_assert(std::endian::native == std::endian::little, "Brick masks are read as little-endian words");
 
   explicit UpdateBatch(int depth_levels = 16);
+  /// A copy holds the same marks; its path cache starts empty.
+  UpdateBatch(const UpdateBatch& other);
+  UpdateBatch& operator=(const UpdateBatch& other);
+  UpdateBatch(UpdateBatch&&) noexcept = default;
+  UpdateBatch& operator=(UpdateBatch&&) noexcept = default;
 
   /// Empties the batch (and frees its memory) for a map of `depth_levels`.
   void reset(int depth_levels);
@@ -101,10 +111,20 @@ class UpdateBatch {
   /// Every voxel of the depth-`depth` node containing `code` gets a miss
   /// (voxels with a hit keep it).
   void add_miss_node(std::uint64_t code, int depth);
-  /// Merges another batch over the same depth levels into this one.
-  void merge(const UpdateBatch& other);
+  /// The same, unless the node holds a hit or was marked with keep_fine: then
+  /// nothing is marked and the result is false (the fast integrator then
+  /// traces the node voxel by voxel).
+  bool add_miss_node_unless_hit(std::uint64_t code, int depth);
+  /// Marks the depth-`depth` node (>= 1) containing `code` so that
+  /// add_miss_node_unless_hit refuses it.
+  void keep_fine(std::uint64_t code, int depth);
+  /// Merges another batch over the same depth levels into this one; its
+  /// hits too unless `with_hits` is false (when both already hold the same hits).
+  void merge(const UpdateBatch& other, bool with_hits = true);
 
   [[nodiscard]] bool empty() const;
+  /// Whether the depth-`depth` node containing `code` holds a hit (a walk from the root).
+  [[nodiscard]] bool holds_hit(std::uint64_t code, int depth) const;
   [[nodiscard]] int depth_levels() const { return depth_levels_; }
   [[nodiscard]] std::size_t memory_bytes() const;
 
@@ -140,8 +160,13 @@ class UpdateBatch {
   /// Marks every voxel below group (depth, group) missed; true if all are now full.
   bool fill_with_misses(int depth, std::uint32_t group);
   std::uint32_t new_group(int depth, bool full);
+  /// add_miss_node and add_miss_node_unless_hit.
+  bool miss_node(std::uint64_t code, int depth, bool unless_hit);
   void release_group(int depth, std::uint32_t group);
-  void merge_group(const UpdateBatch& other, int depth, std::uint32_t other_group, std::uint64_t first_code);
+  void merge_group(const UpdateBatch& other, int depth, std::uint32_t other_group, std::uint64_t first_code,
+                   bool with_hits);
+  /// Forgets the cached path (after the pools were replaced).
+  void reset_cache();
 
   int depth_levels_ = 0;
   GroupPool<Brick> bricks_;              // depth 1

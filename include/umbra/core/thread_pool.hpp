@@ -1,0 +1,52 @@
+// ThreadPool: a fixed set of worker threads that run the tasks of one job.
+//
+// run(tasks, work) calls work(task, worker) for task = 0 .. tasks-1, spread
+// over the workers (the calling thread is worker 0 and takes part), and
+// returns when all are done. Tasks are handed out one at a time from an
+// atomic counter, so uneven tasks balance themselves. An exception thrown by
+// a task is rethrown from run() (the first one; remaining tasks are skipped).
+// One job at a time: run() is not reentrant and not for concurrent callers.
+#pragma once
+
+#include <condition_variable>
+#include <cstddef>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace umbra {
+
+class ThreadPool {
+ public:
+  /// `threads` workers including the caller; 0 means std::thread::hardware_concurrency().
+  explicit ThreadPool(unsigned threads = 0);
+  ~ThreadPool();
+  ThreadPool(const ThreadPool&) = delete;
+  ThreadPool& operator=(const ThreadPool&) = delete;
+
+  [[nodiscard]] unsigned size() const { return static_cast<unsigned>(workers_.size()) + 1; }
+  void run(std::size_t tasks, const std::function<void(std::size_t task, unsigned worker)>& work);
+
+  /// hardware_concurrency(), at least 1.
+  static unsigned hardware_threads();
+
+ private:
+  void worker_loop(unsigned worker);
+  void work_on_job(unsigned worker);
+
+  std::vector<std::thread> workers_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::condition_variable done_;
+  const std::function<void(std::size_t, unsigned)>* job_ = nullptr;
+  std::size_t tasks_ = 0;
+  std::size_t next_task_ = 0;  // guarded by mutex_
+  unsigned busy_ = 0;          // workers still in the current job
+  std::size_t generation_ = 0;
+  bool stopping_ = false;
+  std::exception_ptr failure_;
+};
+
+}  // namespace umbra

@@ -1,0 +1,105 @@
+// RayTracer: one worker's share of a scan, traced into its own UpdateBatch.
+//
+// The integrator splits a scan's rays over workers; each worker owns a
+// RayTracer (its batch and scratch buffers), so tracing needs no locks, and
+// the batches are merged before the tree is updated. What every tracer of a
+// scan shares is the read-only ScanContext.
+//
+// Per ray (see integrator.hpp for the rules):
+//  - the ray to a point beyond max_range is cut there and gives no hit;
+//  - with a bounding box the ray is clipped to it (begin and end move
+//    inwards; a clipped end gives a miss instead of a hit) and only voxels
+//    in the box are updated;
+//  - simple / discrete: every voxel before the end voxel gets a miss
+//    (OctoMap's walk), collected a brick (4x4x4 voxels) at a time;
+//  - fast: the depth-`clear_depth` nodes the ray crosses are cleared whole,
+//    except the last `fine_steps` before the end node and any node that the
+//    map says holds an obstacle or that holds, or touches a node that holds,
+//    a hit of this scan: those are traced voxel by voxel. Hits are added for
+//    the whole scan before any ray (ScanContext::hits_first), so that every
+//    tracer knows them.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "umbra/core/aabb.hpp"
+#include "umbra/core/grid.hpp"
+#include "umbra/core/vec3.hpp"
+#include "umbra/integrate/node_walker.hpp"
+#include "umbra/tree/occupancy_tree.hpp"
+#include "umbra/tree/update_batch.hpp"
+
+namespace umbra {
+
+struct InsertStats;
+
+/// The voxels of a bounding box: finest keys [min, max] on every axis.
+struct KeyBox {
+  Key min;
+  Key max;
+  [[nodiscard]] bool contains(Key k) const {
+    return k.x >= min.x && k.x <= max.x && k.y >= min.y && k.y <= max.y && k.z >= min.z && k.z <= max.z;
+  }
+};
+
+/// What all tracers of one scan read.
+struct ScanContext {
+  const Grid* grid = nullptr;
+  Vec3f origin;
+  Key origin_key;
+  double max_range = -1.0;   ///< <= 0: unlimited
+  bool fast = false;         ///< the fast integrator (else simple / discrete rules)
+  int clear_depth = 0;       ///< fast: depth of the nodes cleared whole
+  int fine_steps = 0;        ///< fast: nodes before the end node traced voxel by voxel
+  bool hits_first = false;   ///< hits are already in every tracer's batch
+  const OccupancyTree* tree = nullptr;  ///< fast: where obstacles are (read only)
+  std::optional<Aabb> box;   ///< clip rays to this box
+  std::optional<KeyBox> box_keys;
+};
+
+class RayTracer {
+ public:
+  /// Empties the batch for a scan of a map with `depth_levels`.
+  void start(int depth_levels);
+  /// Traces the rays to `ends` (points, or voxel centres) into the batch.
+  void trace(const ScanContext& scan, std::span<const Vec3f> ends, InsertStats& stats);
+  /// The hits of the rays to `ends` only (the first pass of the fast integrator).
+  void add_hits(const ScanContext& scan, std::span<const Vec3f> ends);
+
+  [[nodiscard]] UpdateBatch& batch() { return batch_; }
+  /// Scratch memory kept between scans (the batch is emptied after each).
+  [[nodiscard]] std::size_t memory_bytes() const;
+
+ private:
+  /// A ray after max-range truncation and box clipping.
+  struct Ray {
+    Vec3f begin;
+    Key begin_key;
+    Vec3f end;
+    Key end_key;
+    bool hit;       ///< the end voxel gets a hit
+    bool miss_end;  ///< the end voxel gets a miss (the ray was clipped there)
+  };
+  /// The ray to `point`, or nothing (counted in `stats`) when it updates nothing.
+  std::optional<Ray> prepare(const ScanContext& scan, Vec3f point, InsertStats* stats) const;
+  /// Misses for the voxels from `from` up to, not including, the voxel of `to`.
+  void add_segment_misses(const ScanContext& scan, Vec3f from, Key from_key, Vec3f to, Key to_key);
+  void add_end(const ScanContext& scan, const Ray& ray);
+  void trace_fast(const ScanContext& scan, const Ray& ray, OccupancyTree::Cursor& cursor);
+
+  /// A run of a ray's voxels inside one brick (see UpdateBatch): bit i of
+  /// `voxels` is voxel (code & ~63) + i.
+  struct BrickRun {
+    std::uint64_t code;
+    std::uint64_t voxels;
+  };
+
+  UpdateBatch batch_;
+  std::vector<BrickRun> runs_;            // one ray's runs; capacity kept between rays
+  std::vector<NodeCrossing> crossings_;  // fast: one ray's coarse nodes
+};
+
+}  // namespace umbra

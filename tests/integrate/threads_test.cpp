@@ -1,0 +1,66 @@
+// Insertion with several threads gives exactly the map of one thread, for
+// every integrator, with colour and with a bounding box.
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "umbra/map/occupancy_map.hpp"
+
+namespace umbra {
+namespace {
+
+struct Node {
+  std::uint64_t code;
+  int depth;
+  std::uint32_t bits;
+  std::optional<Rgb> color;
+  friend bool operator==(const Node&, const Node&) = default;
+};
+
+std::vector<Node> contents(const OccupancyMap& map) {
+  std::vector<Node> out;
+  map.for_each_leaf([&](const LeafView& l) {
+    out.push_back({morton::encode(l.key), l.depth, std::bit_cast<std::uint32_t>(l.log_odds), l.color});
+  });
+  return out;
+}
+
+TEST(Threads, EveryThreadCountBuildsTheSameMap) {
+  for (const IntegratorKind kind : {IntegratorKind::simple, IntegratorKind::discrete, IntegratorKind::fast}) {
+    for (const bool with_box : {false, true}) {
+      SCOPED_TRACE(std::string(to_string(kind)) + (with_box ? " with box" : ""));
+      std::vector<std::vector<Node>> results;
+      for (const unsigned threads : {1u, 2u, 3u, 8u}) {
+        MapConfig config{0.05, 12, SensorModel{}, Thresholds{}, true};
+        OccupancyMap map(config);
+        if (with_box) map.set_bounding_box(Aabb{{-2.0, -1.5, -1.0}, {1.7, 2.2, 1.3}});
+        std::mt19937 rng(7);
+        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+        InsertOptions options;
+        options.integrator = kind;
+        options.threads = threads;
+        options.max_range = 4.0;
+        options.fine_steps = 1;
+        for (int scan = 0; scan < 3; ++scan) {
+          std::vector<Vec3f> points;
+          std::vector<Rgb> colors;
+          for (int i = 0; i < 3000; ++i) {
+            // A box-shaped room with noise, and some far points.
+            const float a = u(rng) * 3.14159f;
+            const float r = i % 10 == 0 ? 6.0f : 3.0f + 0.05f * u(rng);
+            points.push_back({r * std::cos(a), r * std::sin(a), 1.5f * u(rng)});
+            colors.push_back({static_cast<std::uint8_t>(rng()), static_cast<std::uint8_t>(rng()), 7});
+          }
+          map.insert_point_cloud({0.3f * scan, 0.1f, 0.0f}, points, colors, options);
+        }
+        ASSERT_EQ(map.tree().check_invariants(), "");
+        results.push_back(contents(map));
+      }
+      EXPECT_GT(results[0].size(), 1000u);
+      for (std::size_t i = 1; i < results.size(); ++i) EXPECT_TRUE(results[i] == results[0]) << "thread count #" << i;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace umbra
