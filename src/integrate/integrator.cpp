@@ -170,25 +170,58 @@ InsertStats Integrator::insert(OccupancyTree& tree, const Grid& grid, const Sens
   const unsigned threads = options.threads == 0 ? ThreadPool::hardware_threads() : options.threads;
   ensure_workers(threads);
   for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
-  if (scan.fast) {
+  std::vector<InsertStats> worker_stats(threads);
+  // Runs `work(begin, end, worker)` over [0, count) in contiguous chunks
+  // (neighbouring rays stay in one batch; several chunks per worker balance
+  // uneven rays).
+  auto split = [&](std::size_t count, const auto& work) {
+    if (threads == 1) {
+      work(std::size_t{0}, count, 0u);
+      return;
+    }
+    const std::size_t tasks = std::min<std::size_t>(count, std::size_t{threads} * 8);
+    pool_->run(tasks, [&](std::size_t task, unsigned worker) {
+      work(count * task / tasks, count * (task + 1) / tasks, worker);
+    });
+  };
+
+  if (!scan.fast) {
+    split(ends.size(), [&](std::size_t begin, std::size_t end, unsigned worker) {
+      tracers_[worker]->trace(scan, ends.subspan(begin, end - begin), worker_stats[worker]);
+    });
+  } else {
+    std::vector<PreparedRay> rays;
+    rays.reserve(ends.size());
+    bool moved = false;  // truncation or clipping changed some end
+    for (const Vec3f& end : ends) {
+      if (const std::optional<PreparedRay> ray = prepare_ray(scan, end, &stats)) {
+        rays.push_back(*ray);
+        stats.hits += ray->hit;
+        moved |= !ray->hit;
+      }
+    }
+    const int depth_bits = 3 * grid.depth_levels();
+    if (moved) radix_sort(rays, depth_bits, [](const PreparedRay& r) { return morton::encode(r.end_key); });
+    // Groups of rays whose ends share a coarse node, each traced by one coarse ray.
+    const int shift = 3 * scan.clear_depth;
+    std::vector<std::size_t> group_begin;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      if (i == 0 || morton::encode(rays[i].end_key) >> shift != morton::encode(rays[i - 1].end_key) >> shift) {
+        group_begin.push_back(i);
+      }
+    }
+    group_begin.push_back(rays.size());
     // Every tracer must know all hits of the scan to decide which coarse
     // nodes it may clear whole: add them once and copy the batch.
-    tracers_[0]->add_hits(scan, ends);
+    tracers_[0]->add_hits(scan, rays);
     for (unsigned w = 1; w < threads; ++w) tracers_[w]->batch() = tracers_[0]->batch();
     scan.hits_first = true;
-  }
-
-  std::vector<InsertStats> worker_stats(threads);
-  if (threads == 1) {
-    tracers_[0]->trace(scan, ends, worker_stats[0]);
-  } else {
-    // Contiguous chunks keep neighbouring rays in one batch; several per
-    // worker balance uneven rays.
-    const std::size_t tasks = std::min<std::size_t>(ends.size(), std::size_t{threads} * 8);
-    pool_->run(tasks, [&](std::size_t task, unsigned worker) {
-      const std::size_t begin = ends.size() * task / tasks;
-      const std::size_t end = ends.size() * (task + 1) / tasks;
-      tracers_[worker]->trace(scan, ends.subspan(begin, end - begin), worker_stats[worker]);
+    const std::span<const PreparedRay> all(rays);
+    split(group_begin.size() - 1, [&](std::size_t begin, std::size_t end, unsigned worker) {
+      OccupancyTree::Cursor cursor(tree);
+      for (std::size_t g = begin; g < end; ++g) {
+        tracers_[worker]->trace_group(scan, all.subspan(group_begin[g], group_begin[g + 1] - group_begin[g]), cursor);
+      }
     });
   }
   for (const InsertStats& s : worker_stats) stats += s;

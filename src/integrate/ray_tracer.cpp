@@ -9,13 +9,17 @@
 
 namespace umbra {
 
-void RayTracer::start(int depth_levels) { batch_.reset(depth_levels); }
-
-std::size_t RayTracer::memory_bytes() const {
-  return batch_.memory_bytes() + runs_.capacity() * sizeof(BrickRun) + crossings_.capacity() * sizeof(NodeCrossing);
+void RayTracer::start(int depth_levels) {
+  batch_.reset(depth_levels);
+  previous_cleared_.clear();
 }
 
-std::optional<RayTracer::Ray> RayTracer::prepare(const ScanContext& scan, Vec3f point, InsertStats* stats) const {
+std::size_t RayTracer::memory_bytes() const {
+  return batch_.memory_bytes() + runs_.capacity() * sizeof(BrickRun) + crossings_.capacity() * sizeof(NodeCrossing) +
+         (cleared_.capacity() + previous_cleared_.capacity()) * sizeof(std::uint64_t);
+}
+
+std::optional<PreparedRay> prepare_ray(const ScanContext& scan, Vec3f point, InsertStats* stats) {
   auto count = [stats](std::size_t InsertStats::*field) {
     if (stats != nullptr) ++(stats->*field);
   };
@@ -24,7 +28,7 @@ std::optional<RayTracer::Ray> RayTracer::prepare(const ScanContext& scan, Vec3f 
     return std::nullopt;
   }
   const Grid& grid = *scan.grid;
-  Ray ray{scan.origin, scan.origin_key, point, {}, true, false};
+  PreparedRay ray{scan.origin, scan.origin_key, point, {}, true, false};
   const Vec3f offset = point - scan.origin;
   const double range = octomap_norm(offset);
   if (scan.max_range > 0.0 && range > scan.max_range) {
@@ -95,19 +99,18 @@ void RayTracer::add_segment_misses(const ScanContext& scan, Vec3f from, Key from
   for (std::size_t i = 1; i <= last; ++i) batch_.add_misses_in_brick(runs[i].code, runs[i].voxels);
 }
 
-void RayTracer::add_end(const ScanContext& scan, const Ray& ray) {
+void RayTracer::add_end(const ScanContext& scan, const PreparedRay& ray) {
   if (scan.box_keys && !scan.box_keys->contains(ray.end_key)) return;
   if (ray.miss_end) batch_.add_miss(morton::encode(ray.end_key));
   if (ray.hit && !scan.hits_first) batch_.add_hit(morton::encode(ray.end_key));
 }
 
-void RayTracer::add_hits(const ScanContext& scan, std::span<const Vec3f> ends) {
+void RayTracer::add_hits(const ScanContext& scan, std::span<const PreparedRay> rays) {
   std::vector<std::uint64_t> coarse;  // the coarse nodes holding a hit
   const int depth = scan.clear_depth;
-  for (const Vec3f& end : ends) {
-    const std::optional<Ray> ray = prepare(scan, end, nullptr);
-    if (!ray || !ray->hit || (scan.box_keys && !scan.box_keys->contains(ray->end_key))) continue;
-    const std::uint64_t code = morton::encode(ray->end_key);
+  for (const PreparedRay& ray : rays) {
+    if (!ray.hit || (scan.box_keys && !scan.box_keys->contains(ray.end_key))) continue;
+    const std::uint64_t code = morton::encode(ray.end_key);
     batch_.add_hit(code);
     coarse.push_back(code >> (3 * depth));
   }
@@ -139,29 +142,27 @@ void RayTracer::add_hits(const ScanContext& scan, std::span<const Vec3f> ends) {
 }
 
 void RayTracer::trace(const ScanContext& scan, std::span<const Vec3f> ends, InsertStats& stats) {
-  std::optional<OccupancyTree::Cursor> cursor;
-  if (scan.fast) cursor.emplace(*scan.tree);
   for (const Vec3f& point : ends) {
-    const std::optional<Ray> ray = prepare(scan, point, &stats);
+    const std::optional<PreparedRay> ray = prepare_ray(scan, point, &stats);
     if (!ray) continue;
     if (ray->hit) ++stats.hits;
-    if (scan.fast) {
-      trace_fast(scan, *ray, *cursor);
-    } else {
-      add_segment_misses(scan, ray->begin, ray->begin_key, ray->end, ray->end_key);
-    }
+    add_segment_misses(scan, ray->begin, ray->begin_key, ray->end, ray->end_key);
     add_end(scan, *ray);
   }
 }
 
-void RayTracer::trace_fast(const ScanContext& scan, const Ray& ray, OccupancyTree::Cursor& cursor) {
+void RayTracer::trace_group(const ScanContext& scan, std::span<const PreparedRay> rays,
+                            OccupancyTree::Cursor& cursor) {
+  if (rays.empty()) return;
   const Grid& grid = *scan.grid;
   const int depth = scan.clear_depth;
+  // The coarse ray: to the end of the group's middle ray.
+  const PreparedRay& guide = rays[rays.size() / 2];
   crossings_.clear();
-  walk_nodes(grid, depth, Vec3d(ray.begin), ray.begin_key, Vec3d(ray.end), ray.end_key,
+  walk_nodes(grid, depth, Vec3d(guide.begin), guide.begin_key, Vec3d(guide.end), guide.end_key,
              [this](const NodeCrossing& c) { crossings_.push_back(c); });
-  const Vec3d begin(ray.begin);
-  const Vec3d direction = Vec3d(ray.end) - begin;
+  const Vec3d begin(guide.begin);
+  const Vec3d direction = Vec3d(guide.end) - begin;
   const double length = direction.norm();
   const Vec3d unit = length > 0.0 ? direction / length : direction;
   // Segment ends are nudged a hundredth of a voxel past a node's exit, so
@@ -170,9 +171,29 @@ void RayTracer::trace_fast(const ScanContext& scan, const Ray& ray, OccupancyTre
   const float occupied = scan.tree->thresholds().occupied;
   const std::size_t total = crossings_.size();
   const std::size_t fine = static_cast<std::size_t>(scan.fine_steps);
-  const std::size_t coarse = scan.fine_steps == 0 ? total : (total > fine ? total - fine : 0);
+  const std::size_t coarse = total > fine ? total - fine : 0;
+
+  // Consecutive coarse rays (in Morton order of their ends) cross nearly the
+  // same nodes, and a node cleared whole stays so for the whole scan (what
+  // decides it, the map and this scan's hits, does not change while
+  // tracing). So a node the previous coarse ray cleared whole is skipped
+  // without asking the map or the batch again.
+  std::size_t previous = 0;
+  cleared_.clear();
   for (std::size_t i = 0; i < coarse; ++i) {
     const NodeCrossing& c = crossings_[i];
+    bool seen = false;
+    for (std::size_t j = previous; j < previous_cleared_.size() && j < previous + 3; ++j) {
+      if (previous_cleared_[j] == c.code) {
+        seen = true;
+        previous = j + 1;
+        break;
+      }
+    }
+    if (seen) {
+      cleared_.push_back(c.code);
+      continue;
+    }
     bool whole = cursor.max_log_odds(c.code, depth) <= occupied;  // no obstacle the map knows of
     if (whole && scan.box_keys) {
       const Key first = morton::decode(c.code);
@@ -180,20 +201,35 @@ void RayTracer::trace_fast(const ScanContext& scan, const Ray& ray, OccupancyTre
       whole = scan.box_keys->contains(first) &&
               scan.box_keys->contains({first.x + last, first.y + last, first.z + last});
     }
-    if (whole && batch_.add_miss_node_unless_hit(c.code, depth)) continue;
-    // Voxel by voxel through this node.
+    if (whole && batch_.add_miss_node_unless_hit(c.code, depth)) {
+      cleared_.push_back(c.code);
+      continue;
+    }
+    // Voxel by voxel through this node, along the coarse ray.
     const Vec3f from = static_cast<Vec3f>(begin + unit * c.t_in);
     const Vec3f to = static_cast<Vec3f>(begin + unit * std::min(c.t_out + nudge, length));
     const std::optional<Key> from_key = grid.key_checked(from);
     const std::optional<Key> to_key = grid.key_checked(to);
     if (from_key && to_key) add_segment_misses(scan, from, *from_key, to, *to_key);
   }
-  if (scan.fine_steps == 0) return;
-  // The last nodes before the end, and the end node, voxel by voxel.
-  const double t_start = coarse < total ? crossings_[coarse].t_in : 0.0;
-  const Vec3f from = t_start > 0.0 ? static_cast<Vec3f>(begin + unit * t_start) : ray.begin;
-  if (const std::optional<Key> from_key = grid.key_checked(from)) {
-    add_segment_misses(scan, from, *from_key, ray.end, ray.end_key);
+  previous_cleared_.swap(cleared_);
+
+  // Every ray of the group: the last `fine_steps` nodes voxel by voxel,
+  // starting as far from its origin (proportionally) as the coarse ray left off.
+  const double share = coarse > 0 && length > 0.0 ? crossings_[coarse - 1].t_out / length : 0.0;
+  for (const PreparedRay& ray : rays) {
+    if (fine > 0) {
+      if (share == 0.0) {
+        add_segment_misses(scan, ray.begin, ray.begin_key, ray.end, ray.end_key);
+      } else {
+        const Vec3d from_begin(ray.begin);
+        const Vec3f from = static_cast<Vec3f>(from_begin + (Vec3d(ray.end) - from_begin) * share);
+        if (const std::optional<Key> from_key = grid.key_checked(from)) {
+          add_segment_misses(scan, from, *from_key, ray.end, ray.end_key);
+        }
+      }
+    }
+    add_end(scan, ray);
   }
 }
 

@@ -12,12 +12,14 @@
 //    in the box are updated;
 //  - simple / discrete: every voxel before the end voxel gets a miss
 //    (OctoMap's walk), collected a brick (4x4x4 voxels) at a time;
-//  - fast: the depth-`clear_depth` nodes the ray crosses are cleared whole,
-//    except the last `fine_steps` before the end node and any node that the
-//    map says holds an obstacle or that holds, or touches a node that holds,
-//    a hit of this scan: those are traced voxel by voxel. Hits are added for
-//    the whole scan before any ray (ScanContext::hits_first), so that every
-//    tracer knows them.
+//  - fast: the rays are grouped by the depth-`clear_depth` node their end
+//    lies in; one coarse ray per group (to the end of its middle ray) clears
+//    the nodes it crosses whole, except the last `fine_steps` before the end
+//    node and any node that the map says holds an obstacle or that holds, or
+//    touches a node that holds, a hit of this scan: those are traced voxel by
+//    voxel along it. Then every ray of the group is traced voxel by voxel
+//    over the last `fine_steps` nodes. Hits are added for the whole scan
+//    before any ray (ScanContext::hits_first), so that every tracer knows them.
 #pragma once
 
 #include <cstdint>
@@ -60,35 +62,39 @@ struct ScanContext {
   std::optional<KeyBox> box_keys;
 };
 
+/// A ray after max-range truncation and box clipping.
+struct PreparedRay {
+  Vec3f begin;
+  Key begin_key;
+  Vec3f end;
+  Key end_key;
+  bool hit;       ///< the end voxel gets a hit
+  bool miss_end;  ///< the end voxel gets a miss (the ray was clipped there)
+};
+
+/// The ray to `point`, or nothing (counted in `stats` when given) when it updates nothing.
+std::optional<PreparedRay> prepare_ray(const ScanContext& scan, Vec3f point, InsertStats* stats);
+
 class RayTracer {
  public:
   /// Empties the batch for a scan of a map with `depth_levels`.
   void start(int depth_levels);
   /// Traces the rays to `ends` (points, or voxel centres) into the batch.
   void trace(const ScanContext& scan, std::span<const Vec3f> ends, InsertStats& stats);
-  /// The hits of the rays to `ends` only (the first pass of the fast integrator).
-  void add_hits(const ScanContext& scan, std::span<const Vec3f> ends);
+  /// The fast integrator's first pass: the hits of `rays`, and the marks that
+  /// keep the coarse nodes next to them from being cleared whole.
+  void add_hits(const ScanContext& scan, std::span<const PreparedRay> rays);
+  /// The fast integrator: `rays`, whose ends all lie in one coarse node.
+  void trace_group(const ScanContext& scan, std::span<const PreparedRay> rays, OccupancyTree::Cursor& cursor);
 
   [[nodiscard]] UpdateBatch& batch() { return batch_; }
   /// Scratch memory kept between scans (the batch is emptied after each).
   [[nodiscard]] std::size_t memory_bytes() const;
 
  private:
-  /// A ray after max-range truncation and box clipping.
-  struct Ray {
-    Vec3f begin;
-    Key begin_key;
-    Vec3f end;
-    Key end_key;
-    bool hit;       ///< the end voxel gets a hit
-    bool miss_end;  ///< the end voxel gets a miss (the ray was clipped there)
-  };
-  /// The ray to `point`, or nothing (counted in `stats`) when it updates nothing.
-  std::optional<Ray> prepare(const ScanContext& scan, Vec3f point, InsertStats* stats) const;
   /// Misses for the voxels from `from` up to, not including, the voxel of `to`.
   void add_segment_misses(const ScanContext& scan, Vec3f from, Key from_key, Vec3f to, Key to_key);
-  void add_end(const ScanContext& scan, const Ray& ray);
-  void trace_fast(const ScanContext& scan, const Ray& ray, OccupancyTree::Cursor& cursor);
+  void add_end(const ScanContext& scan, const PreparedRay& ray);
 
   /// A run of a ray's voxels inside one brick (see UpdateBatch): bit i of
   /// `voxels` is voxel (code & ~63) + i.
@@ -100,6 +106,8 @@ class RayTracer {
   UpdateBatch batch_;
   std::vector<BrickRun> runs_;            // one ray's runs; capacity kept between rays
   std::vector<NodeCrossing> crossings_;  // fast: one ray's coarse nodes
+  std::vector<std::uint64_t> cleared_;   // fast: the nodes this ray found cleared whole, in ray order
+  std::vector<std::uint64_t> previous_cleared_;  // ... and those of the previous ray
 };
 
 }  // namespace umbra
