@@ -1,23 +1,29 @@
-// Insertion benchmark: umbra against liboctomap on the same scans, in one run.
+// Insertion benchmark: umbra's integrators against liboctomap on the same
+// scans, in one run.
 //
-// For every dataset and resolution, each method builds a fresh map from all
-// scans of the dataset, in a forked child process so that every measurement
-// starts from the same clean heap (OctoMap frees millions of small hash-set
-// nodes after each scan, which would otherwise slow down whatever runs next)
-// and so that the child's peak RSS is that method's alone. Repetitions
-// interleave the methods; the median per-scan time is reported. Methods:
+// For every dataset, resolution and thread count, each method builds a fresh
+// map from all scans of the dataset, in a forked child process so that every
+// measurement starts from the same clean heap (OctoMap frees millions of
+// small hash-set nodes after each scan, which would otherwise slow down
+// whatever runs next) and so that the child's peak RSS is that method's
+// alone. Repetitions interleave the methods; the median per-scan time is
+// reported. Methods:
 //   octomap-plain     OcTree::insertPointCloud(..., discretize = false)
 //   octomap-discrete  OcTree::insertPointCloud(..., discretize = true)
-//   umbra-simple      OccupancyMap::insert_point_cloud, IntegratorKind::simple
-//   umbra-discrete    OccupancyMap::insert_point_cloud, IntegratorKind::discrete
-// umbra-simple is compared with octomap-plain and umbra-discrete with
-// octomap-discrete: the same semantics, voxel for voxel.
+//   umbra-simple      IntegratorKind::simple   (same voxels as octomap-plain)
+//   umbra-discrete    IntegratorKind::discrete (same voxels as octomap-discrete)
+//   umbra-fast-n2     IntegratorKind::fast, fine_steps 2, clear depth at 16 cm
+//   umbra-fast-n0     IntegratorKind::fast, fine_steps 0, clear depth at 16 cm
+// Each umbra method is compared with the OctoMap method of its semantics:
+// simple with octomap-plain, the others with octomap-discrete. OctoMap runs
+// single-threaded whatever --threads says.
 //
 // Memory: OctoMap's memoryUsage() and umbra's memory_bytes() for the
 // finished map, and the peak RSS growth of the child while inserting.
 //
-// Usage: umbra_insert_benchmark [--data DIR] [--res 0.05,0.02] [--repeat 3]
-//          [--max-range 30] [--datasets scan.dat,3dtk] [--markdown FILE]
+// Usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum]
+//          [--res 0.05,0.02] [--methods LIST] [--threads 1,2] [--repeat 3]
+//          [--max-range 30] [--tum-max-range 5] [--color] [--markdown FILE]
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -41,30 +47,35 @@ namespace {
 
 struct Dataset {
   std::string name;
+  double max_range = 30.0;
   std::vector<umbra::Scan> scans;
   std::vector<octomap::Pointcloud> clouds;  // the same points for OctoMap
 };
 
-enum class Method { octomap_plain, octomap_discrete, umbra_simple, umbra_discrete };
-const Method kMethods[] = {Method::octomap_plain, Method::umbra_simple, Method::octomap_discrete,
-                           Method::umbra_discrete};
+struct Method {
+  std::string name;
+  bool octomap = false;
+  bool discretize = false;          // OctoMap
+  umbra::IntegratorKind kind{};     // umbra
+  int fine_steps = 0;               // umbra fast
+  std::string counterpart;          // the OctoMap method with the same semantics
+};
 
-const char* name_of(Method m) {
-  switch (m) {
-    case Method::octomap_plain: return "octomap-plain";
-    case Method::octomap_discrete: return "octomap-discrete";
-    case Method::umbra_simple: return "umbra-simple";
-    case Method::umbra_discrete: return "umbra-discrete";
-  }
-  return "?";
-}
+const std::vector<Method> kAllMethods = {
+    {"octomap-plain", true, false, {}, 0, ""},
+    {"octomap-discrete", true, true, {}, 0, ""},
+    {"umbra-simple", false, false, umbra::IntegratorKind::simple, 0, "octomap-plain"},
+    {"umbra-discrete", false, false, umbra::IntegratorKind::discrete, 0, "octomap-discrete"},
+    {"umbra-fast-n2", false, false, umbra::IntegratorKind::fast, 2, "octomap-discrete"},
+    {"umbra-fast-n0", false, false, umbra::IntegratorKind::fast, 0, "octomap-discrete"},
+};
 
 /// What one child measured.
 struct Measurement {
   static constexpr int kMaxScans = 64;
   int scans = 0;
   double scan_seconds[kMaxScans] = {};
-  std::uint64_t map_bytes = 0;    // memoryUsage() / memory_bytes()
+  std::uint64_t map_bytes = 0;        // memoryUsage() / memory_bytes()
   std::uint64_t peak_rss_growth = 0;  // bytes, peak RSS minus RSS before inserting
   bool ok = false;
 };
@@ -83,30 +94,40 @@ std::uint64_t peak_rss_bytes() {
   return static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;
 }
 
-Measurement measure_in_this_process(const Dataset& data, Method method, double resolution, double max_range) {
+Measurement measure_in_this_process(const Dataset& data, const Method& method, double resolution, unsigned threads,
+                                    bool color) {
   Measurement m;
   m.scans = static_cast<int>(std::min<std::size_t>(data.scans.size(), Measurement::kMaxScans));
   const std::uint64_t rss_before = current_rss_bytes();
   using Clock = std::chrono::steady_clock;
-  if (method == Method::octomap_plain || method == Method::octomap_discrete) {
+  if (method.octomap) {
     octomap::OcTree tree(resolution);
-    const bool discretize = method == Method::octomap_discrete;
     for (int i = 0; i < m.scans; ++i) {
       const umbra::Vec3f o = data.scans[i].origin;
       const auto start = Clock::now();
-      tree.insertPointCloud(data.clouds[i], octomap::point3d(o.x, o.y, o.z), max_range, false, discretize);
+      tree.insertPointCloud(data.clouds[i], octomap::point3d(o.x, o.y, o.z), data.max_range, false,
+                            method.discretize);
       m.scan_seconds[i] = std::chrono::duration<double>(Clock::now() - start).count();
     }
     m.map_bytes = tree.memoryUsage();
   } else {
-    umbra::OccupancyMap map(resolution);
+    umbra::MapConfig config;
+    config.resolution = resolution;
+    config.color = color;
+    umbra::OccupancyMap map(config);
     umbra::InsertOptions options;
-    options.integrator =
-        method == Method::umbra_discrete ? umbra::IntegratorKind::discrete : umbra::IntegratorKind::simple;
-    options.max_range = max_range;
+    options.integrator = method.kind;
+    options.fine_steps = method.fine_steps;
+    options.max_range = data.max_range;
+    options.threads = threads;
     for (int i = 0; i < m.scans; ++i) {
+      const umbra::Scan& scan = data.scans[i];
       const auto start = Clock::now();
-      map.insert_point_cloud(data.scans[i].origin, data.scans[i].points, options);
+      if (color && !scan.colors.empty()) {
+        map.insert_point_cloud(scan.origin, scan.points, scan.colors, options);
+      } else {
+        map.insert_point_cloud(scan.origin, scan.points, options);
+      }
       m.scan_seconds[i] = std::chrono::duration<double>(Clock::now() - start).count();
     }
     m.map_bytes = map.memory_bytes();
@@ -117,7 +138,8 @@ Measurement measure_in_this_process(const Dataset& data, Method method, double r
   return m;
 }
 
-Measurement measure_in_child(const Dataset& data, Method method, double resolution, double max_range) {
+Measurement measure_in_child(const Dataset& data, const Method& method, double resolution, unsigned threads,
+                             bool color) {
   int fds[2];
   if (::pipe(fds) != 0) throw std::runtime_error("pipe failed");
   std::fflush(nullptr);
@@ -127,9 +149,9 @@ Measurement measure_in_child(const Dataset& data, Method method, double resoluti
     ::close(fds[0]);
     Measurement m;
     try {
-      m = measure_in_this_process(data, method, resolution, max_range);
+      m = measure_in_this_process(data, method, resolution, threads, color);
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "%s failed: %s\n", name_of(method), e.what());
+      std::fprintf(stderr, "%s failed: %s\n", method.name.c_str(), e.what());
     }
     const ssize_t written = ::write(fds[1], &m, sizeof m);
     ::_exit(written == static_cast<ssize_t>(sizeof m) ? 0 : 1);
@@ -145,7 +167,7 @@ Measurement measure_in_child(const Dataset& data, Method method, double resoluti
   ::close(fds[0]);
   int status = 0;
   ::waitpid(child, &status, 0);
-  if (got != sizeof m || !m.ok) throw std::runtime_error(std::string(name_of(method)) + ": child failed");
+  if (got != sizeof m || !m.ok) throw std::runtime_error(method.name + ": child failed");
   return m;
 }
 
@@ -155,9 +177,10 @@ double median(std::vector<double> values) {
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
-Dataset load(const std::string& name, const std::string& path) {
+Dataset load(const std::string& name, const std::string& path, double max_range) {
   Dataset data;
   data.name = name;
+  data.max_range = max_range;
   const auto source = umbra::open_scan_source(path);
   umbra::Scan scan;
   while (source->next(scan)) {
@@ -184,15 +207,24 @@ std::string mib(std::uint64_t bytes) {
   return text;
 }
 
+struct Result {
+  double ms_per_scan = 0.0;
+  Measurement last;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string data_dir = "../shared/data";
   std::string resolutions = "0.05,0.02";
   std::string datasets = "scan.dat,3dtk";
+  std::string method_names = "octomap-plain,umbra-simple,octomap-discrete,umbra-discrete";
+  std::string thread_counts = "1";
   std::string markdown_path;
   int repeat = 3;
   double max_range = 30.0;
+  double tum_max_range = 5.0;
+  bool color = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto value = [&]() -> std::string {
@@ -205,76 +237,107 @@ int main(int argc, char** argv) {
     if (arg == "--data") data_dir = value();
     else if (arg == "--res") resolutions = value();
     else if (arg == "--datasets") datasets = value();
+    else if (arg == "--methods") method_names = value();
+    else if (arg == "--threads") thread_counts = value();
     else if (arg == "--repeat") repeat = std::stoi(value());
     else if (arg == "--max-range") max_range = std::stod(value());
+    else if (arg == "--tum-max-range") tum_max_range = std::stod(value());
+    else if (arg == "--color") color = true;
     else if (arg == "--markdown") markdown_path = value();
     else {
       std::fprintf(stderr, "unknown argument %s (see the comment at the top of bench/insert_benchmark.cpp)\n", arg.c_str());
       return 2;
     }
   }
+  std::vector<Method> methods;
+  for (const std::string& name : split(method_names)) {
+    const auto it = std::find_if(kAllMethods.begin(), kAllMethods.end(), [&](const Method& m) { return m.name == name; });
+    if (it == kAllMethods.end()) {
+      std::fprintf(stderr, "unknown method %s\n", name.c_str());
+      return 2;
+    }
+    methods.push_back(*it);
+  }
 
   std::vector<Dataset> loaded;
   for (const std::string& name : split(datasets)) {
+    const bool tum = name == "tum";
     const std::string path = name == "scan.dat" ? data_dir + "/octomap/scan.dat.bz2"
                              : name == "3dtk"   ? data_dir + "/3dtk/3dtk_registered.graph"
+                             : tum              ? data_dir + "/tum_fr2_pioneer_slam2"
                                                 : name;
     try {
-      loaded.push_back(load(name, path));
+      loaded.push_back(load(name, path, tum ? tum_max_range : max_range));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "cannot load %s: %s\n", name.c_str(), e.what());
       return 1;
     }
     std::size_t points = 0;
     for (const auto& s : loaded.back().scans) points += s.points.size();
-    std::fprintf(stderr, "loaded %s: %zu scans, %zu points\n", name.c_str(), loaded.back().scans.size(), points);
+    std::fprintf(stderr, "loaded %s: %zu scans, %zu points, max range %g m\n", name.c_str(), loaded.back().scans.size(),
+                 points, loaded.back().max_range);
   }
 
   std::ostringstream table;
-  table << "| dataset | res (m) | semantics | OctoMap ms/scan | umbra ms/scan | speed-up | OctoMap memoryUsage (MiB) | "
-           "umbra memory (MiB) | umbra/OctoMap memory | OctoMap peak RSS growth (MiB) | umbra peak RSS growth (MiB) |\n"
-        << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  table << "| dataset | res (m) | threads | method | ms/scan | scans/s | speed-up vs OctoMap | map (MiB) | "
+           "map vs OctoMap | peak RSS growth (MiB) |\n"
+        << "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Dataset& data : loaded) {
     for (const std::string& res_text : split(resolutions)) {
       const double resolution = std::stod(res_text);
-      std::map<Method, std::vector<std::vector<double>>> times;  // method -> per scan -> repeats
-      std::map<Method, Measurement> last;
-      for (int r = 0; r < repeat; ++r) {
-        for (const Method method : kMethods) {
-          const Measurement m = measure_in_child(data, method, resolution, max_range);
-          auto& per_scan = times[method];
-          per_scan.resize(static_cast<std::size_t>(m.scans));
-          double total = 0;
-          for (int s = 0; s < m.scans; ++s) {
-            per_scan[static_cast<std::size_t>(s)].push_back(m.scan_seconds[s]);
-            total += m.scan_seconds[s];
+      std::map<std::string, Result> octomap_results;
+      for (const std::string& threads_text : split(thread_counts)) {
+        const unsigned threads = static_cast<unsigned>(std::stoul(threads_text));
+        std::map<std::string, std::vector<std::vector<double>>> times;  // method -> scan -> repeats
+        std::map<std::string, Measurement> last;
+        for (int r = 0; r < repeat; ++r) {
+          for (const Method& method : methods) {
+            if (method.octomap && octomap_results.count(method.name)) continue;  // OctoMap: once
+            const Measurement m = measure_in_child(data, method, resolution, threads, color);
+            auto& per_scan = times[method.name];
+            per_scan.resize(static_cast<std::size_t>(m.scans));
+            double total = 0;
+            for (int s = 0; s < m.scans; ++s) {
+              per_scan[static_cast<std::size_t>(s)].push_back(m.scan_seconds[s]);
+              total += m.scan_seconds[s];
+            }
+            last[method.name] = m;
+            std::fprintf(stderr, "%s res %.3f %s threads %u run %d: %.3f s, map %s MiB, peak RSS growth %s MiB\n",
+                         data.name.c_str(), resolution, method.name.c_str(), threads, r + 1, total,
+                         mib(m.map_bytes).c_str(), mib(m.peak_rss_growth).c_str());
           }
-          last[method] = m;
-          std::fprintf(stderr, "%s %s res %.3f run %d: %.3f s, map %s MiB, peak RSS growth %s MiB\n",
-                       data.name.c_str(), name_of(method), resolution, r + 1, total, mib(m.map_bytes).c_str(),
-                       mib(m.peak_rss_growth).c_str());
         }
-      }
-      auto ms_per_scan = [&](Method method) {
-        double sum = 0;
-        for (const auto& repeats : times[method]) sum += median(repeats);
-        return 1e3 * sum / static_cast<double>(times[method].size());
-      };
-      const std::pair<Method, Method> pairs[] = {{Method::octomap_plain, Method::umbra_simple},
-                                                 {Method::octomap_discrete, Method::umbra_discrete}};
-      for (const auto& [octo, mine] : pairs) {
-        const double octo_ms = ms_per_scan(octo);
-        const double mine_ms = ms_per_scan(mine);
-        char row[512];
-        std::snprintf(row, sizeof row, "| %s | %.3g | %s | %.1f | %.1f | %.1fx | %s | %s | %.1f%% | %s | %s |\n",
-                      data.name.c_str(), resolution,
-                      octo == Method::octomap_plain ? "simple (discretize=false)" : "discrete (discretize=true)",
-                      octo_ms, mine_ms, octo_ms / mine_ms, mib(last[octo].map_bytes).c_str(),
-                      mib(last[mine].map_bytes).c_str(),
-                      100.0 * static_cast<double>(last[mine].map_bytes) / static_cast<double>(last[octo].map_bytes),
-                      mib(last[octo].peak_rss_growth).c_str(), mib(last[mine].peak_rss_growth).c_str());
-        table << row;
-        std::fputs(row, stderr);
+        std::map<std::string, Result> results = octomap_results;
+        for (const auto& [name, per_scan] : times) {
+          double sum = 0;
+          for (const auto& repeats : per_scan) sum += median(repeats);
+          results[name] = {1e3 * sum / static_cast<double>(per_scan.size()), last[name]};
+        }
+        for (const Method& method : methods) {
+          if (method.octomap) octomap_results[method.name] = results[method.name];
+        }
+        for (const Method& method : methods) {
+          const Result& mine = results[method.name];
+          std::string speedup = "-";
+          std::string memory_ratio = "-";
+          if (!method.octomap && results.count(method.counterpart)) {
+            const Result& theirs = results[method.counterpart];
+            char text[64];
+            std::snprintf(text, sizeof text, "%.1fx", theirs.ms_per_scan / mine.ms_per_scan);
+            speedup = text;
+            std::snprintf(text, sizeof text, "%.1f%%",
+                          100.0 * static_cast<double>(mine.last.map_bytes) / static_cast<double>(theirs.last.map_bytes));
+            memory_ratio = text;
+          }
+          char row[512];
+          std::snprintf(row, sizeof row, "| %s | %.3g | %s | %s | %.1f | %.2f | %s | %s | %s | %s |\n",
+                        data.name.c_str(), resolution, method.octomap ? "1" : threads_text.c_str(),
+                        method.name.c_str(), mine.ms_per_scan, 1e3 / mine.ms_per_scan, speedup.c_str(),
+                        mib(mine.last.map_bytes).c_str(), memory_ratio.c_str(),
+                        mib(mine.last.peak_rss_growth).c_str());
+          table << row;
+          std::fputs(row, stderr);
+        }
       }
     }
   }

@@ -1,5 +1,6 @@
 // `umbra build INPUT... -o MAP.umb`: integrate point clouds into a map.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -22,9 +23,18 @@ struct BuildOptions {
   double resolution = 0.1;
   int depth_levels = 16;
   std::string integrator = "simple";
+  int clear_depth = -1;
+  int fine_steps = 2;
+  unsigned threads = 0;
   double max_range = -1.0;
   std::string origin = "0,0,0";
+  std::string bbox;
+  bool color = false;
   std::string format;
+  std::string poses;
+  std::string calibration;
+  std::string association;
+  std::string camera;
 };
 
 struct ScanRow {
@@ -34,16 +44,30 @@ struct ScanRow {
   double insert_seconds = 0.0;
 };
 
-Vec3f parse_origin(const std::string& text) {
-  std::istringstream in(text);
-  Vec3f origin;
-  char comma1 = 0;
-  char comma2 = 0;
-  if (!(in >> origin.x >> comma1 >> origin.y >> comma2 >> origin.z) || comma1 != ',' || comma2 != ',' ||
-      !(in >> std::ws).eof() || !origin.is_finite()) {
-    throw std::invalid_argument("--origin expects three finite numbers x,y,z, got '" + text + "'");
+/// `count` finite numbers separated by commas, or std::invalid_argument naming `option`.
+std::vector<double> parse_numbers(const std::string& text, std::size_t count, const std::string& option) {
+  std::vector<double> values;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::size_t used = 0;
+    double value = 0.0;
+    try {
+      value = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(value)) {
+      throw std::invalid_argument(option + " expects " + std::to_string(count) +
+                                  " finite numbers separated by commas, got '" + text + "'");
+    }
+    values.push_back(value);
   }
-  return origin;
+  if (values.size() != count) {
+    throw std::invalid_argument(option + " expects " + std::to_string(count) + " numbers separated by commas, got '" +
+                                text + "'");
+  }
+  return values;
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -64,16 +88,37 @@ int run_build(const BuildOptions& options) {
   check_output_path(options.output);
   ScanSourceOptions source_options;
   source_options.format = options.format;
-  source_options.origin = parse_origin(options.origin);
+  const std::vector<double> origin = parse_numbers(options.origin, 3, "--origin");
+  source_options.origin = {static_cast<float>(origin[0]), static_cast<float>(origin[1]), static_cast<float>(origin[2])};
+  source_options.poses = options.poses;
+  source_options.calibration = options.calibration;
+  source_options.association = options.association;
+  if (!options.camera.empty()) {
+    const std::vector<double> c = parse_numbers(options.camera, 5, "--camera");
+    source_options.depth_camera = {c[0], c[1], c[2], c[3], c[4]};
+  }
   for (const std::string& input : options.inputs) (void)scan_format_for(input, options.format);  // fail early
 
-  OccupancyMap map(options.resolution, options.depth_levels);
+  MapConfig config;
+  config.resolution = options.resolution;
+  config.depth_levels = options.depth_levels;
+  config.color = options.color;
+  OccupancyMap map(config);
+  if (!options.bbox.empty()) {
+    const std::vector<double> b = parse_numbers(options.bbox, 6, "--bbox");
+    map.set_bounding_box(Aabb{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}});
+  }
   InsertOptions insert;
   insert.integrator = parse_integrator_kind(options.integrator);
   insert.max_range = options.max_range;
+  insert.clear_depth = options.clear_depth;
+  insert.fine_steps = options.fine_steps;
+  insert.threads = options.threads;
+  insert.validate(map.depth_levels());
 
   std::vector<ScanRow> rows;
   InsertStats total;
+  std::size_t uncoloured = 0;
   ProgressBar bar("building");
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t file = 0; file < options.inputs.size(); ++file) {
@@ -86,7 +131,12 @@ int run_build(const BuildOptions& options) {
       row.name = scan.name;
       row.read_seconds = seconds_since(read_start);
       const auto insert_start = std::chrono::steady_clock::now();
-      row.stats = map.insert_point_cloud(scan.origin, scan.points, insert);
+      if (options.color && !scan.colors.empty()) {
+        row.stats = map.insert_point_cloud(scan.origin, scan.points, scan.colors, insert);
+      } else {
+        uncoloured += options.color ? 1 : 0;
+        row.stats = map.insert_point_cloud(scan.origin, scan.points, insert);
+      }
       row.insert_seconds = seconds_since(insert_start);
       total += row.stats;
       rows.push_back(row);
@@ -99,16 +149,25 @@ int run_build(const BuildOptions& options) {
 
   double insert_seconds = 0.0;
   double read_seconds = 0.0;
-  std::printf("%-40s %10s %10s %9s %9s\n", "scan", "points", "rays", "read ms", "insert ms");
+  std::printf("%-48s %10s %10s %9s %9s %12s\n", "scan", "points", "rays", "read ms", "insert ms", "M points/s");
   for (const ScanRow& row : rows) {
-    std::printf("%-40s %10zu %10zu %9.1f %9.1f\n", row.name.c_str(), row.stats.points, row.stats.rays,
-                row.read_seconds * 1e3, row.insert_seconds * 1e3);
+    std::printf("%-48s %10zu %10zu %9.1f %9.1f %12.2f\n", row.name.c_str(), row.stats.points, row.stats.rays,
+                row.read_seconds * 1e3, row.insert_seconds * 1e3,
+                row.insert_seconds > 0 ? static_cast<double>(row.stats.points) / row.insert_seconds / 1e6 : 0.0);
     insert_seconds += row.insert_seconds;
     read_seconds += row.read_seconds;
   }
-  std::printf("total: %zu scans, %zu points, %zu rays, read %.3f s, insert %.3f s (%.2f M points/s), %.3f s in all\n",
+  const double rate = insert_seconds > 0 ? static_cast<double>(rows.size()) / insert_seconds : 0.0;
+  std::printf("total: %zu scans, %zu points, %zu rays; read %.3f s, insert %.3f s (%.2f M points/s, %.1f scans/s "
+              "of insertion alone), %.3f s in all\n",
               rows.size(), total.points, total.rays, read_seconds, insert_seconds,
-              insert_seconds > 0 ? static_cast<double>(total.points) / insert_seconds / 1e6 : 0.0, build_seconds);
+              insert_seconds > 0 ? static_cast<double>(total.points) / insert_seconds / 1e6 : 0.0, rate, build_seconds);
+  std::printf("integrator %s", to_string(insert.integrator));
+  if (insert.integrator == IntegratorKind::fast) {
+    std::printf(" (clear depth %d = %.3g m nodes, %d fine steps)", insert.resolved_clear_depth(map.grid()),
+                map.grid().node_size(insert.resolved_clear_depth(map.grid())), insert.fine_steps);
+  }
+  std::printf(", %u threads\n", insert.threads == 0 ? ThreadPool::hardware_threads() : insert.threads);
   if (total.non_finite > 0) std::printf("warning: %zu points were NaN or infinite and were skipped\n", total.non_finite);
   if (total.out_of_bounds > 0) {
     std::printf("warning: %zu points lie outside the map (half extent %.1f m) and were skipped; "
@@ -116,6 +175,8 @@ int run_build(const BuildOptions& options) {
                 total.out_of_bounds, map.grid().half_extent());
   }
   if (total.truncated > 0) std::printf("note: %zu rays were cut at --max-range %g m\n", total.truncated, options.max_range);
+  if (total.outside_box > 0) std::printf("note: %zu rays missed the --bbox and were skipped\n", total.outside_box);
+  if (uncoloured > 0) std::printf("warning: --color, but %zu scans carry no colours\n", uncoloured);
 
   const auto save_start = std::chrono::steady_clock::now();
   save_map(map, options.output);
@@ -129,10 +190,12 @@ int run_build(const BuildOptions& options) {
 Command add_build_command(CLI::App& app) {
   auto options = std::make_shared<BuildOptions>();
   CLI::App* command = app.add_subcommand(
-      "build", "Build a map from point clouds: OctoMap ScanGraph (.graph) or ASCII x y z (.xyz, .dat, .txt, also .bz2)");
-  command->add_option("inputs", options->inputs, "point-cloud files, inserted in order")
+      "build",
+      "Build a map from point clouds: OctoMap ScanGraph (.graph), ASCII x y z [r g b] (.xyz .dat .txt, also .bz2), "
+      "PLY, PCD, KITTI velodyne (.bin or a folder, with --poses), TUM RGB-D (a sequence folder)");
+  command->add_option("inputs", options->inputs, "point-cloud files or sequence folders, inserted in order")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingPath);
   command->add_option("-o,--output", options->output, "map file to write (.umb)")->required();
   command->add_option("--res", options->resolution, "voxel edge in metres")
       ->capture_default_str()
@@ -140,15 +203,31 @@ Command add_build_command(CLI::App& app) {
   command->add_option("--depth-levels", options->depth_levels, "tree depth levels (1-21; 16 like OctoMap)")
       ->capture_default_str()
       ->check(CLI::Range(1, 21));
-  command->add_option("--integrator", options->integrator, "simple or discrete (OctoMap's discretize=true)")
+  command->add_option("--integrator", options->integrator,
+                      "simple, discrete (OctoMap's discretize=true) or fast (coarse free-space clearing)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"simple", "discrete"}));
+      ->check(CLI::IsMember({"simple", "discrete", "fast"}));
+  command->add_option("--clear-depth", options->clear_depth,
+                      "fast: depth of the nodes free space is cleared with (-1: nodes closest to 16 cm)")
+      ->capture_default_str()
+      ->check(CLI::Range(-1, 21));
+  command->add_option("--fine-steps", options->fine_steps,
+                      "fast: coarse nodes before each end point traced voxel by voxel (0: none)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command->add_option("--threads", options->threads, "threads tracing rays (0: all cores)")->capture_default_str();
   command->add_option("--max-range", options->max_range, "metres; longer rays are cut there without a hit (<= 0: unlimited)")
       ->capture_default_str();
-  command->add_option("--origin", options->origin, "sensor origin x,y,z for files without poses (.xyz)")
+  command->add_option("--bbox", options->bbox, "only map inside minx,miny,minz,maxx,maxy,maxz (rays are clipped)");
+  command->add_flag("--color", options->color, "keep an RGB colour per voxel (inputs with colours: xyz rgb, PLY, PCD, TUM)");
+  command->add_option("--origin", options->origin, "sensor origin x,y,z for files without poses (.xyz, .ply, .pcd, lone .bin)")
       ->capture_default_str();
-  command->add_option("--format", options->format, "input format for every input: graph or xyz (default: by extension)")
-      ->check(CLI::IsMember({"graph", "xyz"}));
+  command->add_option("--format", options->format, "input format for every input (default: by name)")
+      ->check(CLI::IsMember({"graph", "xyz", "ply", "pcd", "kitti", "tum"}));
+  command->add_option("--poses", options->poses, "kitti: poses file (12 numbers per line)");
+  command->add_option("--calibration", options->calibration, "kitti: calib.txt with the velodyne-to-camera Tr");
+  command->add_option("--association", options->association, "tum: association file (default: the folder's *assoc*.txt)");
+  command->add_option("--camera", options->camera, "tum: fx,fy,cx,cy,depth_scale (default: TUM fr2 Kinect, 5000)");
   return [options] { return run_build(*options); };
 }
 

@@ -57,26 +57,24 @@ namespace {
 
 constexpr auto code_of = [](std::uint64_t code) { return code; };
 
-/// One ray per end voxel, to the voxel centre (OctoMap's computeDiscreteUpdate),
-/// in Morton order of the end voxels, which keeps consecutive rays on nearby paths.
-std::vector<Vec3f> voxel_centre_ends(const Grid& grid, std::span<const Vec3f> points, InsertStats& stats) {
-  std::vector<std::uint64_t> codes;
+/// The Morton codes of the finite points inside the map, with repeats in a
+/// row dropped (neighbouring points, pixels of a depth image or beams of a
+/// scan line, often share a voxel: a Kinect frame at 16 cm keeps 11k of its
+/// 257k points), and what was skipped.
+void end_codes(const Grid& grid, std::span<const Vec3f> points, std::vector<std::uint64_t>& codes,
+               InsertStats& stats) {
+  codes.clear();
   codes.reserve(points.size());
   for (const Vec3f& p : points) {
     if (!p.is_finite()) {
       ++stats.non_finite;
     } else if (auto key = grid.key_checked(p)) {
-      codes.push_back(morton::encode(*key));
+      const std::uint64_t code = morton::encode(*key);
+      if (codes.empty() || codes.back() != code) codes.push_back(code);
     } else {
       ++stats.out_of_bounds;
     }
   }
-  radix_sort(codes, 3 * grid.depth_levels(), code_of);
-  codes.erase(std::unique(codes.begin(), codes.end()), codes.end());
-  std::vector<Vec3f> centres;
-  centres.reserve(codes.size());
-  for (const std::uint64_t code : codes) centres.push_back(grid.center_f(morton::decode(code)));
-  return centres;
 }
 
 /// The colour samples of a scan: the points that give a hit, in scan order,
@@ -160,33 +158,49 @@ InsertStats Integrator::insert(OccupancyTree& tree, const Grid& grid, const Sens
 
   InsertStats stats;
   stats.points = points.size();
-  std::vector<Vec3f> centres;
-  std::span<const Vec3f> ends = points;
-  if (options.integrator != IntegratorKind::simple) {
-    centres = voxel_centre_ends(grid, points, stats);
-    ends = centres;
-  }
-
   const unsigned threads = options.threads == 0 ? ThreadPool::hardware_threads() : options.threads;
   ensure_workers(threads);
   for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
   std::vector<InsertStats> worker_stats(threads);
-  // Runs `work(begin, end, worker)` over [0, count) in contiguous chunks
-  // (neighbouring rays stay in one batch; several chunks per worker balance
-  // uneven rays).
-  auto split = [&](std::size_t count, const auto& work) {
+  // Runs `work(begin, end, worker, chunk)` over [0, count) in `chunks`
+  // contiguous chunks (neighbouring rays stay in one batch; several chunks
+  // per worker balance uneven rays). Any worker may run any chunk.
+  auto split = [&](std::size_t count, std::size_t chunks, const auto& work) {
     if (threads == 1) {
-      work(std::size_t{0}, count, 0u);
+      for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+        work(count * chunk / chunks, count * (chunk + 1) / chunks, 0u, chunk);
+      }
       return;
     }
-    const std::size_t tasks = std::min<std::size_t>(count, std::size_t{threads} * 8);
-    pool_->run(tasks, [&](std::size_t task, unsigned worker) {
-      work(count * task / tasks, count * (task + 1) / tasks, worker);
+    pool_->run(chunks, [&](std::size_t chunk, unsigned worker) {
+      work(count * chunk / chunks, count * (chunk + 1) / chunks, worker, chunk);
     });
   };
+  const std::size_t ray_chunks = std::size_t{threads} * 8;
+
+  std::vector<Vec3f> centres;
+  std::span<const Vec3f> ends = points;
+  if (options.integrator != IntegratorKind::simple) {
+    // One ray per end voxel, to the voxel centre (OctoMap's
+    // computeDiscreteUpdate), in Morton order of the end voxels, which keeps
+    // consecutive rays on nearby paths. The codes are found in parallel.
+    std::vector<std::vector<std::uint64_t>> parts(threads);
+    std::vector<InsertStats> part_stats(threads);
+    split(points.size(), threads, [&](std::size_t begin, std::size_t end, unsigned, std::size_t chunk) {
+      end_codes(grid, points.subspan(begin, end - begin), parts[chunk], part_stats[chunk]);
+    });
+    std::vector<std::uint64_t> codes = std::move(parts[0]);
+    for (unsigned c = 1; c < threads; ++c) codes.insert(codes.end(), parts[c].begin(), parts[c].end());
+    for (const InsertStats& s : part_stats) stats += s;
+    radix_sort(codes, 3 * grid.depth_levels(), code_of);
+    codes.erase(std::unique(codes.begin(), codes.end()), codes.end());
+    centres.reserve(codes.size());
+    for (const std::uint64_t code : codes) centres.push_back(grid.center_f(morton::decode(code)));
+    ends = centres;
+  }
 
   if (!scan.fast) {
-    split(ends.size(), [&](std::size_t begin, std::size_t end, unsigned worker) {
+    split(ends.size(), ray_chunks, [&](std::size_t begin, std::size_t end, unsigned worker, std::size_t) {
       tracers_[worker]->trace(scan, ends.subspan(begin, end - begin), worker_stats[worker]);
     });
   } else {
@@ -217,7 +231,7 @@ InsertStats Integrator::insert(OccupancyTree& tree, const Grid& grid, const Sens
     for (unsigned w = 1; w < threads; ++w) tracers_[w]->batch() = tracers_[0]->batch();
     scan.hits_first = true;
     const std::span<const PreparedRay> all(rays);
-    split(group_begin.size() - 1, [&](std::size_t begin, std::size_t end, unsigned worker) {
+    split(group_begin.size() - 1, ray_chunks, [&](std::size_t begin, std::size_t end, unsigned worker, std::size_t) {
       OccupancyTree::Cursor cursor(tree);
       for (std::size_t g = begin; g < end; ++g) {
         tracers_[worker]->trace_group(scan, all.subspan(group_begin[g], group_begin[g + 1] - group_begin[g]), cursor);

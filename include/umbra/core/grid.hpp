@@ -48,10 +48,15 @@ class Grid {
 
   /// Finest key along one axis, or nothing when outside [0, 2^depth_levels).
   [[nodiscard]] std::optional<std::uint32_t> axis_key(double coordinate) const {
-    const double scaled = std::floor(inverse_resolution_ * coordinate);
-    // Written so that NaN fails the test.
+    const double scaled = inverse_resolution_ * coordinate;
+    // floor(scaled) without calling libm (no SSE4.1 roundsd on baseline
+    // x86-64: a call per coordinate was the largest cost of discretising a
+    // Kinect frame). Range first, written so that NaN fails it; then the
+    // truncation is exact and one comparison turns it into floor.
     if (!(scaled >= -double(key_offset_) && scaled < double(key_offset_))) return std::nullopt;
-    return static_cast<std::uint32_t>(static_cast<std::int64_t>(scaled) + key_offset_);
+    auto whole = static_cast<std::int64_t>(scaled);
+    whole -= static_cast<double>(whole) > scaled ? 1 : 0;
+    return static_cast<std::uint32_t>(whole + key_offset_);
   }
 
   /// Centre of the finest voxel with index k along an axis (OctoMap's keyToCoord).
