@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <regex>
+#include <tuple>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -156,6 +157,58 @@ TEST(Cli, BadInputGivesAClearErrorAndNoMap) {
   const CommandResult info = run(cli() + " info " + quoted(dir / "junk.umb"));
   EXPECT_EQ(info.exit_code, 1);
   EXPECT_NE(info.output.find("junk.umb"), std::string::npos) << info.output;
+}
+
+TEST(Cli, BuildWithTheFastIntegratorThreadsBoxAndColour) {
+  const auto dir = test::scratch_dir();
+  const std::vector<Vec3f> points = room_scan();
+  {
+    std::ofstream out(dir / "room.xyz");
+    out.precision(9);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      out << points[i].x << ' ' << points[i].y << ' ' << points[i].z << ' ' << (i % 256) << " 10 200\n";
+    }
+  }
+  const CommandResult fast = run(cli() + " build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "fast.umb") +
+                                 " --res 0.05 --integrator fast --clear-depth 2 --fine-steps 1 --threads 2 --color");
+  ASSERT_EQ(fast.exit_code, 0) << fast.output;
+  EXPECT_NE(fast.output.find("clear depth 2"), std::string::npos) << fast.output;
+
+  MapConfig config;
+  config.resolution = 0.05;
+  config.color = true;
+  OccupancyMap expected(config);
+  InsertOptions options;
+  options.integrator = IntegratorKind::fast;
+  options.clear_depth = 2;
+  options.fine_steps = 1;
+  std::vector<Rgb> colors;
+  for (std::size_t i = 0; i < points.size(); ++i) colors.push_back({static_cast<std::uint8_t>(i % 256), 10, 200});
+  expected.insert_point_cloud({0, 0, 0}, points, colors, options);
+  const OccupancyMap built = load_map(dir / "fast.umb");
+  ASSERT_TRUE(built.has_color());
+  std::vector<std::tuple<std::uint64_t, float, std::optional<Rgb>>> a;
+  std::vector<std::tuple<std::uint64_t, float, std::optional<Rgb>>> b;
+  expected.for_each_leaf([&](const LeafView& l) { a.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds, l.color); });
+  built.for_each_leaf([&](const LeafView& l) { b.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds, l.color); });
+  EXPECT_TRUE(a == b);
+
+  const CommandResult boxed = run(cli() + " build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "box.umb") +
+                                  " --res 0.05 --bbox -1,-1,-1,1,1,1");
+  ASSERT_EQ(boxed.exit_code, 0) << boxed.output;
+  const MapStatistics stats = compute_statistics(load_map(dir / "box.umb"));
+  ASSERT_TRUE(stats.has_known_space);
+  for (int axis = 0; axis < 3; ++axis) {
+    EXPECT_GE(stats.known_min[axis], -1.05);
+    EXPECT_LE(stats.known_max[axis], 1.05);
+  }
+  EXPECT_EQ(stats.occupied_voxels, 0u) << "every wall lies outside the box";
+  EXPECT_GT(stats.free_voxels, 1000u) << "rays to the walls still clear the box";
+
+  const CommandResult bad = run(cli() + " build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "bad.umb") +
+                                " --bbox 1,2,3,4,5");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.output.find("--bbox"), std::string::npos) << bad.output;
 }
 
 /// The README's quick start is exactly two commands; the first runs the demo.
