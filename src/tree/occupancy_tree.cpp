@@ -122,35 +122,41 @@ void OccupancyTree::expand(int depth, std::uint32_t group, unsigned slot) {
   }
 }
 
+OccupancyTree::ChildrenSummary OccupancyTree::summarize_children(int depth, std::uint32_t child) const {
+  ChildrenSummary summary{};
+  summary.same = true;
+  if (depth == 1) {
+    const auto& values = leaves_[child].log_odds;
+    summary.max = values[0];
+    for (const float v : values) {
+      summary.max = std::max(summary.max, v);
+      summary.any_free |= thresholds_.is_free(v);
+      summary.any_unknown |= thresholds_.is_unknown(v);
+      summary.same &= v == values[0];
+    }
+    return summary;
+  }
+  // Inner children carry their own maximum and indicator bits.
+  const InnerGroup& children = inner_[depth - 1][child];
+  summary.max = children.log_odds[0];
+  for (unsigned i = 0; i < 8; ++i) {
+    summary.max = std::max(summary.max, children.log_odds[i]);
+    summary.same &= children.child[i] == kNoGroup && children.log_odds[i] == children.log_odds[0];
+  }
+  summary.any_free = children.contains_free != 0;
+  summary.any_unknown = children.contains_unknown != 0;
+  return summary;
+}
+
 void OccupancyTree::refresh(int depth, std::uint32_t group, unsigned slot, bool allow_prune) {
   InnerGroup& node = inner_[depth][group];
   const std::uint32_t child = node.child[slot];
   UMBRA_ASSERT(child != kNoGroup);
-  float max;
-  bool any_free;
-  bool any_unknown;
-  bool same = true;
-  if (depth == 1) {
-    const auto& values = leaves_[child].log_odds;
-    max = values[0];
-    any_free = false;
-    any_unknown = false;
-    for (const float v : values) {
-      max = std::max(max, v);
-      any_free |= thresholds_.is_free(v);
-      any_unknown |= thresholds_.is_unknown(v);
-      same &= v == values[0];
-    }
-  } else {
-    const InnerGroup& children = inner_[depth - 1][child];
-    max = children.log_odds[0];
-    for (unsigned i = 0; i < 8; ++i) {
-      max = std::max(max, children.log_odds[i]);
-      same &= children.child[i] == kNoGroup && children.log_odds[i] == children.log_odds[0];
-    }
-    any_free = children.contains_free != 0;
-    any_unknown = children.contains_unknown != 0;
-  }
+  const ChildrenSummary summary = summarize_children(depth, child);
+  const float max = summary.max;
+  const bool any_free = summary.any_free;
+  const bool any_unknown = summary.any_unknown;
+  bool same = summary.same;
   if (has_color()) {
     const ColorGroup& child_colors = colors_[depth - 1][child];
     ColorGroup& colors = colors_[depth][group];
@@ -551,30 +557,21 @@ std::string OccupancyTree::check_node(int depth, std::uint32_t group_index, unsi
   if (seen_here[child]) return where + "child group referenced twice";
   seen_here[child] = true;
 
-  float max = -1e30f;
-  bool any_free = false;
-  bool any_unknown = false;
-  bool same = true;
   if (depth == 1) {
-    const auto& values = leaves_[child].log_odds;
-    for (const float v : values) {
+    for (const float v : leaves_[child].log_odds) {
       if (v < range_.min || v > range_.max) return where + "leaf value outside the clamping range";
-      max = std::max(max, v);
-      any_free |= thresholds_.is_free(v);
-      any_unknown |= thresholds_.is_unknown(v);
-      same &= v == values[0];
     }
   } else {
-    const InnerGroup& children = inner_[depth - 1][child];
     for (unsigned i = 0; i < 8; ++i) {
       std::string problem = check_node(depth - 1, child, i, seen);
       if (!problem.empty()) return problem;
-      max = std::max(max, children.log_odds[i]);
-      any_free |= (children.contains_free & bit(i)) != 0;
-      any_unknown |= (children.contains_unknown & bit(i)) != 0;
-      same &= children.child[i] == kNoGroup && children.log_odds[i] == children.log_odds[0];
     }
   }
+  const ChildrenSummary summary = summarize_children(depth, child);
+  const float max = summary.max;
+  const bool any_free = summary.any_free;
+  const bool any_unknown = summary.any_unknown;
+  bool same = summary.same;
   if (has_color()) {
     const ColorGroup& child_colors = colors_[depth - 1][child];
     same &= same_colors(child_colors);

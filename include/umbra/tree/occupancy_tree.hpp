@@ -257,6 +257,14 @@ class OccupancyTree {
   void set_childless(InnerGroup& group, unsigned slot, float value) const;
   /// Gives a childless node eight children with its value and colour.
   void expand(int depth, std::uint32_t group, unsigned slot);
+  /// What a node with children takes from them (the child group `child` one depth below).
+  struct ChildrenSummary {
+    float max;         ///< maximum value
+    bool any_free;     ///< some voxel below is free
+    bool any_unknown;  ///< some voxel below is unknown
+    bool same;         ///< all eight childless and of one value
+  };
+  [[nodiscard]] ChildrenSummary summarize_children(int depth, std::uint32_t child) const;
   /// Recomputes a node with children from them; prunes when allowed.
   void refresh(int depth, std::uint32_t group, unsigned slot, bool allow_prune);
   void apply_group(int depth, std::uint32_t group, const UpdateBatch& batch, std::uint32_t batch_group,
