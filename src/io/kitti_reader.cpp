@@ -43,12 +43,7 @@ constexpr std::size_t kPointBytes = 16;  // float32 x, y, z, reflectance
 
 namespace fs = std::filesystem;
 
-bool is_bin_file(const fs::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension == ".bin";
-}
+bool is_bin_file(const fs::path& path) { return io_detail::to_lower(path.extension().string()) == ".bin"; }
 
 /// The number a scan file is named by ("000123.bin" -> 123), if it is one.
 std::optional<std::uint64_t> scan_number(const fs::path& path) {
@@ -90,12 +85,10 @@ std::vector<Pose> read_poses(const fs::path& path) {
     Tokens tokens(line);
     if (tokens.at_end()) {
       // Blank lines are tolerated only at the end of the file.
-      std::uint64_t blank_line = lines.line_number();
-      while (lines.next(line)) {
-        if (!Tokens(line).at_end()) {
-          throw FormatError::at_line(file.name(), blank_line,
-                                     "blank line inside the poses (the line number of a pose is its scan number)");
-        }
+      const std::uint64_t blank_line = lines.line_number();
+      if (lines.next_non_blank(line)) {
+        throw FormatError::at_line(file.name(), blank_line,
+                                   "blank line inside the poses (the line number of a pose is its scan number)");
       }
       break;
     }

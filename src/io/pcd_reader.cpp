@@ -15,7 +15,6 @@
 #include <atomic>
 #include <bit>
 #include <cstdint>
-#include <exception>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -67,7 +66,7 @@ Rgb unpack_colour(std::uint32_t bits) {
   return {static_cast<std::uint8_t>(bits >> 16), static_cast<std::uint8_t>(bits >> 8), static_cast<std::uint8_t>(bits)};
 }
 
-class PcdReader final : public ScanSource {
+class PcdReader final : public io_detail::SingleScanSource {
  public:
   PcdReader(const std::filesystem::path& path, Vec3f origin)
       : file_(path), display_name_(path.filename().string()), origin_(origin) {
@@ -79,29 +78,10 @@ class PcdReader final : public ScanSource {
     check_sizes();
   }
 
-  bool next(Scan& scan) override {
-    if (error_) std::rethrow_exception(error_);
-    if (done_) return false;
-    try {
-      read_scan(scan);
-    } catch (...) {
-      error_ = std::current_exception();
-      throw;
-    }
-    done_ = true;
-    consumed_.store(file_.size(), std::memory_order_relaxed);
-    return true;
-  }
-
-  [[nodiscard]] std::size_t scan_count() const override { return 1; }
-
-  [[nodiscard]] double progress() const override {
-    if (done_) return 1.0;
-    if (file_.size() == 0) return 0.0;
-    return static_cast<double>(consumed_.load(std::memory_order_relaxed)) / static_cast<double>(file_.size());
-  }
-
  private:
+  [[nodiscard]] std::uint64_t input_bytes() const override { return file_.size(); }
+  [[nodiscard]] std::uint64_t bytes_consumed() const override { return consumed_.load(std::memory_order_relaxed); }
+
   // --- header ---
 
   [[noreturn]] void header_error(const std::string& message) const {
@@ -393,7 +373,7 @@ class PcdReader final : public ScanSource {
 
   // --- data ---
 
-  void read_scan(Scan& scan) {
+  void read_scan(Scan& scan) override {
     const bool transform = !viewpoint_.is_identity();
     scan.origin = transform ? viewpoint_.translation() : origin_;
     scan.points.clear();
@@ -522,13 +502,12 @@ class PcdReader final : public ScanSource {
     const std::size_t wanted_fields = roles_.colour ? 4 : 3;
     const std::size_t wanted[4] = {roles_.x, roles_.y, roles_.z, roles_.colour.value_or(0)};
     while (point < point_count_) {
-      if (!lines_->next(line)) {
+      if (!lines_->next_non_blank(line)) {
         throw FormatError::at_line(file_.name(), lines_->line_number() + 1,
                                    "truncated file: the file ends after " + std::to_string(point) + " of " +
                                        std::to_string(point_count_) + " points");
       }
       Tokens tokens(line);
-      if (tokens.at_end()) continue;  // blank line
       // Pick out the wanted tokens by position; count all of them.
       std::string_view values[4];
       std::uint64_t index = 0;
@@ -561,12 +540,10 @@ class PcdReader final : public ScanSource {
       ++point;
       if (point % 4096 == 0) consumed_.store(lines_->offset(), std::memory_order_relaxed);
     }
-    while (lines_->next(line)) {
-      if (!Tokens(line).at_end()) {
-        throw FormatError::at_line(file_.name(), lines_->line_number(),
-                                   "more data than the " + std::to_string(point_count_) +
-                                       " points the header declares: " + quote(line));
-      }
+    if (lines_->next_non_blank(line)) {
+      throw FormatError::at_line(file_.name(), lines_->line_number(),
+                                 "more data than the " + std::to_string(point_count_) +
+                                     " points the header declares: " + quote(line));
     }
   }
 
@@ -584,9 +561,7 @@ class PcdReader final : public ScanSource {
   std::uint64_t data_line_ = 0;
   std::uint64_t data_offset_ = 0;
   std::uint64_t compressed_bytes_ = 0;
-  std::atomic<bool> done_{false};
-  std::exception_ptr error_;
-  std::atomic<std::uint64_t> consumed_{0};
+  std::atomic<std::uint64_t> consumed_{0};  // file offset reached, for progress()
 };
 
 }  // namespace

@@ -16,7 +16,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
-#include <exception>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -110,7 +109,7 @@ std::uint8_t colour_channel(double value, ScalarType type) {
   return static_cast<std::uint8_t>(std::min(channel, 255.0));
 }
 
-class PlyReader final : public ScanSource {
+class PlyReader final : public io_detail::SingleScanSource {
  public:
   PlyReader(const std::filesystem::path& path, Vec3f origin)
       : file_(path), display_name_(path.filename().string()), origin_(origin) {
@@ -121,30 +120,11 @@ class PlyReader final : public ScanSource {
     parse_header();
   }
 
-  bool next(Scan& scan) override {
-    if (error_) std::rethrow_exception(error_);
-    if (done_) return false;
-    try {
-      read_scan(scan);
-    } catch (...) {
-      error_ = std::current_exception();
-      throw;
-    }
-    done_ = true;
-    consumed_.store(file_.size(), std::memory_order_relaxed);
-    return true;
-  }
-
-  [[nodiscard]] std::size_t scan_count() const override { return 1; }
-
-  [[nodiscard]] double progress() const override {
-    if (done_) return 1.0;
-    if (file_.size() == 0) return 0.0;
-    return static_cast<double>(consumed_.load(std::memory_order_relaxed)) / static_cast<double>(file_.size());
-  }
-
  private:
-  void read_scan(Scan& scan) {
+  [[nodiscard]] std::uint64_t input_bytes() const override { return file_.size(); }
+  [[nodiscard]] std::uint64_t bytes_consumed() const override { return consumed_.load(std::memory_order_relaxed); }
+
+  void read_scan(Scan& scan) override {
     scan.origin = origin_;
     scan.points.clear();
     scan.colors.clear();
@@ -454,9 +434,7 @@ class PlyReader final : public ScanSource {
   /// The next non-blank line, or a FormatError naming the missing instance.
   std::string_view next_data_line(const PlyElement& element, std::uint64_t instance) {
     std::string_view line;
-    while (lines_->next(line)) {
-      if (!Tokens(line).at_end()) return line;
-    }
+    if (lines_->next_non_blank(line)) return line;
     throw FormatError::at_line(file_.name(), lines_->line_number() + 1,
                                "truncated file: the file ends before element '" + element.name + "' instance " +
                                    std::to_string(instance) + " of " + std::to_string(element.count));
@@ -523,12 +501,10 @@ class PlyReader final : public ScanSource {
       }
     }
     std::string_view line;
-    while (lines_->next(line)) {
-      if (!Tokens(line).at_end()) {
-        throw FormatError::at_line(file_.name(), lines_->line_number(),
-                                   "unexpected data after the last element (do the header counts match?): " +
-                                       quote(line));
-      }
+    if (lines_->next_non_blank(line)) {
+      throw FormatError::at_line(file_.name(), lines_->line_number(),
+                                 "unexpected data after the last element (do the header counts match?): " +
+                                     quote(line));
     }
   }
 
@@ -542,9 +518,7 @@ class PlyReader final : public ScanSource {
   std::array<const PlyProperty*, 7> vertex_roles_{};  // by Role; points into elements_ (fixed after the header)
   bool has_colours_ = false;
   std::uint64_t data_offset_ = 0;
-  std::atomic<bool> done_{false};
-  std::exception_ptr error_;
-  std::atomic<std::uint64_t> consumed_{0};
+  std::atomic<std::uint64_t> consumed_{0};  // file offset reached, for progress()
 };
 
 }  // namespace

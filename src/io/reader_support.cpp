@@ -1,6 +1,7 @@
-// Internal helpers shared by the PLY, PCD, KITTI and TUM readers: file
-// access by offset (pread), a buffered byte reader, a line splitter, number
-// parsing with std::from_chars, binary scalar decoding and 3x4 poses.
+// Internal helpers shared by the point-cloud readers: file access by offset
+// (pread), a buffered byte reader, a line splitter, number parsing with
+// std::from_chars, binary scalar decoding, 3x4 poses and the single-scan
+// ScanSource base.
 //
 // Cost model: every read goes through one buffer per reader (1 MiB by
 // default for bytes, growing only for lines longer than the buffer up to a
@@ -34,28 +35,38 @@ constexpr std::size_t kLineChunkBytes = 256 * 1024;
 
 std::string errno_text(int error) { return std::generic_category().message(error); }
 
-std::string quote(std::string_view text) {
+std::string quote(std::string_view text, HighBytes high_bytes) {
   std::string quoted = "'";
   for (std::size_t i = 0; i < text.size() && i < kQuotedTextChars; ++i) {
     const auto c = static_cast<unsigned char>(text[i]);
-    quoted += (c < 0x20 || c >= 0x7f) ? '?' : static_cast<char>(c);
+    const bool shown = c >= 0x20 && c != 0x7f && (c < 0x80 || high_bytes == HighBytes::keep);
+    quoted += shown ? static_cast<char>(c) : '?';
   }
   if (text.size() > kQuotedTextChars) quoted += "...";
   quoted += "'";
   return quoted;
 }
 
-bool has_bz2_suffix(const std::filesystem::path& path) {
-  std::string name = path.filename().string();
-  if (name.size() < 4) return false;
-  std::transform(name.end() - 4, name.end(), name.end() - 4,
+std::string to_lower(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return name.ends_with(".bz2");
+  return text;
+}
+
+bool has_bz2_suffix(const std::filesystem::path& path) {
+  return to_lower(path.filename().string()).ends_with(".bz2");
+}
+
+void reject_directory(const std::filesystem::path& path) {
+  std::error_code ignored;
+  if (std::filesystem::is_directory(path, ignored)) {
+    throw std::runtime_error("cannot open " + path.string() + ": it is a directory");
+  }
 }
 
 // --- InputFile ---------------------------------------------------------------
 
-InputFile::InputFile(const std::filesystem::path& path) : name_(path.string()) {
+InputFile::InputFile(const std::filesystem::path& path, std::string_view format) : name_(path.string()) {
   descriptor_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (descriptor_ < 0) throw std::runtime_error("cannot open " + name_ + ": " + errno_text(errno));
   struct stat info {};
@@ -70,7 +81,9 @@ InputFile::InputFile(const std::filesystem::path& path) : name_(path.string()) {
   }
   if (!S_ISREG(info.st_mode)) {
     ::close(descriptor_);
-    throw std::runtime_error("cannot open " + name_ + ": not a regular file");
+    std::string reason = "not a regular file";
+    if (!format.empty()) reason += " (" + std::string(format) + " files are read with seeks)";
+    throw std::runtime_error("cannot open " + name_ + ": " + reason);
   }
   size_ = static_cast<std::uint64_t>(info.st_size);
 }
@@ -173,6 +186,13 @@ bool LineReader::next(std::string_view& line) {
                                  quote({buffer_.data() + begin_, std::min<std::size_t>(end_ - begin_, 80)}));
 }
 
+bool LineReader::next_non_blank(std::string_view& line) {
+  while (next(line)) {
+    if (!Tokens(line).at_end()) return true;
+  }
+  return false;
+}
+
 std::size_t Tokens::count_left() const {
   std::size_t count = 0;
   bool in_token = false;
@@ -220,7 +240,12 @@ bool parse_floating(std::string_view token, Float& value) {
 bool parse_float(std::string_view token, float& value) { return parse_floating(token, value); }
 bool parse_double(std::string_view token, double& value) { return parse_floating(token, value); }
 
-bool parse_unsigned(std::string_view token, std::uint64_t& value) {
+namespace {
+
+/// A whole token as a decimal integer; an optional '+' (from_chars takes '-'
+/// only for signed types).
+template <typename Integer>
+bool parse_integer(std::string_view token, Integer& value) {
   const char* first = token.data();
   const char* const last = first + token.size();
   if (first != last && *first == '+') ++first;
@@ -229,14 +254,10 @@ bool parse_unsigned(std::string_view token, std::uint64_t& value) {
   return status == std::errc() && end == last;
 }
 
-bool parse_signed(std::string_view token, std::int64_t& value) {
-  const char* first = token.data();
-  const char* const last = first + token.size();
-  if (first != last && *first == '+') ++first;
-  if (first == last) return false;
-  const auto [end, status] = std::from_chars(first, last, value);
-  return status == std::errc() && end == last;
-}
+}  // namespace
+
+bool parse_unsigned(std::string_view token, std::uint64_t& value) { return parse_integer(token, value); }
+bool parse_signed(std::string_view token, std::int64_t& value) { return parse_integer(token, value); }
 
 double load_scalar(const unsigned char* data, ScalarType type, bool big_endian) {
   const std::uint64_t bits = load_bits(data, type.bytes, big_endian);
@@ -322,6 +343,28 @@ Pose Pose::operator*(const Pose& other) const {
     }
   }
   return product;
+}
+
+// --- SingleScanSource --------------------------------------------------------
+
+bool SingleScanSource::next(Scan& scan) {
+  if (error_) std::rethrow_exception(error_);
+  if (done_) return false;
+  try {
+    read_scan(scan);
+  } catch (...) {
+    error_ = std::current_exception();
+    throw;
+  }
+  done_ = true;
+  return true;
+}
+
+double SingleScanSource::progress() const {
+  if (done_) return 1.0;
+  const std::uint64_t total = input_bytes();
+  if (total == 0) return 0.0;
+  return static_cast<double>(bytes_consumed()) / static_cast<double>(total);
 }
 
 }  // namespace umbra::io_detail

@@ -1,4 +1,5 @@
-// Internal helpers shared by the PLY, PCD, KITTI and TUM readers (not installed).
+// Internal helpers shared by the point-cloud readers (ScanGraph, xyz, PLY,
+// PCD, KITTI, TUM; not installed).
 //
 // InputFile opens a regular file (std::runtime_error "cannot open FILE:
 // reason" otherwise) and reads at offsets with pread; ByteReader streams its
@@ -6,38 +7,66 @@
 // (no per-record allocation, a file that ends early is reported by a null
 // pointer so the caller can name what was expected at which byte offset);
 // LineReader splits text into lines without copying them and counts them.
-// The number parsers wrap std::from_chars; the scalar loaders decode
-// little- or big-endian integers and IEEE floats of 1, 2, 4 or 8 bytes; Pose
-// is a rigid (or affine) 3x4 transform kept in double and applied to float
-// points with one rounding per coordinate.
+// FileHandle closes a stdio file (for streams that cannot be read by offset,
+// such as pipes, and for writing). The number parsers wrap std::from_chars;
+// the scalar loaders decode little- or big-endian integers and IEEE floats of
+// 1, 2, 4 or 8 bytes; Pose is a rigid (or affine) 3x4 transform kept in
+// double and applied to float points with one rounding per coordinate.
+// SingleScanSource is the ScanSource side of a reader whose file is one scan.
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <exception>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "umbra/core/vec3.hpp"
+#include "umbra/io/scan_source.hpp"
 
 namespace umbra::io_detail {
 
+/// The system's text for an errno value, e.g. "No such file or directory".
 std::string errno_text(int error);
 
-/// `text` quoted for an error message: control bytes shown as '?', at most 80 characters.
-std::string quote(std::string_view text);
+/// What quote() shows of bytes 0x80 to 0xff (parts of UTF-8 characters).
+enum class HighBytes : std::uint8_t { replace, keep };
+
+/// `text` quoted for an error message, at most 80 characters: control bytes
+/// and DEL shown as '?', and so are bytes from 0x80 on unless `high_bytes` is keep.
+std::string quote(std::string_view text, HighBytes high_bytes = HighBytes::replace);
+
+/// `text` with the ASCII letters in lower case.
+std::string to_lower(std::string text);
 
 /// True when the file name ends in ".bz2" (any case).
 bool has_bz2_suffix(const std::filesystem::path& path);
+
+/// Throws std::runtime_error("cannot open FILE: it is a directory") when
+/// `path` names a folder (checked without opening it, so that an unreadable
+/// folder is named as a folder, and before fopen, which opens folders).
+void reject_directory(const std::filesystem::path& path);
+
+/// A stdio file that is closed when the handle goes.
+struct FileCloser {
+  void operator()(std::FILE* file) const { std::fclose(file); }
+};
+using FileHandle = std::unique_ptr<std::FILE, FileCloser>;
 
 /// A regular file opened for reading (binary), with its size fixed at open.
 class InputFile {
  public:
   /// Throws std::runtime_error("cannot open FILE: reason") for a missing file,
-  /// a directory or anything else that is not a readable regular file.
-  explicit InputFile(const std::filesystem::path& path);
+  /// a directory or anything else that is not a readable regular file; for
+  /// the last, a non-empty `format` adds why: "not a regular file (FORMAT
+  /// files are read with seeks)".
+  explicit InputFile(const std::filesystem::path& path, std::string_view format = {});
   InputFile(const InputFile&) = delete;
   InputFile& operator=(const InputFile&) = delete;
   ~InputFile();
@@ -98,6 +127,10 @@ class LineReader {
   /// The next line without its '\n' and trailing '\r'; false at the end of
   /// the file. The view stays valid until the next call.
   bool next(std::string_view& line);
+
+  /// The next line that holds more than whitespace (Tokens::is_space), skipping
+  /// blank ones; false when only blank lines are left.
+  bool next_non_blank(std::string_view& line);
 
   /// Number of the line last returned (0 before the first).
   [[nodiscard]] std::uint64_t line_number() const { return line_number_; }
@@ -208,6 +241,31 @@ struct Pose {
 
   /// this * other (apply `other` first).
   [[nodiscard]] Pose operator*(const Pose& other) const;
+};
+
+/// The ScanSource side of a reader whose file holds exactly one scan (xyz,
+/// PLY, PCD): next() calls read_scan() once and then returns false; an
+/// exception read_scan() throws is kept and thrown again by every later
+/// call. progress() is 1 once the scan is read, before that bytes_consumed()
+/// / input_bytes(), or 0 while the input size is 0 or unknown.
+class SingleScanSource : public ScanSource {
+ public:
+  bool next(Scan& scan) final;
+  [[nodiscard]] std::size_t scan_count() const final { return 1; }
+  [[nodiscard]] double progress() const final;
+
+ protected:
+  /// Fills `scan` (reusing its buffers) with the file's one scan.
+  virtual void read_scan(Scan& scan) = 0;
+  /// The size of the input in bytes; 0 when unknown.
+  [[nodiscard]] virtual std::uint64_t input_bytes() const = 0;
+  /// How many bytes of the input read_scan() has consumed; called from other
+  /// threads (for progress bars) while it runs.
+  [[nodiscard]] virtual std::uint64_t bytes_consumed() const = 0;
+
+ private:
+  std::atomic<bool> done_{false};
+  std::exception_ptr error_;
 };
 
 }  // namespace umbra::io_detail

@@ -9,16 +9,15 @@
 // the points) to check every count and pose against the file size, so a
 // truncated or hostile file fails up front with the byte offset of the bad
 // field and never causes an allocation larger than the file. next() then
-// streams one node's points in fixed-size chunks (checking each point's
-// count prefix), rounds each coordinate to float (as OctoMap does) and maps
-// it into the world frame with the node's pose: world point = R p + t (R from
-// the normalised quaternion), sensor origin = t. Edges are only checked for
-// size. write_scan_graph() produces files in the same layout.
+// reads one node's points by offset in fixed-size chunks (checking each
+// point's count prefix), rounds each coordinate to float (as OctoMap does)
+// and maps it into the world frame with the node's pose: world point = R p +
+// t (R from the normalised quaternion), sensor origin = t. Edges are only
+// checked for size. write_scan_graph() produces files in the same layout.
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <bit>
-#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -32,15 +31,20 @@
 #include <system_error>
 #include <vector>
 
-#include <sys/stat.h>
 #include <unistd.h>
 
+#include "reader_support.hpp"
 #include "umbra/io/format_error.hpp"
 #include "umbra/io/scan_graph.hpp"
 #include "umbra/io/scan_source.hpp"
 
 namespace umbra {
 namespace {
+
+using io_detail::errno_text;
+using io_detail::FileHandle;
+using io_detail::InputFile;
+using io_detail::Pose;
 
 constexpr std::uint64_t kCountBytes = 4;                         // uint32 / int32 fields
 constexpr std::uint64_t kPointBytes = 4 + 3 * 8;                 // int32 3 + 3 doubles
@@ -53,17 +57,12 @@ constexpr std::uint32_t kPointsPerChunk = 4096;
 // --- little-endian encoding, independent of the host byte order ---
 
 std::uint32_t load_u32(const unsigned char* bytes) {
-  return static_cast<std::uint32_t>(bytes[0]) | (static_cast<std::uint32_t>(bytes[1]) << 8) |
-         (static_cast<std::uint32_t>(bytes[2]) << 16) | (static_cast<std::uint32_t>(bytes[3]) << 24);
+  return static_cast<std::uint32_t>(io_detail::load_bits(bytes, 4, false));
 }
 
 std::int32_t load_i32(const unsigned char* bytes) { return static_cast<std::int32_t>(load_u32(bytes)); }
 
-double load_f64(const unsigned char* bytes) {
-  std::uint64_t bits = 0;
-  for (int i = 7; i >= 0; --i) bits = (bits << 8) | bytes[i];
-  return std::bit_cast<double>(bits);
-}
+double load_f64(const unsigned char* bytes) { return std::bit_cast<double>(io_detail::load_bits(bytes, 8, false)); }
 
 void append_u32(std::vector<unsigned char>& out, std::uint32_t value) {
   for (int i = 0; i < 4; ++i) out.push_back(static_cast<unsigned char>(value >> (8 * i)));
@@ -78,40 +77,6 @@ void append_f64(std::vector<unsigned char>& out, double value) {
   for (int i = 0; i < 8; ++i) out.push_back(static_cast<unsigned char>(bits >> (8 * i)));
 }
 
-struct FileCloser {
-  void operator()(std::FILE* file) const { std::fclose(file); }
-};
-using FileHandle = std::unique_ptr<std::FILE, FileCloser>;
-
-std::string errno_text(int error) { return std::generic_category().message(error); }
-
-bool has_bz2_suffix(const std::filesystem::path& path) {
-  std::string name = path.filename().string();
-  if (name.size() < 4) return false;
-  std::transform(name.end() - 4, name.end(), name.end() - 4,
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return name.ends_with(".bz2");
-}
-
-/// A pose as a rotation matrix and the float translation (the sensor
-/// origin). Points are transformed in double and rounded once, so an identity
-/// rotation gives exactly float(p) + float(t) as OctoMap computes it, and other
-/// rotations are at least as accurate as OctoMap's float quaternion products.
-struct RigidTransform {
-  std::array<std::array<double, 3>, 3> rotation{};
-  Vec3f translation;
-
-  [[nodiscard]] Vec3f apply(Vec3f p) const {
-    const auto& r = rotation;
-    const double x = p.x;
-    const double y = p.y;
-    const double z = p.z;
-    return {static_cast<float>(r[0][0] * x + r[0][1] * y + r[0][2] * z + static_cast<double>(translation.x)),
-            static_cast<float>(r[1][0] * x + r[1][1] * y + r[1][2] * z + static_cast<double>(translation.y)),
-            static_cast<float>(r[2][0] * x + r[2][1] * y + r[2][2] * z + static_cast<double>(translation.z))};
-  }
-};
-
 /// Where a node's points are, how many there are, and its pose.
 struct NodeEntry {
   std::uint64_t header_offset = 0;  // offset of the point count
@@ -119,42 +84,31 @@ struct NodeEntry {
   std::uint64_t end_offset = 0;     // offset just past the id
   std::uint32_t point_count = 0;
   std::uint32_t id = 0;
-  RigidTransform pose;
+  // The translation is rounded to float (it is the sensor origin); points are
+  // transformed in double and rounded once, so an identity rotation gives
+  // exactly float(p) + float(t) as OctoMap computes it, and other rotations
+  // are at least as accurate as OctoMap's float quaternion products.
+  Pose pose;
 };
 
 class ScanGraphReader final : public ScanSource {
  public:
   explicit ScanGraphReader(const std::filesystem::path& path)
-      : file_name_(path.string()), display_name_(path.filename().string()) {
-    std::error_code ignored;
-    if (std::filesystem::is_directory(path, ignored)) {
-      throw std::runtime_error("cannot open " + file_name_ + ": it is a directory");
+      : file_(path, "ScanGraph"), display_name_(path.filename().string()) {
+    if (io_detail::has_bz2_suffix(path)) {
+      throw FormatError(file_.name(), "compressed ScanGraph files are not supported; decompress it first (bunzip2)");
     }
-    file_.reset(std::fopen(path.c_str(), "rb"));
-    if (!file_) throw std::runtime_error("cannot open " + file_name_ + ": " + errno_text(errno));
-    struct stat info {};
-    if (::fstat(::fileno(file_.get()), &info) != 0) {
-      throw std::runtime_error("cannot open " + file_name_ + ": " + errno_text(errno));
-    }
-    if (!S_ISREG(info.st_mode)) {
-      throw std::runtime_error("cannot open " + file_name_ +
-                               ": not a regular file (ScanGraph files are read with seeks)");
-    }
-    if (has_bz2_suffix(path)) {
-      throw FormatError(file_name_, "compressed ScanGraph files are not supported; decompress it first (bunzip2)");
-    }
-    file_size_ = static_cast<std::uint64_t>(info.st_size);
     index_nodes();
     chunk_.resize(static_cast<std::size_t>(kPointsPerChunk * kPointBytes));
   }
 
   bool next(Scan& scan) override {
     if (next_node_ >= nodes_.size()) {
-      consumed_.store(file_size_, std::memory_order_relaxed);
+      consumed_.store(file_.size(), std::memory_order_relaxed);
       return false;
     }
     const NodeEntry& node = nodes_[next_node_];
-    scan.origin = node.pose.translation;
+    scan.origin = node.pose.translation();
     scan.points.clear();
     scan.colors.clear();
     // Safe: the count was checked against the file size when it was opened.
@@ -174,7 +128,7 @@ class ScanGraphReader final : public ScanSource {
         const std::int32_t element_count = load_i32(bytes);
         if (element_count != 3) {
           throw FormatError::at_byte(
-              file_name_, offset + i * kPointBytes,
+              file_.name(), offset + i * kPointBytes,
               "scan " + std::to_string(next_node_) + " point " + std::to_string(points_done + i) +
                   ": expected the element count 3 (int32) before its coordinates, found " +
                   std::to_string(element_count));
@@ -197,36 +151,26 @@ class ScanGraphReader final : public ScanSource {
   [[nodiscard]] std::size_t scan_count() const override { return nodes_.size(); }
 
   [[nodiscard]] double progress() const override {
-    if (file_size_ == 0) return 1.0;
+    if (file_.size() == 0) return 1.0;
     return static_cast<double>(consumed_.load(std::memory_order_relaxed)) /
-           static_cast<double>(file_size_);
+           static_cast<double>(file_.size());
   }
 
  private:
   /// Reads `size` bytes at `offset`; a file too short for them is a FormatError
   /// naming `what` was expected there.
   void read_exact(std::uint64_t offset, unsigned char* out, std::uint64_t size, const std::string& what) {
-    const std::uint64_t available = offset < file_size_ ? file_size_ - offset : 0;
+    const std::uint64_t available = offset < file_.size() ? file_.size() - offset : 0;
     if (size > available) {
-      throw FormatError::at_byte(file_name_, offset,
+      throw FormatError::at_byte(file_.name(), offset,
                                  "truncated file: expected " + what + " (" + std::to_string(size) +
                                      " bytes), but only " + std::to_string(available) +
                                      " bytes remain");
     }
-    if (position_ != offset) {
-      if (::fseeko(file_.get(), static_cast<off_t>(offset), SEEK_SET) != 0) {
-        throw std::runtime_error("cannot read " + file_name_ + ": " + errno_text(errno));
-      }
-      position_ = offset;
-    }
-    const std::size_t got = std::fread(out, 1, static_cast<std::size_t>(size), file_.get());
-    position_ += got;
+    const std::size_t got = file_.read_at(offset, out, static_cast<std::size_t>(size));
     if (got != size) {
-      if (std::ferror(file_.get())) {
-        throw std::runtime_error("cannot read " + file_name_ + ": " + errno_text(errno));
-      }
       // The file shrank after it was opened.
-      throw FormatError::at_byte(file_name_, offset + got,
+      throw FormatError::at_byte(file_.name(), offset + got,
                                  "truncated file: expected " + what + ", but the file ends here");
     }
   }
@@ -238,14 +182,14 @@ class ScanGraphReader final : public ScanSource {
     read_exact(0, buffer.data(), kCountBytes, "the scan count (uint32)");
     const std::uint32_t node_count = load_u32(buffer.data());
     const std::uint64_t minimum_size = kCountBytes + node_count * kMinNodeBytes + kCountBytes;
-    if (minimum_size > file_size_) {
+    if (minimum_size > file_.size()) {
       std::string message = "the file declares " + std::to_string(node_count) +
                             " scans, which need at least " + std::to_string(minimum_size) +
-                            " bytes, but the file has only " + std::to_string(file_size_) + " bytes";
+                            " bytes, but the file has only " + std::to_string(file_.size()) + " bytes";
       if (std::memcmp(buffer.data(), "BZh", 3) == 0) {
         message += "; it looks bz2-compressed: decompress it first (bunzip2)";
       }
-      throw FormatError::at_byte(file_name_, 0, message);
+      throw FormatError::at_byte(file_.name(), 0, message);
     }
     nodes_.reserve(node_count);
 
@@ -258,10 +202,10 @@ class ScanGraphReader final : public ScanSource {
       node.point_count = load_u32(buffer.data());
       node.points_offset = offset + kCountBytes;
       const std::uint64_t points_bytes = node.point_count * kPointBytes;
-      const std::uint64_t remaining = file_size_ - node.points_offset;
+      const std::uint64_t remaining = file_.size() - node.points_offset;
       if (points_bytes + kNodeTailBytes > remaining) {
         throw FormatError::at_byte(
-            file_name_, offset,
+            file_.name(), offset,
             scan_label + " declares " + std::to_string(node.point_count) + " points, which need " +
                 std::to_string(points_bytes) + " bytes plus " + std::to_string(kNodeTailBytes) +
                 " for its pose and id, but only " + std::to_string(remaining) +
@@ -279,10 +223,10 @@ class ScanGraphReader final : public ScanSource {
     read_exact(offset, buffer.data(), kCountBytes, "the edge count (uint32) after the last scan");
     const std::uint32_t edge_count = load_u32(buffer.data());
     const std::uint64_t edge_bytes = edge_count * kEdgeBytes;
-    const std::uint64_t after_count = file_size_ - offset - kCountBytes;
+    const std::uint64_t after_count = file_.size() - offset - kCountBytes;
     if (edge_bytes != after_count) {
       throw FormatError::at_byte(
-          file_name_, offset,
+          file_.name(), offset,
           "the file declares " + std::to_string(edge_count) + " edges, which need " +
               std::to_string(edge_bytes) + " bytes after the edge count, but " +
               std::to_string(after_count) + " bytes follow" +
@@ -291,73 +235,55 @@ class ScanGraphReader final : public ScanSource {
   }
 
   /// Checks and converts a pose (translation, quaternion) starting at `offset`.
-  RigidTransform parse_pose(const unsigned char* bytes, std::uint64_t offset, const std::string& scan_label) const {
+  Pose parse_pose(const unsigned char* bytes, std::uint64_t offset, const std::string& scan_label) const {
     const std::int32_t translation_count = load_i32(bytes);
     if (translation_count != 3) {
-      throw FormatError::at_byte(file_name_, offset,
+      throw FormatError::at_byte(file_.name(), offset,
                                  scan_label + " pose: expected the translation's element count 3 (int32), found " +
                                      std::to_string(translation_count));
     }
     const std::uint64_t quaternion_offset = offset + 4 + 3 * 8;
     const std::int32_t quaternion_count = load_i32(bytes + 4 + 3 * 8);
     if (quaternion_count != 4) {
-      throw FormatError::at_byte(file_name_, quaternion_offset,
+      throw FormatError::at_byte(file_.name(), quaternion_offset,
                                  scan_label + " pose: expected the quaternion's element count 4 (int32), found " +
                                      std::to_string(quaternion_count));
     }
 
-    RigidTransform pose;
     static constexpr std::array<const char*, 3> kAxisNames{"x", "y", "z"};
+    std::array<double, 3> translation{};
     for (std::size_t axis = 0; axis < 3; ++axis) {
       const std::uint64_t value_offset = offset + 4 + axis * 8;
       const double value = load_f64(bytes + 4 + axis * 8);
       const auto rounded = static_cast<float>(value);
       if (!std::isfinite(value) || !std::isfinite(rounded)) {
-        throw FormatError::at_byte(file_name_, value_offset,
+        throw FormatError::at_byte(file_.name(), value_offset,
                                    scan_label + " pose: translation " + kAxisNames[axis] + " is " +
                                        std::to_string(value) + ", not a finite float");
       }
-      pose.translation[axis] = rounded;
+      translation[axis] = rounded;
     }
 
     static constexpr std::array<const char*, 4> kQuaternionNames{"w", "x", "y", "z"};
     std::array<double, 4> q{};
-    double largest = 0.0;
     for (std::size_t i = 0; i < 4; ++i) {
       q[i] = load_f64(bytes + 4 + 3 * 8 + 4 + i * 8);
       if (!std::isfinite(q[i])) {
-        throw FormatError::at_byte(file_name_, quaternion_offset + 4 + i * 8,
+        throw FormatError::at_byte(file_.name(), quaternion_offset + 4 + i * 8,
                                    scan_label + " pose: quaternion " + kQuaternionNames[i] + " is " +
                                        std::to_string(q[i]) + ", not finite");
       }
-      largest = std::max(largest, std::abs(q[i]));
     }
-    if (largest == 0.0) {
-      throw FormatError::at_byte(file_name_, quaternion_offset,
-                                 scan_label + " pose: the rotation quaternion is (0, 0, 0, 0), which is no rotation");
+    try {
+      return Pose::from_translation_quaternion(translation[0], translation[1], translation[2], q[0], q[1], q[2],
+                                               q[3]);
+    } catch (const std::invalid_argument& error) {  // all finite (checked above): a zero quaternion
+      throw FormatError::at_byte(file_.name(), quaternion_offset, scan_label + " pose: " + error.what());
     }
-    // Normalise (scaling by the largest element first so that nothing overflows).
-    double norm_squared = 0.0;
-    for (double& element : q) {
-      element /= largest;
-      norm_squared += element * element;
-    }
-    const double norm = std::sqrt(norm_squared);
-    const double w = q[0] / norm;
-    const double x = q[1] / norm;
-    const double y = q[2] / norm;
-    const double z = q[3] / norm;
-    pose.rotation = {{{1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)},
-                      {2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)},
-                      {2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)}}};
-    return pose;
   }
 
-  std::string file_name_;     // as given, for error messages
+  InputFile file_;
   std::string display_name_;  // file name only, for Scan::name
-  FileHandle file_;
-  std::uint64_t file_size_ = 0;
-  std::uint64_t position_ = 0;  // current stdio position
   std::vector<NodeEntry> nodes_;
   std::size_t next_node_ = 0;
   std::vector<unsigned char> chunk_;
@@ -367,6 +293,7 @@ class ScanGraphReader final : public ScanSource {
 }  // namespace
 
 std::unique_ptr<ScanSource> open_scan_graph(const std::filesystem::path& path) {
+  io_detail::reject_directory(path);  // before opening, so an unreadable folder is named as a folder
   return std::make_unique<ScanGraphReader>(path);
 }
 

@@ -11,7 +11,6 @@
 // one frame's images and points, reused from scan to scan.
 #include <algorithm>
 #include <atomic>
-#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <csetjmp>
@@ -319,9 +318,7 @@ fs::path find_tum_association(const fs::path& folder, const fs::path& associatio
   if (!association.empty()) return association.is_absolute() ? association : folder / association;
   std::vector<fs::path> candidates;
   for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
-    std::string name = entry.path().filename().string();
-    std::transform(name.begin(), name.end(), name.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const std::string name = io_detail::to_lower(entry.path().filename().string());
     if (name.find("assoc") != std::string::npos && name.ends_with(".txt") && entry.is_regular_file()) {
       candidates.push_back(entry.path());
     }

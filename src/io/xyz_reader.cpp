@@ -6,27 +6,26 @@
 // point scan.dat.bz2 loads in a small fraction of a second. Every problem is
 // reported with the file name, and for text problems the line number and the
 // offending text. A file is one scan whose sensor origin the caller gives.
+// The file is read as a stream (stdio), not by offset, so pipes work too.
 #include <algorithm>
 #include <atomic>
-#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <exception>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
-#include <system_error>
 #include <vector>
 
 #include <bzlib.h>
 #include <sys/stat.h>
 
+#include "reader_support.hpp"
 #include "umbra/io/format_error.hpp"
 #include "umbra/io/scan_source.hpp"
 #include "umbra/io/xyz_file.hpp"
@@ -34,25 +33,13 @@
 namespace umbra {
 namespace {
 
+using io_detail::errno_text;
+using io_detail::FileHandle;
+using io_detail::Tokens;
+
 constexpr std::size_t kRawChunkBytes = 256 * 1024;   // compressed input per read
 constexpr std::size_t kTextChunkBytes = 256 * 1024;  // initial text buffer
 constexpr std::size_t kMaxLineBytes = 1024 * 1024;   // longer lines mean "not a text file"
-constexpr std::size_t kQuotedTextChars = 80;         // how much of a bad line an error quotes
-
-struct FileCloser {
-  void operator()(std::FILE* file) const { std::fclose(file); }
-};
-using FileHandle = std::unique_ptr<std::FILE, FileCloser>;
-
-std::string errno_text(int error) { return std::generic_category().message(error); }
-
-bool has_bz2_suffix(const std::filesystem::path& path) {
-  std::string name = path.filename().string();
-  if (name.size() < 4) return false;
-  std::transform(name.end() - 4, name.end(), name.end() - 4,
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return name.ends_with(".bz2");
-}
 
 /// The bytes of a file, decompressed when it is bz2. read() returns 0 only at
 /// the real end of the data; truncated or corrupt bz2 data throws FormatError.
@@ -168,23 +155,14 @@ class TextInput {
   std::atomic<std::uint64_t> raw_bytes_read_{0};
 };
 
-/// `text` as a quoted, single-line, length-limited string for error messages.
-std::string quote(std::string_view text) {
-  std::string quoted = "'";
-  for (std::size_t i = 0; i < text.size() && i < kQuotedTextChars; ++i) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    quoted += (c < 0x20 || c == 0x7f) ? '?' : static_cast<char>(c);
-  }
-  if (text.size() > kQuotedTextChars) quoted += "...";
-  quoted += "'";
-  return quoted;
-}
-
-bool is_separator(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+/// `text` quoted for an error message; unlike the binary formats' readers,
+/// this one shows bytes from 0x80 on as they are (UTF-8 text stays legible).
+std::string quote(std::string_view text) { return io_detail::quote(text, io_detail::HighBytes::keep); }
 
 /// Parses a whole token as a float: decimal or scientific, optional sign
 /// (including '+'), "nan" and "inf". Values beyond float range become +-inf
-/// or are flushed towards 0, as strtof would; beyond double range is an error.
+/// or are flushed towards 0, as strtof would; beyond double range is an error
+/// (where io_detail::parse_float, used by PLY and PCD, gives +-inf or 0).
 bool parse_coordinate(std::string_view token, float& value) {
   const char* first = token.data();
   const char* const last = first + token.size();
@@ -200,6 +178,7 @@ bool parse_coordinate(std::string_view token, float& value) {
   return true;
 }
 
+/// A whole token as an integer 0..255, digits only (no sign).
 bool parse_colour_channel(std::string_view token, std::uint8_t& value) {
   unsigned channel = 0;
   const auto [end, status] = std::from_chars(token.data(), token.data() + token.size(), channel);
@@ -208,46 +187,28 @@ bool parse_colour_channel(std::string_view token, std::uint8_t& value) {
   return true;
 }
 
-class XyzReader final : public ScanSource {
+class XyzReader final : public io_detail::SingleScanSource {
  public:
   XyzReader(const std::filesystem::path& path, Vec3f origin)
       : file_name_(path.string()), display_name_(path.filename().string()), origin_(origin) {
-    std::error_code ignored;
-    if (std::filesystem::is_directory(path, ignored)) {
-      throw std::runtime_error("cannot open " + file_name_ + ": it is a directory");
-    }
+    io_detail::reject_directory(path);
     FileHandle file(std::fopen(path.c_str(), "rb"));
     if (!file) throw std::runtime_error("cannot open " + file_name_ + ": " + errno_text(errno));
     struct stat info {};
     if (::fstat(::fileno(file.get()), &info) == 0 && S_ISREG(info.st_mode)) {
       file_size_ = static_cast<std::uint64_t>(info.st_size);
     }
-    input_ = std::make_unique<TextInput>(std::move(file), has_bz2_suffix(path), file_name_);
-  }
-
-  bool next(Scan& scan) override {
-    if (error_) std::rethrow_exception(error_);
-    if (done_) return false;
-    try {
-      read_scan(scan);
-    } catch (...) {
-      error_ = std::current_exception();
-      throw;
-    }
-    done_ = true;
-    return true;
-  }
-
-  [[nodiscard]] std::size_t scan_count() const override { return 1; }
-
-  [[nodiscard]] double progress() const override {
-    if (done_) return 1.0;
-    if (file_size_ == 0) return 0.0;
-    return std::min(1.0, static_cast<double>(input_->raw_bytes_read()) / static_cast<double>(file_size_));
+    input_ = std::make_unique<TextInput>(std::move(file), io_detail::has_bz2_suffix(path), file_name_);
   }
 
  private:
-  void read_scan(Scan& scan) {
+  [[nodiscard]] std::uint64_t input_bytes() const override { return file_size_; }
+  // Capped: a file that grows while being read still ends at 1.
+  [[nodiscard]] std::uint64_t bytes_consumed() const override {
+    return std::min(input_->raw_bytes_read(), file_size_);
+  }
+
+  void read_scan(Scan& scan) override {
     scan.origin = origin_;
     scan.points.clear();
     scan.colors.clear();
@@ -296,14 +257,10 @@ class XyzReader final : public ScanSource {
 
     std::string_view tokens[7];
     std::size_t token_count = 0;
-    std::size_t position = 0;
-    while (true) {
-      while (position < line.size() && is_separator(line[position])) ++position;
-      if (position == line.size()) break;
-      if (token_count == 0 && line[position] == '#') return;  // comment
-      const std::size_t token_start = position;
-      while (position < line.size() && !is_separator(line[position])) ++position;
-      if (token_count < 7) tokens[token_count] = line.substr(token_start, position - token_start);
+    Tokens splitter(line);
+    for (std::string_view token = splitter.next(); !token.empty(); token = splitter.next()) {
+      if (token_count == 0 && token.front() == '#') return;  // comment
+      if (token_count < 7) tokens[token_count] = token;
       ++token_count;
     }
     if (token_count == 0) return;  // blank line
@@ -355,8 +312,6 @@ class XyzReader final : public ScanSource {
   std::unique_ptr<TextInput> input_;
   std::optional<bool> colour_line_kind_;  // set by the first point line: true = with colours
   std::uint64_t first_point_line_ = 0;
-  std::atomic<bool> done_{false};
-  std::exception_ptr error_;
 };
 
 }  // namespace
