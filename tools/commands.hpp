@@ -13,5 +13,6 @@ using Command = std::function<int()>;
 Command add_demo_command(CLI::App& app);
 Command add_build_command(CLI::App& app);
 Command add_info_command(CLI::App& app);
+Command add_convert_command(CLI::App& app);
 
 }  // namespace umbra::cli

@@ -1,11 +1,11 @@
-// `umbra info MAP [--json]`: what a map file holds.
+// `umbra info MAP [--json]`: what a map file (.umb, .bt, .ot) holds.
 #include <cstdio>
 #include <memory>
 #include <string>
 
 #include "commands.hpp"
 #include "report.hpp"
-#include "umbra/io/map_file.hpp"
+#include "umbra/io/map_formats.hpp"
 
 namespace umbra::cli {
 namespace {
@@ -16,7 +16,7 @@ struct InfoOptions {
 };
 
 int run_info(const InfoOptions& options) {
-  const OccupancyMap map = load_map(options.map_path);
+  const OccupancyMap map = load_any_map(options.map_path);  // .umb, .bt or .ot by extension
   const MapStatistics stats = compute_statistics(map);
   if (options.json) {
     std::printf("%s\n", statistics_json(stats).c_str());
@@ -32,7 +32,9 @@ int run_info(const InfoOptions& options) {
 Command add_info_command(CLI::App& app) {
   auto options = std::make_shared<InfoOptions>();
   CLI::App* command = app.add_subcommand("info", "Show what a map file holds");
-  command->add_option("map", options->map_path, "map file (.umb)")->required()->check(CLI::ExistingFile);
+  command->add_option("map", options->map_path, "map file (.umb, or OctoMap's .bt / .ot)")
+      ->required()
+      ->check(CLI::ExistingFile);
   command->add_flag("--json", options->json, "print one JSON object instead of text");
   return [options] { return run_info(*options); };
 }

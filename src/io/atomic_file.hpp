@@ -1,0 +1,23 @@
+// Whole-file writes that never leave a half-written file under the real name.
+//
+// write_file_atomically() writes the bytes to a new hidden file beside the
+// target (unique per process, call and clock tick; O_EXCL settles any
+// clash), flushes it to disk, gives it the permissions of the file it
+// replaces, renames it over the target and flushes the folder (best effort).
+// On any failure the temporary file is removed and the target is untouched.
+// Cost: one write per part, two fsyncs. Private to umbra_io.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <initializer_list>
+#include <span>
+#include <string>
+
+namespace umbra::detail {
+
+/// Throws std::runtime_error "cannot save map to 'PATH': WHAT 'TEMP': REASON".
+void write_file_atomically(const std::filesystem::path& path,
+                           std::initializer_list<std::span<const std::uint8_t>> parts);
+
+}  // namespace umbra::detail

@@ -1,0 +1,455 @@
+// OctoMap files: the public functions, the byte input, and the text header
+// both formats share (the trees themselves are in octomap_bt.cpp and
+// octomap_ot.cpp).
+//
+// The header is parsed the way liboctomap parses it — whitespace-separated
+// tokens, `#` starts a comment up to the end of the line, unknown keywords
+// are skipped with the rest of their line, `data` ends the header and the
+// tree starts after the end of that line — but stricter about values: `res`
+// and `size` must be whole numbers (no trailing text), `res` finite and > 0,
+// and `id`, `res` and `size` must all be present. Cost: one pass over the
+// header bytes; tokens longer than 64 bytes are not stored. Files are read
+// through a 1 MiB buffer, never whole.
+#include "umbra/io/octomap_files.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+#include <system_error>
+
+#include "atomic_file.hpp"
+#include "octomap_format.hpp"
+
+namespace umbra {
+namespace octomap_io {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::size_t kBufferBytes = std::size_t{1} << 20;
+/// Longest header token that is kept (longer keywords are unknown, longer values wrong).
+constexpr std::size_t kMaxTokenBytes = 64;
+/// The second and third lines liboctomap writes.
+constexpr std::string_view kCommentLines =
+    "# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
+
+[[noreturn]] void throw_io(const std::string& what, const fs::path& path, int error) {
+  throw std::runtime_error(what + " '" + path.string() + "': " + std::generic_category().message(error));
+}
+
+bool is_space(int c) { return c == ' ' || c == '\t' || c == '\n' || c == '\v' || c == '\f' || c == '\r'; }
+
+/// Reads the header token by token, counting lines.
+class HeaderLexer {
+ public:
+  HeaderLexer(ByteInput& in, const std::string& name) : in_(in), name_(name) {}
+
+  /// Skips whitespace; false at the end of the input.
+  bool skip_space() {
+    for (int c = in_.peek(); c >= 0; c = in_.peek()) {
+      if (!is_space(c)) return true;
+      if (c == '\n') ++line_;
+      in_.get();
+    }
+    return false;
+  }
+  /// The next token (call after skip_space() returned true); `too_long` when it had more than 64 bytes.
+  std::string token(bool& too_long) {
+    std::string text;
+    too_long = false;
+    for (int c = in_.peek(); c >= 0 && !is_space(c); c = in_.peek()) {
+      if (text.size() < kMaxTokenBytes) {
+        text += static_cast<char>(c);
+      } else {
+        too_long = true;
+      }
+      in_.get();
+    }
+    return text;
+  }
+  /// Consumes the rest of the line, its '\n' included.
+  void skip_line() {
+    for (int c = in_.get(); c >= 0; c = in_.get()) {
+      if (c == '\n') {
+        ++line_;
+        return;
+      }
+    }
+  }
+  /// The value after a keyword (on the same or a later line, as liboctomap allows).
+  std::string value(const char* keyword) {
+    if (!skip_space()) fail("the header ends after '" + std::string(keyword) + "' without its value");
+    bool too_long = false;
+    std::string text = token(too_long);
+    if (too_long) fail("the value of '" + std::string(keyword) + "' is longer than 64 bytes: " + quote_text(text) + "...");
+    return text;
+  }
+
+  [[nodiscard]] std::uint64_t line() const { return line_; }
+  [[noreturn]] void fail(const std::string& message) const { fail_at(line_, message); }
+  [[noreturn]] void fail_at(std::uint64_t line, const std::string& message) const {
+    throw FormatError::at_line(name_, line, message);
+  }
+
+ private:
+  ByteInput& in_;
+  const std::string& name_;
+  std::uint64_t line_ = 2;  // the first line is read before the lexer starts
+};
+
+/// Reads the first line and says which format it announces.
+OctoMapFormat read_first_line(ByteInput& in, const std::string& name) {
+  std::string start;
+  const std::size_t longest = std::max(kBtFirstLine.size(), kOtFirstLine.size());
+  for (int c = in.peek(); c >= 0 && c != '\n' && start.size() < longest; c = in.peek()) {
+    start += static_cast<char>(c);
+    in.get();
+  }
+  OctoMapFormat format;
+  if (start.starts_with(kBtFirstLine)) {
+    format = OctoMapFormat::bt;
+  } else if (start.starts_with(kOtFirstLine)) {
+    format = OctoMapFormat::ot;
+  } else {
+    throw FormatError::at_line(name, 1,
+                               "not an OctoMap file: the first line must start with '" + std::string(kBtFirstLine) +
+                                   "' (.bt) or '" + std::string(kOtFirstLine) + "' (.ot), found " +
+                                   (in.size() == 0 ? std::string("an empty file") : quote_text(start, 40)));
+  }
+  for (int c = in.get(); c >= 0 && c != '\n'; c = in.get()) {
+  }
+  return format;
+}
+
+double parse_resolution(HeaderLexer& lexer, const std::string& text) {
+  std::string_view digits = text;
+  if (digits.size() > 1 && digits[0] == '+' && digits[1] != '-') digits.remove_prefix(1);  // as istream accepts
+  double value = 0.0;
+  const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+  if (error != std::errc() || end != digits.data() + digits.size()) {
+    lexer.fail("res must be a number (the voxel edge in metres), found " + quote_text(text));
+  }
+  // 1/res must be finite too: keys are computed with it.
+  if (!(std::isfinite(value) && value > 0.0 && std::isfinite(1.0 / value))) {
+    lexer.fail("res must be a finite number > 0 (the voxel edge in metres), found " + quote_text(text));
+  }
+  return value;
+}
+
+std::uint64_t parse_size(HeaderLexer& lexer, const std::string& text) {
+  std::uint64_t value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error == std::errc::result_out_of_range) lexer.fail("size " + quote_text(text) + " is too large");
+  if (error != std::errc() || end != text.data() + text.size()) {
+    lexer.fail("size must be a whole number >= 0 (the number of nodes), found " + quote_text(text));
+  }
+  return value;
+}
+
+}  // namespace
+
+// --- ByteInput ----------------------------------------------------------------
+
+ByteInput::ByteInput(std::span<const std::uint8_t> bytes)
+    : data_(bytes.data()), end_(bytes.size()), size_(bytes.size()) {}
+
+ByteInput::ByteInput(const fs::path& path) : path_(path) {
+  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) throw_io("cannot open map file", path, errno);
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0) {
+    const int error = errno;
+    ::close(fd_);
+    throw_io("cannot stat map file", path, error);
+  }
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd_);
+    throw std::runtime_error("cannot read map file '" + path.string() + "': not a regular file");
+  }
+  size_ = static_cast<std::uint64_t>(st.st_size);
+  buffer_.resize(static_cast<std::size_t>(std::min<std::uint64_t>(size_, kBufferBytes)));
+  data_ = buffer_.data();
+}
+
+ByteInput::~ByteInput() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool ByteInput::refill() {
+  if (fd_ < 0 || buffer_.empty()) return false;
+  window_offset_ += end_;
+  pos_ = 0;
+  end_ = 0;
+  // Never past the size the file had when it was opened (a file that grows meanwhile is read as it was).
+  if (window_offset_ >= size_) return false;
+  const auto want = static_cast<std::size_t>(std::min<std::uint64_t>(buffer_.size(), size_ - window_offset_));
+  while (end_ == 0) {
+    const ssize_t n = ::pread(fd_, buffer_.data(), want, static_cast<off_t>(window_offset_));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw_io("cannot read map file", path_, errno);
+    }
+    if (n == 0) return false;  // the end (or the file shrank: the reader reports a truncation)
+    end_ = static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+bool ByteInput::read_slow(std::uint8_t* out, std::size_t n) {
+  while (n > 0) {
+    if (pos_ == end_ && !refill()) return false;
+    const std::size_t chunk = std::min(n, end_ - pos_);
+    std::memcpy(out, data_ + pos_, chunk);
+    pos_ += chunk;
+    out += chunk;
+    n -= chunk;
+  }
+  return true;
+}
+
+// --- header -------------------------------------------------------------------
+
+Header parse_header(ByteInput& in, const std::string& name) {
+  Header header;
+  header.format = read_first_line(in, name);
+  header.file_bytes = in.size();
+  HeaderLexer lexer(in, name);
+  std::string id;
+  std::uint64_t id_line = 0;
+  bool have_res = false;
+  bool have_size = false;
+  std::uint64_t data_line = 0;
+  for (;;) {
+    if (!lexer.skip_space()) {
+      lexer.fail("the header ends without a 'data' line (the line after which the tree starts)");
+    }
+    const std::uint64_t line = lexer.line();
+    bool too_long = false;
+    const std::string token = lexer.token(too_long);
+    if (too_long || token.starts_with('#')) {
+      lexer.skip_line();  // a comment, or a keyword no one knows
+    } else if (token == "data") {
+      data_line = line;
+      lexer.skip_line();
+      break;
+    } else if (token == "id") {
+      id = lexer.value("id");
+      id_line = line;
+    } else if (token == "res") {
+      header.resolution = parse_resolution(lexer, lexer.value("res"));
+      have_res = true;
+    } else if (token == "size") {
+      header.nodes = parse_size(lexer, lexer.value("size"));
+      header.size_line = line;
+      have_size = true;
+    } else {
+      lexer.skip_line();  // liboctomap skips unknown keywords (with a warning) too
+    }
+  }
+  if (id.empty()) lexer.fail_at(data_line, "the header has no 'id' line (the tree type, e.g. 'id OcTree')");
+  if (!have_res) lexer.fail_at(data_line, "the header has no 'res' line (the voxel edge in metres)");
+  if (!have_size) lexer.fail_at(data_line, "the header has no 'size' line (the number of nodes)");
+
+  if (id == "1") id = "OcTree";  // the legacy id liboctomap still accepts
+  if (id == "OcTree" || id == "OcTreeStamped") {
+    header.color = false;
+  } else if (id == "ColorOcTree") {
+    header.color = header.format == OctoMapFormat::ot;  // a .bt file carries no colour
+  } else if (id == "OcTreeBase" || id == "CountingOcTree") {
+    lexer.fail_at(id_line, "tree type " + quote_text(id) +
+                               " is a CountingOcTree (liboctomap registers it as 'OcTreeBase'): it counts hits, it "
+                               "holds no occupancy; umbra reads the occupancy trees OcTree, OcTreeStamped and "
+                               "ColorOcTree");
+  } else {
+    lexer.fail_at(id_line, "unknown tree type " + quote_text(id) +
+                               ": umbra reads the occupancy trees liboctomap 1.9.7 knows: OcTree, OcTreeStamped, "
+                               "ColorOcTree (and the legacy id '1', an OcTree)");
+  }
+  header.tree_type = id;
+  header.data_offset = in.offset();
+  return header;
+}
+
+std::string resolution_text(double resolution) {
+  char text[64];
+  // What `std::ostream << double` writes with its default precision (%g, 6 digits).
+  std::snprintf(text, sizeof text, "%g", resolution);
+  double back = 0.0;
+  const std::string_view short_text(text);
+  const auto parsed = std::from_chars(short_text.data(), short_text.data() + short_text.size(), back);
+  if (parsed.ec == std::errc() && back == resolution) return text;
+  const auto written = std::to_chars(text, text + sizeof text, resolution);  // shortest exact form
+  return std::string(text, written.ptr);
+}
+
+std::string header_text(OctoMapFormat format, std::string_view id, std::uint64_t size, double resolution) {
+  std::string text(format == OctoMapFormat::bt ? kBtFirstLine : kOtFirstLine);
+  text += '\n';
+  text += kCommentLines;
+  text += "id ";
+  text += id;
+  text += "\nsize " + std::to_string(size) + "\nres " + resolution_text(resolution) + "\ndata\n";
+  return text;
+}
+
+// --- size against the file length ---------------------------------------------------
+
+void check_declared_size(const Header& header, const std::string& name) {
+  const std::uint64_t data_bytes = header.file_bytes - header.data_offset;
+  const std::uint64_t nodes = header.nodes;
+  auto fail = [&](const std::string& message) -> FormatError {
+    return FormatError::at_line(name, header.size_line, message);
+  };
+  if (header.format == OctoMapFormat::ot) {
+    // Every node is its data (4 bytes of log-odds, 3 of colour in a ColorOcTree) and a child mask byte.
+    const std::uint64_t node_bytes = header.color ? 8 : 5;
+    if (data_bytes % node_bytes == 0 && data_bytes / node_bytes == nodes) return;
+    throw fail("size says " + std::to_string(nodes) + " nodes of " + std::to_string(node_bytes) + " bytes (" +
+               header.tree_type + "), but " + std::to_string(data_bytes) +
+               " bytes follow the header (the file is truncated, has trailing bytes, or the size is wrong)");
+  }
+  // .bt: every node with children takes 2 bytes (the root's come first) and has 1 to 8 children.
+  const std::uint64_t with_children = data_bytes / 2;
+  if (nodes == 0 && data_bytes == 0) return;
+  if (nodes == 0) {
+    throw fail("size is 0 (an empty tree), but " + std::to_string(data_bytes) + " bytes follow the header");
+  }
+  if (data_bytes == 0) {
+    throw fail("size says " + std::to_string(nodes) + " nodes, but no bytes follow the header");
+  }
+  const std::uint64_t most = with_children > (UINT64_MAX - 1) / 8 ? UINT64_MAX : 8 * with_children + 1;
+  if (nodes < with_children || nodes > most) {
+    throw fail("size says " + std::to_string(nodes) + " nodes, but the " + std::to_string(data_bytes) +
+               " bytes after the header describe " + std::to_string(with_children) +
+               " nodes with children, so between " + std::to_string(with_children) + " and " + std::to_string(most) +
+               " nodes (the file is truncated, has trailing bytes, or the size is wrong)");
+  }
+}
+
+// --- helpers --------------------------------------------------------------------
+
+void require_octomap_depth(const OccupancyMap& map, const std::string& what) {
+  if (map.depth_levels() == kOctoMapDepthLevels) return;
+  throw std::invalid_argument(what + ": OctoMap files always hold a tree of 16 depth levels (their keys and the "
+                              "map's extent depend on it), and this map has " +
+                              std::to_string(map.depth_levels()) +
+                              "; only maps made with depth_levels = 16 can be written as .bt or .ot");
+}
+
+std::string node_text(int depth, std::uint64_t code) {
+  const Key key = morton::decode(code);
+  return "the node at OctoMap depth " + std::to_string(kOctoMapDepthLevels - depth) + " (first voxel key (" +
+         std::to_string(key.x) + ", " + std::to_string(key.y) + ", " + std::to_string(key.z) + "))";
+}
+
+std::string quote_text(std::string_view text, std::size_t limit) {
+  std::string out = "'";
+  for (std::size_t i = 0; i < text.size() && i < limit; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c >= 0x20 && c < 0x7F && c != '\'' && c != '\\') {
+      out += static_cast<char>(c);
+    } else {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02x", static_cast<unsigned>(c));
+      out += hex;
+    }
+  }
+  return out + (text.size() > limit ? "'..." : "'");
+}
+
+std::string float_text(float value) {
+  std::ostringstream out;
+  out.precision(9);
+  char bits[16];
+  std::snprintf(bits, sizeof bits, "0x%08x", static_cast<unsigned>(std::bit_cast<std::uint32_t>(value)));
+  out << value << " (bits " << bits << ")";
+  return out.str();
+}
+
+OccupancyMap new_map(const Header& header, const std::string& name, const SensorModel& sensor, bool color) {
+  MapConfig config;
+  config.resolution = header.resolution;
+  config.depth_levels = kOctoMapDepthLevels;
+  config.sensor = sensor;
+  config.color = color;
+  try {
+    return OccupancyMap(config);
+  } catch (const std::invalid_argument& e) {
+    throw FormatError(name, std::string("cannot make a map of this file's resolution: ") + e.what());
+  }
+}
+
+}  // namespace octomap_io
+
+// --- public functions -------------------------------------------------------------
+
+namespace {
+
+OccupancyMap decode(octomap_io::ByteInput& in, const std::string& name, const SensorModel& sensor) {
+  sensor.validate();
+  const octomap_io::Header header = octomap_io::parse_header(in, name);
+  return header.format == OctoMapFormat::bt ? octomap_io::decode_bt(in, header, name, sensor)
+                                            : octomap_io::decode_ot(in, header, name, sensor);
+}
+
+struct EncodedFile {
+  std::string header;
+  octomap_io::EncodedTree tree;
+};
+
+EncodedFile encode(const OccupancyMap& map, OctoMapFormat format, const std::string& what) {
+  octomap_io::require_octomap_depth(map, what);
+  EncodedFile file;
+  file.tree = format == OctoMapFormat::bt ? octomap_io::encode_bt(map) : octomap_io::encode_ot(map);
+  const char* id = format == OctoMapFormat::ot && map.has_color() ? "ColorOcTree" : "OcTree";
+  file.header = octomap_io::header_text(format, id, file.tree.nodes, map.resolution());
+  return file;
+}
+
+}  // namespace
+
+const char* to_string(OctoMapFormat format) { return format == OctoMapFormat::bt ? "bt" : "ot"; }
+
+OccupancyMap load_octomap(const std::filesystem::path& path, const SensorModel& sensor) {
+  octomap_io::ByteInput in(path);
+  return decode(in, path.string(), sensor);
+}
+
+OccupancyMap decode_octomap(std::span<const std::uint8_t> bytes, const std::string& name, const SensorModel& sensor) {
+  octomap_io::ByteInput in(bytes);
+  return decode(in, name, sensor);
+}
+
+OctoMapFileInfo read_octomap_info(const std::filesystem::path& path) {
+  octomap_io::ByteInput in(path);
+  const std::string name = path.string();
+  const octomap_io::Header header = octomap_io::parse_header(in, name);
+  octomap_io::check_declared_size(header, name);
+  OctoMapFileInfo info = header;
+  return info;
+}
+
+std::vector<std::uint8_t> encode_octomap(const OccupancyMap& map, OctoMapFormat format) {
+  EncodedFile file = encode(map, format, "encode_octomap");
+  std::vector<std::uint8_t> bytes(file.header.begin(), file.header.end());
+  bytes.insert(bytes.end(), file.tree.bytes.begin(), file.tree.bytes.end());
+  return bytes;
+}
+
+void save_octomap(const OccupancyMap& map, const std::filesystem::path& path, OctoMapFormat format) {
+  const EncodedFile file = encode(map, format, "cannot save '" + path.string() + "'");
+  const std::span<const std::uint8_t> header(reinterpret_cast<const std::uint8_t*>(file.header.data()),
+                                             file.header.size());
+  detail::write_file_atomically(path, {header, std::span<const std::uint8_t>(file.tree.bytes)});
+}
+
+}  // namespace umbra
