@@ -147,8 +147,10 @@ InsertStats Integrator::insert(OccupancyTree& tree, const Grid& grid, const Sens
   scan.origin = origin;
   scan.origin_key = grid.key(Vec3d(origin));  // throws std::out_of_range with the coordinate and the extent
   scan.max_range = options.max_range;
-  scan.fast = options.integrator == IntegratorKind::fast;
   scan.clear_depth = options.resolved_clear_depth(grid);
+  // Clearing depth-0 "nodes" is clearing voxels: the discrete integrator does
+  // that exactly, and faster than grouping rays per voxel.
+  scan.fast = options.integrator == IntegratorKind::fast && scan.clear_depth > 0;
   scan.fine_steps = options.fine_steps;
   scan.tree = &tree;
   if (box) {

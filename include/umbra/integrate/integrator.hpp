@@ -67,7 +67,8 @@ struct InsertOptions {
   /// Metres; <= 0 means unlimited (OctoMap's default -1).
   double max_range = -1.0;
   /// fast: depth of the nodes cleared whole; -1: the depth whose nodes are
-  /// closest to 16 cm (the UFOMap paper's setting).
+  /// closest to 16 cm (the UFOMap paper's setting). At depth 0 the fast
+  /// integrator is the discrete one.
   int clear_depth = -1;
   /// fast: coarse nodes before the end point traced voxel by voxel; 0: none.
   int fine_steps = 2;
