@@ -247,7 +247,7 @@ InsertStats Integrator::insert(OccupancyTree& tree, const Grid& grid, const Sens
     batch.merge(tracers_[w]->batch(), /*with_hits=*/!scan.fast);
     tracers_[w]->start(grid.depth_levels());  // give its memory back
   }
-  tree.apply(batch, sensor.hit_log_odds(), sensor.miss_log_odds());
+  tree.apply(batch, sensor.hit_log_odds(), sensor.miss_log_odds(), threads > 1 ? pool_.get() : nullptr);
   tracers_[0]->start(grid.depth_levels());
   if (!colors.empty()) tree.add_colors(color_samples(grid, origin, points, colors, options, scan.box_keys));
   return stats;

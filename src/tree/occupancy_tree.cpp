@@ -9,6 +9,10 @@ namespace {
 
 constexpr std::uint8_t bit(unsigned slot) { return static_cast<std::uint8_t>(1u << slot); }
 
+// The worker this thread is during a parallel apply(); its pools then
+// allocate from that worker's blocks (GroupPool's concurrent phase).
+thread_local unsigned t_worker = 0;
+
 void assign_bit(std::uint8_t& mask, unsigned slot, bool value) {
   mask = static_cast<std::uint8_t>(value ? (mask | bit(slot)) : (mask & ~bit(slot)));
 }
@@ -65,13 +69,13 @@ void OccupancyTree::clear() {
 // --- groups ---------------------------------------------------------------
 
 std::uint32_t OccupancyTree::new_leaf_group(float value) {
-  const std::uint32_t index = leaves_.allocate();
+  const std::uint32_t index = concurrent_ ? leaves_.allocate(t_worker) : leaves_.allocate();
   leaves_[index].log_odds.fill(value);
   return index;
 }
 
 std::uint32_t OccupancyTree::new_inner_group(int depth, float value) {
-  const std::uint32_t index = inner_[depth].allocate();
+  const std::uint32_t index = concurrent_ ? inner_[depth].allocate(t_worker) : inner_[depth].allocate();
   InnerGroup& group = inner_[depth][index];
   group.log_odds.fill(value);
   group.child.fill(kNoGroup);
@@ -91,6 +95,15 @@ std::uint32_t OccupancyTree::new_color_group(int depth, Rgb rgb, std::uint8_t we
 }
 
 void OccupancyTree::release_group(int depth, std::uint32_t group) {
+  if (concurrent_) {
+    UMBRA_ASSERT(!has_color());
+    if (depth == 0) {
+      leaves_.release(t_worker, group);
+    } else {
+      inner_[depth].release(t_worker, group);
+    }
+    return;
+  }
   if (depth == 0) {
     leaves_.release(group);
   } else {
@@ -343,12 +356,94 @@ void OccupancyTree::add_colors_below(int depth, std::uint32_t group, unsigned sl
 
 // --- applying a scan ------------------------------------------------------------
 
-void OccupancyTree::apply(const UpdateBatch& batch, float hit, float miss) {
+void OccupancyTree::apply(const UpdateBatch& batch, float hit, float miss, ThreadPool* pool) {
   if (batch.depth_levels() != depth_levels_) {
     throw std::invalid_argument("update batch has " + std::to_string(batch.depth_levels()) +
                                 " depth levels, the tree " + std::to_string(depth_levels_));
   }
-  apply_group(depth_levels_, 0, batch, 0, hit, miss);
+  // Colour pools allocate in lockstep with the node pools, which a parallel
+  // phase cannot keep: coloured maps, small trees and one thread go serially.
+  if (pool == nullptr || pool->size() < 2 || has_color() || depth_levels_ < 3) {
+    apply_group(depth_levels_, 0, batch, 0, hit, miss);
+    return;
+  }
+  apply_in_parallel(batch, hit, miss, *pool);
+}
+
+void OccupancyTree::apply_in_parallel(const UpdateBatch& batch, float hit, float miss, ThreadPool& pool) {
+  // 1. Walk down from the root until there are enough independent subtrees
+  //    (tasks), splitting map nodes on the way. A task owns map groups no
+  //    other task writes: "group" tasks own the map group they update,
+  //    "everywhere" tasks own the map group whose full slots they update.
+  struct Task {
+    int depth;
+    std::uint32_t group;        // map group at `depth`
+    std::uint32_t batch_group;  // group task: the batch group at `depth`
+    std::uint8_t full_slots;    // everywhere task: slots of `group` wholly missed
+  };
+  struct Parent {
+    int depth;
+    std::uint32_t group;
+    unsigned slot;
+  };
+  std::vector<Task> tasks{{depth_levels_, 0, 0, 0}};
+  std::vector<Parent> parents;  // nodes above the tasks, top down: refreshed at the end
+  const std::size_t wanted = std::size_t{pool.size()} * 16;
+  while (tasks.size() < wanted) {
+    std::vector<Task> next;
+    bool deeper = false;
+    for (const Task& task : tasks) {
+      if (task.full_slots != 0 || task.depth <= 2) {
+        next.push_back(task);
+        continue;
+      }
+      deeper = true;
+      const UpdateBatch::Inner& todo = batch.inner(task.depth, task.batch_group);
+      if (todo.full != 0) next.push_back({task.depth, task.group, 0, todo.full});
+      for (unsigned slot = 0; slot < 8; ++slot) {
+        if (todo.child[slot] == kNoGroup) continue;
+        if (inner_[task.depth][task.group].child[slot] == kNoGroup) expand(task.depth, task.group, slot);
+        parents.push_back({task.depth, task.group, slot});
+        next.push_back({task.depth - 1, inner_[task.depth][task.group].child[slot], todo.child[slot], 0});
+      }
+    }
+    tasks.swap(next);
+    if (!deeper) break;
+  }
+
+  // 2. The tasks in parallel, each worker allocating from its own blocks.
+  // A map node gains children only where the batch has a group below it:
+  // that bounds the new groups per depth (a brick can split its 8 nodes).
+  leaves_.begin_concurrent(pool.size(), 8 * batch.group_count(1));
+  for (int d = 1; d <= depth_levels_; ++d) {
+    inner_[d].begin_concurrent(pool.size(), d < depth_levels_ ? batch.group_count(d) : 0);
+  }
+  concurrent_ = true;
+  try {
+    pool.run(tasks.size(), [&](std::size_t i, unsigned worker) {
+      t_worker = worker;
+      const Task& task = tasks[i];
+      if (task.full_slots != 0) {
+        for (unsigned slot = 0; slot < 8; ++slot) {
+          if ((task.full_slots & bit(slot)) != 0) apply_everywhere(task.depth, task.group, slot, miss);
+        }
+      } else {
+        apply_group(task.depth, task.group, batch, task.batch_group, hit, miss);
+      }
+      t_worker = 0;
+    });
+  } catch (...) {
+    concurrent_ = false;
+    leaves_.end_concurrent();
+    for (int d = 1; d <= depth_levels_; ++d) inner_[d].end_concurrent();
+    throw;
+  }
+  concurrent_ = false;
+  leaves_.end_concurrent();
+  for (int d = 1; d <= depth_levels_; ++d) inner_[d].end_concurrent();
+
+  // 3. The nodes above the tasks, bottom up.
+  for (auto it = parents.rbegin(); it != parents.rend(); ++it) refresh(it->depth, it->group, it->slot, auto_prune_);
 }
 
 void OccupancyTree::apply_group(int depth, std::uint32_t group, const UpdateBatch& batch,

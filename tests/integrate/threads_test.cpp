@@ -27,11 +27,14 @@ std::vector<Node> contents(const OccupancyMap& map) {
 
 TEST(Threads, EveryThreadCountBuildsTheSameMap) {
   for (const IntegratorKind kind : {IntegratorKind::simple, IntegratorKind::discrete, IntegratorKind::fast}) {
-    for (const bool with_box : {false, true}) {
-      SCOPED_TRACE(std::string(to_string(kind)) + (with_box ? " with box" : ""));
+    for (const int variant : {0, 1, 2}) {
+      // 0: plain (the tree is updated in parallel too), 1: with a box, 2: with colour.
+      const bool with_box = variant == 1;
+      const bool with_color = variant == 2;
+      SCOPED_TRACE(std::string(to_string(kind)) + (with_box ? " with box" : "") + (with_color ? " with colour" : ""));
       std::vector<std::vector<Node>> results;
       for (const unsigned threads : {1u, 2u, 3u, 8u}) {
-        MapConfig config{0.05, 12, SensorModel{}, Thresholds{}, true};
+        MapConfig config{0.05, 12, SensorModel{}, Thresholds{}, with_color};
         OccupancyMap map(config);
         if (with_box) map.set_bounding_box(Aabb{{-2.0, -1.5, -1.0}, {1.7, 2.2, 1.3}});
         std::mt19937 rng(7);
@@ -51,7 +54,11 @@ TEST(Threads, EveryThreadCountBuildsTheSameMap) {
             points.push_back({r * std::cos(a), r * std::sin(a), 1.5f * u(rng)});
             colors.push_back({static_cast<std::uint8_t>(rng()), static_cast<std::uint8_t>(rng()), 7});
           }
-          map.insert_point_cloud({0.3f * scan, 0.1f, 0.0f}, points, colors, options);
+          if (with_color) {
+            map.insert_point_cloud({0.3f * scan, 0.1f, 0.0f}, points, colors, options);
+          } else {
+            map.insert_point_cloud({0.3f * scan, 0.1f, 0.0f}, points, options);
+          }
         }
         ASSERT_EQ(map.tree().check_invariants(), "");
         results.push_back(contents(map));

@@ -10,12 +10,21 @@
 //
 // memory_bytes() is what the pool really allocated (block capacity, free
 // list capacity, block table), never an estimate from a count of groups.
+//
+// Concurrent allocation, for a parallel phase (OccupancyTree::apply with a
+// thread pool): begin_concurrent() grows the last block to full size and
+// reserves the block table, so that no block and no table entry moves until
+// end_concurrent(); meanwhile worker w allocates and releases only through
+// allocate(w) / release(w, index). Each worker takes whole blocks (under a
+// lock, once per kBlockGroups groups) and keeps its own free list; at the end
+// the unused rest of every block and the released groups join the free list.
 #pragma once
 
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <vector>
 
@@ -40,6 +49,7 @@ class GroupPool {
   GroupPool(const GroupPool& other) { *this = other; }
   GroupPool& operator=(const GroupPool& other) {
     if (this == &other) return *this;
+    UMBRA_ASSERT(other.slabs_.empty());
     blocks_.clear();
     blocks_.reserve(other.blocks_.size());
     for (std::size_t b = 0; b < other.blocks_.size(); ++b) {
@@ -53,17 +63,20 @@ class GroupPool {
     return *this;
   }
 
+  // Only the block pointer is read: safe while other workers add blocks
+  // during a concurrent phase (the table never reallocates then).
   Group& operator[](std::uint32_t index) {
-    UMBRA_ASSERT(index < high_water_);
-    return blocks_[index >> kBlockBits][index & (kBlockGroups - 1)];
+    UMBRA_ASSERT(!slabs_.empty() || index < high_water_);
+    return blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
   }
   const Group& operator[](std::uint32_t index) const {
-    UMBRA_ASSERT(index < high_water_);
-    return blocks_[index >> kBlockBits][index & (kBlockGroups - 1)];
+    UMBRA_ASSERT(!slabs_.empty() || index < high_water_);
+    return blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
   }
 
   /// Index of a group whose contents are unspecified; the caller fills it.
   std::uint32_t allocate() {
+    UMBRA_ASSERT(slabs_.empty());
     if (!free_.empty()) {
       const std::uint32_t index = free_.back();
       free_.pop_back();
@@ -81,8 +94,60 @@ class GroupPool {
   }
 
   void release(std::uint32_t index) {
-    UMBRA_ASSERT(index < high_water_);
+    UMBRA_ASSERT(slabs_.empty() && index < high_water_);
     free_.push_back(index);
+  }
+
+  // --- concurrent allocation (see the file comment) -------------------------
+  /// `workers` threads will allocate; together at most `max_new_groups` more.
+  void begin_concurrent(unsigned workers, std::size_t max_new_groups) {
+    UMBRA_ASSERT(slabs_.empty() && workers >= 1);
+    if (!blocks_.empty() && last_capacity_ < kBlockGroups) {
+      while (last_capacity_ < kBlockGroups) grow_last_block();
+    }
+    blocks_.reserve(blocks_.size() + max_new_groups / kBlockGroups + workers + 1);
+    table_limit_ = blocks_.capacity();
+    slabs_.resize(workers);
+    // The sequential tail of the last block goes to worker 0, the free list
+    // is shared out.
+    slabs_[0].next = high_water_;
+    slabs_[0].end = static_cast<std::uint32_t>(blocks_.size()) * kBlockGroups;
+    for (std::size_t i = 0; i < free_.size(); ++i) slabs_[i % workers].released.push_back(free_[i]);
+    free_.clear();
+    lock_ = std::make_unique<std::mutex>();
+  }
+
+  std::uint32_t allocate(unsigned worker) {
+    Slab& slab = slabs_[worker];
+    if (!slab.released.empty()) {
+      const std::uint32_t index = slab.released.back();
+      slab.released.pop_back();
+      return index;
+    }
+    if (slab.next == slab.end) {
+      std::lock_guard guard(*lock_);
+      if (blocks_.size() == table_limit_) throw std::length_error("umbra: more new groups than reserved for a parallel update");
+      const auto first = static_cast<std::uint64_t>(blocks_.size()) * kBlockGroups;
+      if (first + kBlockGroups > kNoGroup) throw std::length_error("umbra: more than 2^32 - 1 node groups at one depth");
+      blocks_.emplace_back(new Group[kBlockGroups]);
+      slab.next = static_cast<std::uint32_t>(first);
+      slab.end = static_cast<std::uint32_t>(first + kBlockGroups);
+    }
+    return slab.next++;
+  }
+
+  void release(unsigned worker, std::uint32_t index) { slabs_[worker].released.push_back(index); }
+
+  void end_concurrent() {
+    UMBRA_ASSERT(!slabs_.empty());
+    for (Slab& slab : slabs_) {
+      for (std::uint32_t i = slab.next; i < slab.end; ++i) free_.push_back(i);
+      free_.insert(free_.end(), slab.released.begin(), slab.released.end());
+    }
+    std::vector<Slab>().swap(slabs_);
+    lock_.reset();
+    high_water_ = static_cast<std::uint32_t>(blocks_.size()) * kBlockGroups;
+    last_capacity_ = blocks_.empty() ? 0 : kBlockGroups;
   }
 
   /// Releases every group and all memory.
@@ -116,10 +181,21 @@ class GroupPool {
     last_capacity_ = grown;
   }
 
+  /// One worker's share of a concurrent phase: the block it hands out from.
+  struct Slab {
+    std::uint32_t next = 0;
+    std::uint32_t end = 0;
+    std::vector<std::uint32_t> released;
+  };
+
   std::vector<std::unique_ptr<Group[]>> blocks_;
   std::uint32_t last_capacity_ = 0;  // groups in the last block
   std::uint32_t high_water_ = 0;     // groups ever handed out
   std::vector<std::uint32_t> free_;  // released groups, reused first
+  // Concurrent phase only:
+  std::vector<Slab> slabs_;
+  std::unique_ptr<std::mutex> lock_;
+  std::size_t table_limit_ = 0;
 };
 
 }  // namespace umbra

@@ -53,6 +53,7 @@
 
 #include "umbra/core/color.hpp"
 #include "umbra/core/log_odds.hpp"
+#include "umbra/core/thread_pool.hpp"
 #include "umbra/core/morton.hpp"
 #include "umbra/tree/group_pool.hpp"
 #include "umbra/tree/update_batch.hpp"
@@ -186,8 +187,10 @@ class OccupancyTree {
   void update(std::uint64_t code, float delta);
   /// Sets finest voxel `code` to `log_odds` (clamped).
   void set(std::uint64_t code, float log_odds);
-  /// Applies one scan's updates: `hit` to the batch's hit voxels, `miss` to its misses.
-  void apply(const UpdateBatch& batch, float hit, float miss);
+  /// Applies one scan's updates: `hit` to the batch's hit voxels, `miss` to
+  /// its misses. With a thread pool, independent subtrees are updated in
+  /// parallel (maps without colour); the result is the same.
+  void apply(const UpdateBatch& batch, float hit, float miss, ThreadPool* pool = nullptr);
   /// Adds one colour sample to finest voxel `code` (the tree must have colour).
   void add_color(std::uint64_t code, Rgb rgb);
   /// Adds colour samples in one walk; sorted by code, each voxel's samples
@@ -269,6 +272,7 @@ class OccupancyTree {
   void refresh(int depth, std::uint32_t group, unsigned slot, bool allow_prune);
   void apply_group(int depth, std::uint32_t group, const UpdateBatch& batch, std::uint32_t batch_group,
                    float hit, float miss);
+  void apply_in_parallel(const UpdateBatch& batch, float hit, float miss, ThreadPool& pool);
   void apply_brick(std::uint32_t group, const UpdateBatch::Brick& todo, float hit, float miss);
   void apply_everywhere(int depth, std::uint32_t group, unsigned slot, float delta);
   void prune_below(int depth, std::uint32_t group, unsigned slot);
@@ -289,6 +293,7 @@ class OccupancyTree {
   LogOddsRange range_;
   LogOddsThresholds thresholds_;
   bool auto_prune_ = true;
+  bool concurrent_ = false;  // inside apply_in_parallel: pools allocate per worker
   GroupPool<LeafGroup> leaves_;
   std::vector<GroupPool<InnerGroup>> inner_;  // index = depth; [0] is unused
   std::vector<GroupPool<ColorGroup>> colors_;  // index = depth; empty without colour

@@ -123,6 +123,10 @@ class UpdateBatch {
   void merge(const UpdateBatch& other, bool with_hits = true);
 
   [[nodiscard]] bool empty() const;
+  /// Groups in use at `depth` (bricks at depth 1).
+  [[nodiscard]] std::size_t group_count(int depth) const {
+    return depth == 1 ? bricks_.size() : inner_[depth].size();
+  }
   /// Whether the depth-`depth` node containing `code` holds a hit (a walk from the root).
   [[nodiscard]] bool holds_hit(std::uint64_t code, int depth) const;
   [[nodiscard]] int depth_levels() const { return depth_levels_; }
