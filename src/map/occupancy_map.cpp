@@ -49,19 +49,19 @@ void require_finite(float value, const char* what) {
 }  // namespace
 
 void OccupancyMap::update_log_odds(Vec3d coordinate, float delta) {
-  update_log_odds(grid_.key(coordinate), delta);
+  update_key_log_odds(grid_.key(coordinate), delta);
 }
 
 void OccupancyMap::set_log_odds(Vec3d coordinate, float log_odds) {
-  set_log_odds(grid_.key(coordinate), log_odds);
+  set_key_log_odds(grid_.key(coordinate), log_odds);
 }
 
-void OccupancyMap::update_log_odds(Key key, float delta) {
+void OccupancyMap::update_key_log_odds(Key key, float delta) {
   require_finite(delta, "log-odds delta");
   tree_.update(morton::encode(key), delta);
 }
 
-void OccupancyMap::set_log_odds(Key key, float log_odds) {
+void OccupancyMap::set_key_log_odds(Key key, float log_odds) {
   require_finite(log_odds, "log-odds value");
   tree_.set(morton::encode(key), log_odds);
 }
@@ -98,7 +98,7 @@ std::optional<Rgb> OccupancyMap::color(Vec3d coordinate, int depth) const {
   return tree_.color(summary(coordinate, depth).node);
 }
 
-std::optional<Rgb> OccupancyMap::color(Key key, int depth) const { return tree_.color(node(key, depth).node); }
+std::optional<Rgb> OccupancyMap::key_color(Key key, int depth) const { return tree_.color(node(key, depth).node); }
 
 void OccupancyMap::add_color(Vec3d coordinate, Rgb rgb) {
   require_color(*this);

@@ -59,6 +59,28 @@ TEST(OccupancyMap, SingleVoxelUpdatesAndQueriesAtEveryDepth) {
   EXPECT_EQ(map.log_odds(wall), map.sensor_model().clamp_max_log_odds()) << "set clamps";
 }
 
+// A braced coordinate must mean a coordinate (Vec3d), not be ambiguous with
+// the Key overloads; a Key must mean that key.
+TEST(OccupancyMap, BracedCoordinatesAndKeysReachTheSameVoxel) {
+  MapConfig config;
+  config.resolution = 0.1;
+  config.color = true;
+  OccupancyMap map(config);
+  const Key key = map.key({1.05, 2.05, 0.35});
+  map.set_log_odds({1.05, 2.05, 0.35}, 0.5f);
+  EXPECT_EQ(map.log_odds(Vec3d{1.05, 2.05, 0.35}), 0.5f);
+  map.update_log_odds(key, 0.25f);
+  EXPECT_EQ(map.log_odds({1.05, 2.05, 0.35}), 0.75f);
+  map.update_log_odds({1.05, 2.05, 0.35}, 0.25f);
+  map.set_log_odds(Key{key.x + 1, key.y, key.z}, -0.5f);
+  EXPECT_EQ(map.log_odds({1.15, 2.05, 0.35}), -0.5f);
+  EXPECT_EQ(map.log_odds({1.05, 2.05, 0.35}), 1.0f);
+  map.add_color({1.05, 2.05, 0.35}, Rgb{10, 20, 30});
+  EXPECT_EQ(map.color({1.05, 2.05, 0.35}), (Rgb{10, 20, 30}));
+  EXPECT_EQ(map.color(key), (Rgb{10, 20, 30}));
+  EXPECT_EQ(map.color({1.15, 2.05, 0.35}), std::nullopt);
+}
+
 TEST(OccupancyMap, BadCoordinatesDepthsAndValuesAreErrors) {
   OccupancyMap map(0.1, 8);  // [-12.8, 12.8)
   EXPECT_NE(message_of<std::out_of_range>([&] { map.update_hit({13.0, 0.0, 0.0}); }).find("outside the map"),

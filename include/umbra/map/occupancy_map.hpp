@@ -15,6 +15,7 @@
 // Thread safety: const functions may run concurrently; writers need exclusive access.
 #pragma once
 
+#include <concepts>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -80,8 +81,13 @@ class OccupancyMap {
   void update_log_odds(Vec3d coordinate, float delta);
   /// Sets the voxel's log-odds (clamped). Throws std::invalid_argument if not finite.
   void set_log_odds(Vec3d coordinate, float log_odds);
-  void update_log_odds(Key key, float delta);
-  void set_log_odds(Key key, float log_odds);
+  // The Key overloads are templates taking exactly a Key, so that a braced
+  // coordinate such as map.set_log_odds({1.0, 2.0, 0.5}, 0.4f) is a Vec3d and
+  // not an ambiguous call (a Key is also a brace of three numbers).
+  template <std::same_as<Key> K>
+  void update_log_odds(K key, float delta) { update_key_log_odds(key, delta); }
+  template <std::same_as<Key> K>
+  void set_log_odds(K key, float log_odds) { set_key_log_odds(key, log_odds); }
 
   // --- colour (maps made with MapConfig::color) ---------------------------
   [[nodiscard]] bool has_color() const { return tree_.has_color(); }
@@ -89,7 +95,8 @@ class OccupancyMap {
   /// running average of the points that fell in it, a coarser node's the
   /// average of its coloured children; nothing when uncoloured.
   [[nodiscard]] std::optional<Rgb> color(Vec3d coordinate, int depth = 0) const;
-  [[nodiscard]] std::optional<Rgb> color(Key key, int depth = 0) const;
+  template <std::same_as<Key> K>
+  [[nodiscard]] std::optional<Rgb> color(K key, int depth = 0) const { return key_color(key, depth); }
   /// One more colour sample for the voxel (running average).
   void add_color(Vec3d coordinate, Rgb rgb);
   /// Sets the voxel's colour outright.
@@ -153,6 +160,9 @@ class OccupancyMap {
  private:
   void check_depth(int depth) const;
   [[nodiscard]] NodeSummary summary(Vec3d coordinate, int depth) const;
+  void update_key_log_odds(Key key, float delta);
+  void set_key_log_odds(Key key, float log_odds);
+  [[nodiscard]] std::optional<Rgb> key_color(Key key, int depth) const;
 
   Grid grid_;
   SensorModel sensor_;
