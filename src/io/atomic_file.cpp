@@ -4,6 +4,8 @@
 // writes), then one fsync of the file and one of its folder.
 #include "atomic_file.hpp"
 
+#include "umbra/io/map_file.hpp"  // set_map_file_fault_for_testing
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -11,6 +13,7 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <functional>
 #include <stdexcept>
 #include <system_error>
 #include <utility>
@@ -80,12 +83,23 @@ class TemporaryFile {
   bool renamed_ = false;
 };
 
+std::function<void()>& fault_hook() {
+  static std::function<void()> hook;
+  return hook;
+}
+
 }  // namespace
+
+void set_map_file_fault_for_testing(std::function<void()> hook) { fault_hook() = std::move(hook); }
 
 void write_file_atomically(const fs::path& path, std::initializer_list<std::span<const std::uint8_t>> parts) {
   {
     TemporaryFile temp(path);
-    for (const auto part : parts) temp.write(part);
+    bool first = true;
+    for (const auto part : parts) {
+      temp.write(part);
+      if (std::exchange(first, false) && fault_hook()) fault_hook()();
+    }
     temp.commit();
   }
   // Make the rename itself durable. Best effort: the file is already complete

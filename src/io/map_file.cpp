@@ -7,9 +7,11 @@
 // 128 KiB chunks, and the two CRC-32s. Cost model: one pass over the tree on
 // save and on load (plus refresh_all() to recompute the inner nodes), no
 // per-node allocation, virtual call or system call; memory besides the map
-// is the compressed file and two chunk buffers. Saving writes a temporary
-// file beside the target, fsyncs it and renames it over the target.
+// is the compressed file and two chunk buffers. Saving goes through
+// write_file_atomically (temporary file, fsync, rename).
 #include "umbra/io/map_file.hpp"
+
+#include "atomic_file.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -19,10 +21,8 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <bit>
 #include <cerrno>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -411,46 +411,6 @@ std::size_t read_at(const OpenedFile& file, const fs::path& path, std::uint64_t 
     done += static_cast<std::size_t>(n);
   }
   return done;
-}
-
-/// "cannot save map to 'TARGET': WHAT 'TEMP': REASON"
-[[noreturn]] void throw_save(const fs::path& target, const std::string& what, const fs::path& temp, int error) {
-  throw std::runtime_error("cannot save map to '" + target.string() + "': " + what + " '" + temp.string() +
-                           "': " + system_reason(error));
-}
-
-void write_all(int fd, const fs::path& target, const fs::path& temp, std::span<const std::uint8_t> bytes) {
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      throw_save(target, "cannot write temporary file", temp, errno);
-    }
-    done += static_cast<std::size_t>(n);
-  }
-}
-
-std::function<void()>& fault_hook() {
-  static std::function<void()> hook;
-  return hook;
-}
-
-/// Creates a new file beside `target` with a name no other writer uses.
-std::pair<Fd, fs::path> create_temporary(const fs::path& target) {
-  static std::atomic<std::uint64_t> counter{0};
-  const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  const auto salt = static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count());
-  for (int attempt = 0;; ++attempt) {
-    // Hidden, and unique per process, call and clock tick; O_EXCL settles any clash.
-    const std::string name = "." + target.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
-                             std::to_string(counter++) + "-" + std::to_string(salt % 1000000007u);
-    const fs::path temp = folder / name;
-    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd >= 0) return {Fd(fd), temp};
-    if (errno == EEXIST && attempt < 100) continue;
-    throw_save(target, "cannot create temporary file", temp, errno);
-  }
 }
 
 // --- streams ----------------------------------------------------------------------
@@ -882,35 +842,7 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path) {
   std::array<std::uint8_t, kChecksumBytes> trailer{};
   put_u32(trailer.data(), crc);
 
-  auto [fd, temp] = create_temporary(path);
-  try {
-    // Keep the permissions of the file being replaced (umask applies to new files).
-    struct stat old {};
-    if (::stat(path.c_str(), &old) == 0 && S_ISREG(old.st_mode)) ::fchmod(fd.get(), old.st_mode & 07777);
-    write_all(fd.get(), path, temp, header);
-    if (fault_hook()) fault_hook()();
-    write_all(fd.get(), path, temp, structure_frame);
-    write_all(fd.get(), path, temp, values_frame);
-    write_all(fd.get(), path, temp, colors_frame);
-    write_all(fd.get(), path, temp, trailer);
-    if (::fsync(fd.get()) != 0) throw_save(path, "cannot flush temporary file", temp, errno);
-    if (const int error = fd.close(); error != 0) throw_save(path, "cannot close temporary file", temp, error);
-    if (::rename(temp.c_str(), path.c_str()) != 0) {
-      throw std::runtime_error("cannot save map to '" + path.string() + "': cannot rename temporary file '" +
-                               temp.string() + "' to it: " + system_reason(errno));
-    }
-  } catch (...) {
-    fd.close();
-    ::unlink(temp.c_str());
-    throw;
-  }
-  // Make the rename itself durable. Best effort: the map is already complete
-  // under its name, and some file systems refuse fsync on folders.
-  const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
-  if (const int dir = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dir >= 0) {
-    ::fsync(dir);
-    ::close(dir);
-  }
+  detail::write_file_atomically(path, {header, structure_frame, values_frame, colors_frame, trailer});
 }
 
 MapFileInfo read_map_info(const std::filesystem::path& path) {
@@ -969,9 +901,5 @@ OccupancyMap load_map(const std::filesystem::path& path) {
   if (!info.auto_prune) map.set_auto_prune(false);
   return map;
 }
-
-namespace detail {
-void set_map_file_fault_for_testing(std::function<void()> hook) { fault_hook() = std::move(hook); }
-}  // namespace detail
 
 }  // namespace umbra

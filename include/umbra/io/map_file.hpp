@@ -68,10 +68,10 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path);
 // ---------------------------------------------------------------------------
 // TEST-ONLY. Not part of the API; do not use outside tests.
 namespace detail {
-/// Installs a hook that save_map calls after the header has been written to
-/// the temporary file and before the body; if the hook throws, save_map
-/// removes the temporary file and rethrows, exactly as for a real write
-/// error. An empty function removes the hook. Not thread safe: install it
+/// Installs a hook that every map save (.umb, .bt, .ot) calls after the
+/// first part (the header) has been written to the temporary file and before
+/// the rest; if the hook throws, the save removes the temporary file and
+/// rethrows, exactly as for a real write error. An empty function removes the hook. Not thread safe: install it
 /// only while no save is running.
 void set_map_file_fault_for_testing(std::function<void()> hook);
 }  // namespace detail
