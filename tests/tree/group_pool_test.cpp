@@ -1,0 +1,129 @@
+// GroupPool: indices stay unique and addressable across sequential and
+// concurrent phases, memory_bytes() follows what is in use, and a parallel
+// update of a small pool does not cost whole blocks per worker.
+#include <algorithm>
+#include <set>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "umbra/tree/group_pool.hpp"
+
+namespace umbra {
+namespace {
+
+struct Group {
+  std::uint32_t owner;
+  std::uint32_t index;  // the index it was handed out under
+};
+using Pool = GroupPool<Group>;
+
+/// Allocates `count` groups and writes a mark into each.
+std::vector<std::uint32_t> take(Pool& pool, std::uint32_t count, std::uint32_t owner) {
+  std::vector<std::uint32_t> taken;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const std::uint32_t index = pool.allocate();
+    pool[index] = {owner, index};
+    taken.push_back(index);
+  }
+  return taken;
+}
+
+/// Every live group still holds its mark, and no index is handed out twice.
+void expect_marks(const Pool& pool, const std::vector<std::vector<std::uint32_t>>& live) {
+  std::set<std::uint32_t> seen;
+  for (std::uint32_t owner = 0; owner < live.size(); ++owner) {
+    for (const std::uint32_t index : live[owner]) {
+      ASSERT_TRUE(seen.insert(index).second) << "index " << index << " handed out twice";
+      EXPECT_EQ(pool[index].owner, owner);
+      EXPECT_EQ(pool[index].index, index);
+    }
+  }
+  EXPECT_EQ(pool.size(), seen.size());
+}
+
+TEST(GroupPool, SequentialAllocationReusesReleasedGroupsAndGrowsInBlocks) {
+  Pool pool;
+  EXPECT_EQ(pool.memory_bytes(), 0u);
+  std::vector<std::vector<std::uint32_t>> live{take(pool, 3000, 0)};
+  expect_marks(pool, live);
+  // Three blocks: two full, the last grown by doubling to hold 952 groups.
+  EXPECT_GE(pool.memory_bytes(), 3000 * sizeof(Group));
+  EXPECT_LE(pool.memory_bytes(), (2 * Pool::kBlockGroups + Pool::kBlockGroups) * sizeof(Group) + 256);
+
+  for (std::size_t i = 0; i < 1000; ++i) pool.release(live[0][i]);
+  live[0].erase(live[0].begin(), live[0].begin() + 1000);
+  const std::size_t before = pool.memory_bytes();
+  live.push_back(take(pool, 1000, 1));
+  expect_marks(pool, live);
+  EXPECT_EQ(pool.memory_bytes(), before) << "released groups are handed out before the pool grows";
+}
+
+TEST(GroupPool, ConcurrentWorkersGetDistinctGroups) {
+  Pool pool;
+  std::vector<std::vector<std::uint32_t>> live{take(pool, 500, 0), {}, {}};
+  for (std::size_t i = 0; i < 100; ++i) pool.release(live[0][i]);
+  live[0].erase(live[0].begin(), live[0].begin() + 100);
+
+  constexpr std::uint32_t kPerWorker = 2500;
+  pool.begin_concurrent(2, 2 * kPerWorker);
+  auto work = [&](unsigned worker) {
+    std::vector<std::uint32_t>& mine = live[worker + 1];
+    for (std::uint32_t i = 0; i < kPerWorker; ++i) {
+      const std::uint32_t index = pool.allocate(worker);
+      pool[index] = {worker + 1, index};
+      mine.push_back(index);
+      if (i % 7 == 3) {  // give one back now and then, as pruning does
+        pool.release(worker, mine.back());
+        mine.pop_back();
+      }
+    }
+  };
+  std::thread first(work, 0u);
+  std::thread second(work, 1u);
+  first.join();
+  second.join();
+  pool.end_concurrent();
+  expect_marks(pool, live);
+
+  // Sequential allocation after the phase goes on from where it stopped.
+  live.push_back(take(pool, 2000, 3));
+  expect_marks(pool, live);
+  const std::size_t in_use = pool.size();
+  EXPECT_LE(pool.memory_bytes(), (in_use + 2 * Pool::kChunkGroups + Pool::kBlockGroups) * sizeof(Group) + 1024);
+}
+
+TEST(GroupPool, ParallelPhaseOnASmallPoolDoesNotTakeWholeBlocks) {
+  Pool pool;
+  std::vector<std::vector<std::uint32_t>> live{take(pool, 5, 0), {}};
+  pool.begin_concurrent(2, 4);
+  for (std::uint32_t i = 0; i < 4; ++i) {
+    const std::uint32_t index = pool.allocate(i % 2);
+    pool[index] = {1, index};
+    live[1].push_back(index);
+  }
+  pool.end_concurrent();
+  expect_marks(pool, live);
+  // 9 groups in use; room for the bound plus one chunk per worker at most.
+  EXPECT_LT(pool.memory_bytes(), Pool::kBlockGroups * sizeof(Group) / 2);
+  Pool copy = pool;
+  expect_marks(copy, live);
+  EXPECT_LE(copy.memory_bytes(), pool.memory_bytes()) << "a copy holds no more than the original";
+}
+
+TEST(GroupPool, ExceedingTheBoundOfAParallelPhaseIsReported) {
+  Pool pool;
+  take(pool, 5, 0);
+  pool.begin_concurrent(1, 2);
+  EXPECT_THROW(
+      {
+        for (int i = 0; i < 10000; ++i) pool.allocate(0u);
+      },
+      std::logic_error);
+  pool.end_concurrent();
+}
+
+}  // namespace
+}  // namespace umbra
