@@ -24,7 +24,8 @@
 // Usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum]
 //          [--res 0.05,0.02] [--methods LIST] [--threads 1,2] [--repeat 3]
 //          [--max-range 30] [--tum-max-range 5] [--color] [--markdown FILE]
-#include <sys/resource.h>
+#include <malloc.h>
+#include <sys/types.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -35,6 +36,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -88,16 +90,32 @@ std::uint64_t current_rss_bytes() {
   return resident * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
 }
 
+/// Resets the kernel's peak-RSS mark to the current RSS (Linux >= 4.0), so
+/// that the peak read later is this measurement's and not the parent's.
+void reset_peak_rss() {
+  std::ofstream clear_refs("/proc/self/clear_refs");
+  clear_refs << "5";
+  if (!clear_refs.flush()) throw std::runtime_error("cannot reset the peak RSS through /proc/self/clear_refs");
+}
+
+/// VmHWM of /proc/self/status: the peak RSS since reset_peak_rss().
 std::uint64_t peak_rss_bytes() {
-  rusage usage{};
-  ::getrusage(RUSAGE_SELF, &usage);
-  return static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stoull(line.substr(6)) * 1024;  // "VmHWM:   1234 kB"
+  }
+  throw std::runtime_error("no VmHWM in /proc/self/status");
 }
 
 Measurement measure_in_this_process(const Dataset& data, const Method& method, double resolution, unsigned threads,
                                     bool color) {
   Measurement m;
   m.scans = static_cast<int>(std::min<std::size_t>(data.scans.size(), Measurement::kMaxScans));
+  // Hand the heap the parent freed (parsing buffers) back to the system, or
+  // the child reuses those resident pages and its growth reads near zero.
+  ::malloc_trim(0);
+  reset_peak_rss();
   const std::uint64_t rss_before = current_rss_bytes();
   using Clock = std::chrono::steady_clock;
   if (method.octomap) {
@@ -244,7 +262,16 @@ int main(int argc, char** argv) {
     else if (arg == "--tum-max-range") tum_max_range = std::stod(value());
     else if (arg == "--color") color = true;
     else if (arg == "--markdown") markdown_path = value();
-    else {
+    else if (arg == "--help" || arg == "-h") {
+      std::printf(
+          "usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum] [--res 0.05,0.02]\n"
+          "         [--methods LIST] [--threads 1,2] [--repeat 3] [--max-range 30] [--tum-max-range 5]\n"
+          "         [--color] [--markdown FILE]\n"
+          "methods:");
+      for (const Method& m : kAllMethods) std::printf(" %s", m.name.c_str());
+      std::printf("\n");
+      return 0;
+    } else {
       std::fprintf(stderr, "unknown argument %s (see the comment at the top of bench/insert_benchmark.cpp)\n", arg.c_str());
       return 2;
     }
