@@ -236,6 +236,8 @@ void check_fast_integrator(const std::string& name, const std::vector<Scan>& sca
     EXPECT_GT(to_discrete.simple_occupied, 1000u);
     EXPECT_GE(to_discrete.recall(), 0.99) << label;
     EXPECT_GE(to_discrete.precision(), 0.98) << label;
+    EXPECT_GE(to_simple.recall(), 0.99) << label;
+    EXPECT_GE(to_simple.precision(), 0.98) << label;
   }
   // Behind surfaces: one scan at a time, so "behind" has one meaning.
   for (const int fine_steps : {2, 0}) {
