@@ -15,6 +15,8 @@
 #include <chrono>
 #include <functional>
 #include <stdexcept>
+#include <string>
+#include <string_view>
 #include <system_error>
 #include <utility>
 
@@ -23,15 +25,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-[[noreturn]] void fail(const fs::path& target, const std::string& what, const fs::path& temp, int error) {
-  throw std::runtime_error("cannot save map to '" + target.string() + "': " + what + " '" + temp.string() +
-                           "': " + std::generic_category().message(error));
-}
-
 /// Closes the descriptor and removes the temporary file unless released.
 class TemporaryFile {
  public:
-  explicit TemporaryFile(const fs::path& target) : target_(target) {
+  TemporaryFile(const fs::path& target, std::string_view kind)
+      : target_(target), context_("cannot save " + std::string(kind) + " to '" + target.string() + "': ") {
     static std::atomic<std::uint64_t> counter{0};
     const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
     const auto tick = static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count());
@@ -40,7 +38,7 @@ class TemporaryFile {
                         std::to_string(counter++) + "-" + std::to_string(tick % 1000000007u));
       fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
       if (fd_ >= 0) return;
-      if (errno != EEXIST || attempt >= 100) fail(target_, "cannot create temporary file", path_, errno);
+      if (errno != EEXIST || attempt >= 100) fail("cannot create temporary file", errno);
     }
   }
   TemporaryFile(const TemporaryFile&) = delete;
@@ -56,7 +54,7 @@ class TemporaryFile {
       const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
       if (n < 0) {
         if (errno == EINTR) continue;
-        fail(target_, "cannot write temporary file", path_, errno);
+        fail("cannot write temporary file", errno);
       }
       done += static_cast<std::size_t>(n);
     }
@@ -66,18 +64,24 @@ class TemporaryFile {
     // Keep the permissions of the file being replaced (umask applies to new files).
     struct stat old {};
     if (::stat(target_.c_str(), &old) == 0 && S_ISREG(old.st_mode)) ::fchmod(fd_, old.st_mode & 07777);
-    if (::fsync(fd_) != 0) fail(target_, "cannot flush temporary file", path_, errno);
+    if (::fsync(fd_) != 0) fail("cannot flush temporary file", errno);
     const int fd = std::exchange(fd_, -1);
-    if (::close(fd) != 0) fail(target_, "cannot close temporary file", path_, errno);
+    if (::close(fd) != 0) fail("cannot close temporary file", errno);
     if (::rename(path_.c_str(), target_.c_str()) != 0) {
-      throw std::runtime_error("cannot save map to '" + target_.string() + "': cannot rename temporary file '" +
-                               path_.string() + "' to it: " + std::generic_category().message(errno));
+      throw std::runtime_error(context_ + "cannot rename temporary file '" + path_.string() +
+                               "' to it: " + std::generic_category().message(errno));
     }
     renamed_ = true;
   }
 
  private:
+  /// "cannot save KIND to 'TARGET': WHAT 'TEMP': REASON"
+  [[noreturn]] void fail(const std::string& what, int error) const {
+    throw std::runtime_error(context_ + what + " '" + path_.string() + "': " + std::generic_category().message(error));
+  }
+
   fs::path target_;
+  std::string context_;
   fs::path path_;
   int fd_ = -1;
   bool renamed_ = false;
@@ -92,9 +96,10 @@ std::function<void()>& fault_hook() {
 
 void set_map_file_fault_for_testing(std::function<void()> hook) { fault_hook() = std::move(hook); }
 
-void write_file_atomically(const fs::path& path, std::initializer_list<std::span<const std::uint8_t>> parts) {
+void write_file_atomically(const fs::path& path, std::initializer_list<std::span<const std::uint8_t>> parts,
+                           std::string_view kind) {
   {
-    TemporaryFile temp(path);
+    TemporaryFile temp(path, kind);
     bool first = true;
     for (const auto part : parts) {
       temp.write(part);

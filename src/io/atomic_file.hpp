@@ -13,11 +13,14 @@
 #include <initializer_list>
 #include <span>
 #include <string>
+#include <string_view>
 
 namespace umbra::detail {
 
-/// Throws std::runtime_error "cannot save map to 'PATH': WHAT 'TEMP': REASON".
+/// `kind` names the contents in errors: std::runtime_error
+/// "cannot save KIND to 'PATH': WHAT 'TEMP': REASON".
 void write_file_atomically(const std::filesystem::path& path,
-                           std::initializer_list<std::span<const std::uint8_t>> parts);
+                           std::initializer_list<std::span<const std::uint8_t>> parts,
+                           std::string_view kind = "map");
 
 }  // namespace umbra::detail

@@ -1,20 +1,15 @@
 #include "umbra/io/png_writer.hpp"
 
-#include <fcntl.h>
-#include <png.h>
-#include <unistd.h>
+#include "atomic_file.hpp"
 
-#include <atomic>
-#include <cerrno>
-#include <cstdio>
+#include <png.h>
+
+#include <cstdint>
 #include <cstring>
 #include <limits>
-#include <random>
-#include <sstream>
 #include <stdexcept>
 #include <string>
-#include <system_error>
-#include <utility>
+#include <vector>
 
 namespace umbra {
 
@@ -25,73 +20,6 @@ namespace {
 constexpr std::uint64_t kMaxReadPixels = std::uint64_t{1} << 28;
 
 std::string quoted(const std::filesystem::path& path) { return "'" + path.string() + "'"; }
-
-std::string errno_text(int error) {
-  return std::error_code(error, std::generic_category()).message();
-}
-
-/// Removes the temporary file unless the write was committed.
-class TemporaryFile {
- public:
-  explicit TemporaryFile(std::filesystem::path path) : path_(std::move(path)) {}
-  TemporaryFile(const TemporaryFile&) = delete;
-  TemporaryFile& operator=(const TemporaryFile&) = delete;
-  ~TemporaryFile() {
-    if (!committed_) {
-      std::error_code ignored;
-      std::filesystem::remove(path_, ignored);
-    }
-  }
-  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
-  void commit() { committed_ = true; }
-
- private:
-  std::filesystem::path path_;
-  bool committed_ = false;
-};
-
-/// Closes the stream if still open (on error paths).
-class StreamCloser {
- public:
-  explicit StreamCloser(std::FILE* stream) : stream_(stream) {}
-  StreamCloser(const StreamCloser&) = delete;
-  StreamCloser& operator=(const StreamCloser&) = delete;
-  ~StreamCloser() {
-    if (stream_ != nullptr) std::fclose(stream_);
-  }
-  /// Closes now; returns 0 or the errno of the failure.
-  int close() {
-    std::FILE* stream = stream_;
-    stream_ = nullptr;
-    errno = 0;
-    return std::fclose(stream) == 0 ? 0 : (errno != 0 ? errno : EIO);
-  }
-
- private:
-  std::FILE* stream_;
-};
-
-/// Creates a new, uniquely named file next to `target` (never opening an
-/// existing one); returns its descriptor and sets `temporary`.
-int create_temporary(const std::filesystem::path& target, std::filesystem::path& temporary) {
-  static std::atomic<std::uint64_t> counter{0};
-  std::random_device entropy;
-  const std::filesystem::path folder =
-      target.parent_path().empty() ? std::filesystem::path(".") : target.parent_path();
-  int error = 0;
-  for (int attempt = 0; attempt < 16; ++attempt) {
-    std::ostringstream name;
-    name << '.' << target.filename().string() << ".tmp-" << ::getpid() << '-' << counter++ << '-'
-         << std::hex << entropy();
-    temporary = folder / name.str();
-    const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd >= 0) return fd;
-    error = errno;
-    if (error != EEXIST) break;
-  }
-  throw std::runtime_error("write_png: cannot create a temporary file in " + quoted(folder) +
-                           " to write " + quoted(target) + ": " + errno_text(error));
-}
 
 }  // namespace
 
@@ -157,52 +85,28 @@ void write_png(const Image& image, const std::filesystem::path& path) {
     throw std::runtime_error("write_png: " + quoted(path) + " does not name a file");
   }
 
-  std::filesystem::path temporary_path;
-  const int fd = create_temporary(path, temporary_path);
-  TemporaryFile temporary(temporary_path);
-  std::FILE* stream = ::fdopen(fd, "wb");
-  if (stream == nullptr) {
-    const int error = errno;
-    ::close(fd);
-    throw std::runtime_error("write_png: cannot open a stream on " + quoted(temporary.path()) +
-                             " to write " + quoted(path) + ": " + errno_text(error));
-  }
-  StreamCloser closer(stream);
-
   png_image png;
   std::memset(&png, 0, sizeof png);
   png.version = PNG_IMAGE_VERSION;
   png.width = static_cast<png_uint_32>(image.width);
   png.height = static_cast<png_uint_32>(image.height);
   png.format = PNG_FORMAT_RGB;
-  // The simplified API keeps libpng's setjmp/longjmp inside libpng and
-  // reports failure through its return value and png.message.
-  errno = 0;
-  const int written = png_image_write_to_stdio(&png, stream, 0, image.rgb.data(), 0, nullptr);
-  if (written == 0) {
-    const int error = errno;  // set when the failure came from the file system
-    std::string reason = std::string("libpng: ") + png.message;
-    if (error != 0) reason += " (" + errno_text(error) + ")";
-    png_image_free(&png);
-    throw std::runtime_error("write_png: cannot write " + quoted(path) + ": " + reason);
+  // Encoded in memory (a top-down picture is a few hundred KiB at most), then
+  // written like every other umbra file: temporary file, fsync, rename. The
+  // simplified API keeps libpng's setjmp/longjmp inside libpng and reports
+  // failure through its return value and png.message.
+  png_alloc_size_t size = 0;
+  std::vector<std::uint8_t> bytes;
+  bool encoded = png_image_write_get_memory_size(png, size, 0, image.rgb.data(), 0, nullptr) != 0;
+  if (encoded) {
+    bytes.resize(size);
+    encoded = png_image_write_to_memory(&png, bytes.data(), &size, 0, image.rgb.data(), 0, nullptr) != 0;
+    bytes.resize(size);
   }
+  const std::string reason = png.message;
   png_image_free(&png);
-
-  // Flush and sync before the rename, so a crash cannot leave an empty file
-  // under the real name.
-  if (std::fflush(stream) != 0 || ::fsync(::fileno(stream)) != 0) {
-    throw std::runtime_error("write_png: cannot write " + quoted(path) + ": " + errno_text(errno));
-  }
-  if (const int error = closer.close(); error != 0) {
-    throw std::runtime_error("write_png: cannot write " + quoted(path) + ": " + errno_text(error));
-  }
-  std::error_code rename_error;
-  std::filesystem::rename(temporary.path(), path, rename_error);
-  if (rename_error) {
-    throw std::runtime_error("write_png: cannot move the finished picture to " + quoted(path) +
-                             ": " + rename_error.message());
-  }
-  temporary.commit();
+  if (!encoded) throw std::runtime_error("write_png: cannot encode " + quoted(path) + ": libpng: " + reason);
+  detail::write_file_atomically(path, {bytes}, "picture");
 }
 
 Image read_png(const std::filesystem::path& path) {

@@ -68,11 +68,12 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path);
 // ---------------------------------------------------------------------------
 // TEST-ONLY. Not part of the API; do not use outside tests.
 namespace detail {
-/// Installs a hook that every map save (.umb, .bt, .ot) calls after the
-/// first part (the header) has been written to the temporary file and before
-/// the rest; if the hook throws, the save removes the temporary file and
-/// rethrows, exactly as for a real write error. An empty function removes the hook. Not thread safe: install it
-/// only while no save is running.
+/// Installs a hook that every file save (.umb, .bt, .ot, .png) calls after
+/// the first part (the header; a PNG is one part) has been written to the
+/// temporary file and before the rest; if the hook throws, the save removes
+/// the temporary file and rethrows, exactly as for a real write error. An
+/// empty function removes the hook. Not thread safe: install it only while
+/// no save is running.
 void set_map_file_fault_for_testing(std::function<void()> hook);
 }  // namespace detail
 // ---------------------------------------------------------------------------
