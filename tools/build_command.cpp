@@ -215,7 +215,7 @@ Command add_build_command(CLI::App& app) {
                       "fast: coarse nodes before each end point traced voxel by voxel (0: none)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  command->add_option("--threads", options->threads, "threads tracing rays (0: all cores)")->capture_default_str();
+  command->add_option("--threads", options->threads, "threads that discretise, trace and apply each scan (0: all cores)")->capture_default_str();
   command->add_option("--max-range", options->max_range, "metres; longer rays are cut there without a hit (<= 0: unlimited)")
       ->capture_default_str();
   command->add_option("--bbox", options->bbox, "only map inside minx,miny,minz,maxx,maxy,maxz (rays are clipped)");
