@@ -36,18 +36,8 @@ using Bytes = std::vector<std::uint8_t>;
 
 // --- files and little-endian fields -------------------------------------------
 
-Bytes read_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-void write_bytes(const fs::path& path, const Bytes& bytes) {
-  // A new file rather than a truncated one: ext4 flushes a truncated file to disk on close.
-  fs::remove(path);
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  ASSERT_TRUE(out.good()) << path;
-}
+using test::read_bytes;
+using test::write_bytes;
 
 void put_le(Bytes& b, std::size_t at, std::uint64_t v, int size) {
   for (int i = 0; i < size; ++i) b[at + i] = static_cast<std::uint8_t>(v >> (8 * i));

@@ -17,8 +17,6 @@
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 #include <octomap/OcTreeStamped.h>
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -44,15 +42,8 @@ using Bytes = std::vector<std::uint8_t>;
 
 // --- bytes and files ----------------------------------------------------------------
 
-Bytes read_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-void write_bytes(const fs::path& path, const Bytes& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-}
+using test::read_bytes;
+using test::write_bytes;
 
 Bytes to_bytes(const std::string& text) { return Bytes(text.begin(), text.end()); }
 std::string to_text(const Bytes& bytes) { return std::string(bytes.begin(), bytes.end()); }
@@ -749,36 +740,6 @@ std::string quote_for_test(const std::string& text) {
   return "'" + out + "'";
 }
 
-/// Lowers the soft address-space limit to the current size plus `extra`, so
-/// that allocating what a file merely claims fails instead of succeeding
-/// lazily. Inactive under AddressSanitizer (which maps terabytes).
-class AddressSpaceCapForTest {
- public:
-  explicit AddressSpaceCapForTest(std::uint64_t extra) {
-#if !defined(__SANITIZE_ADDRESS__)
-    ::getrlimit(RLIMIT_AS, &saved_);
-    std::ifstream statm("/proc/self/statm");
-    std::uint64_t pages = 0;
-    statm >> pages;
-    rlimit lowered = saved_;
-    const std::uint64_t wanted = pages * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE)) + extra;
-    lowered.rlim_cur = saved_.rlim_max == RLIM_INFINITY ? wanted : std::min<std::uint64_t>(wanted, saved_.rlim_max);
-    active_ = pages > 0 && ::setrlimit(RLIMIT_AS, &lowered) == 0;
-#else
-    (void)extra;
-#endif
-  }
-  ~AddressSpaceCapForTest() {
-    if (active_) ::setrlimit(RLIMIT_AS, &saved_);
-  }
-  AddressSpaceCapForTest(const AddressSpaceCapForTest&) = delete;
-  AddressSpaceCapForTest& operator=(const AddressSpaceCapForTest&) = delete;
-
- private:
-  rlimit saved_{};
-  bool active_ = false;
-};
-
 std::string header(const std::string& first_line, const std::string& id, const std::string& size,
                    const std::string& res) {
   return first_line + "\n# comment\n#\nid " + id + "\nsize " + size + "\nres " + res + "\ndata\n";
@@ -912,7 +873,7 @@ TEST(OctoMapMalformed, HeadersLiboctomapAcceptsAreAccepted) {
 }
 
 TEST(OctoMapMalformed, SizesThatLieAreRefusedBeforeReadingTheTree) {
-  AddressSpaceCapForTest cap(256u << 20);  // a reader allocating what the header claims fails here
+  test::AddressSpaceCap cap(256u << 20);  // a reader allocating what the header claims fails here
   const Bytes bt = small_files()[0].second;
   const Bytes ot = small_files()[1].second;
   const std::string bt_text = to_text(bt);

@@ -14,8 +14,6 @@
 // frames.
 #include <gtest/gtest.h>
 
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -123,35 +121,7 @@ std::string format_error_of(const fs::path& path, const ScanSourceOptions& optio
 
 bool contains(const std::string& text, std::string_view part) { return text.find(part) != std::string::npos; }
 
-/// Lowers the soft address-space limit to the current size plus `extra`, so
-/// an allocation of a size a file merely claims fails (bad_alloc) instead of
-/// succeeding lazily. Inactive under AddressSanitizer (which maps terabytes).
-class AddressSpaceCap {
- public:
-  explicit AddressSpaceCap(std::uint64_t extra) {
-#if !defined(__SANITIZE_ADDRESS__)
-    ::getrlimit(RLIMIT_AS, &saved_);
-    std::ifstream statm("/proc/self/statm");
-    std::uint64_t pages = 0;
-    statm >> pages;
-    rlimit lowered = saved_;
-    const std::uint64_t wanted = pages * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE)) + extra;
-    lowered.rlim_cur = saved_.rlim_max == RLIM_INFINITY ? wanted : std::min<std::uint64_t>(wanted, saved_.rlim_max);
-    active_ = pages > 0 && ::setrlimit(RLIMIT_AS, &lowered) == 0;
-#else
-    (void)extra;
-#endif
-  }
-  ~AddressSpaceCap() {
-    if (active_) ::setrlimit(RLIMIT_AS, &saved_);
-  }
-  AddressSpaceCap(const AddressSpaceCap&) = delete;
-  AddressSpaceCap& operator=(const AddressSpaceCap&) = delete;
-
- private:
-  rlimit saved_{};
-  bool active_ = false;
-};
+using test::AddressSpaceCap;
 
 /// Shortest text that reads back as exactly `value`.
 std::string float_text(float value) {

@@ -1,8 +1,15 @@
 #include "support/test_support.hpp"
 
-#include <atomic>
-#include <vector>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <vector>
 
 namespace umbra::test {
 
@@ -43,5 +50,48 @@ std::filesystem::path scratch_dir() {
 }
 
 std::filesystem::path source_dir() { return UMBRA_SOURCE_DIR; }
+
+std::vector<std::uint8_t> read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void write_bytes(const std::filesystem::path& path, std::span<const std::uint8_t> bytes) {
+  std::filesystem::remove(path);
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  ASSERT_TRUE(out.good()) << path;
+}
+
+CommandResult run_command(const std::string& command) {
+  CommandResult result;
+  std::FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return result;
+  std::array<char, 4096> buffer{};
+  std::size_t n = 0;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) result.output.append(buffer.data(), n);
+  const int status = ::pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+AddressSpaceCap::AddressSpaceCap(std::uint64_t extra) {
+#if !defined(__SANITIZE_ADDRESS__)
+  ::getrlimit(RLIMIT_AS, &saved_);
+  std::ifstream statm("/proc/self/statm");
+  std::uint64_t pages = 0;
+  statm >> pages;
+  rlimit lowered = saved_;
+  const std::uint64_t wanted = pages * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE)) + extra;
+  lowered.rlim_cur = saved_.rlim_max == RLIM_INFINITY ? wanted : std::min<std::uint64_t>(wanted, saved_.rlim_max);
+  active_ = pages > 0 && ::setrlimit(RLIMIT_AS, &lowered) == 0;
+#else
+  (void)extra;
+#endif
+}
+
+AddressSpaceCap::~AddressSpaceCap() {
+  if (active_) ::setrlimit(RLIMIT_AS, &saved_);
+}
 
 }  // namespace umbra::test

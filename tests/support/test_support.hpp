@@ -1,9 +1,15 @@
-// Helpers shared by the test suites: the shared sensor data, scratch folders.
+// Helpers shared by the test suites: the shared sensor data, scratch folders,
+// whole-file bytes, running the CLI, capping the address space.
 #pragma once
 
+#include <sys/resource.h>
+
+#include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -17,6 +23,37 @@ std::filesystem::path scratch_dir();
 
 /// The project's source folder (for README checks and scripts).
 std::filesystem::path source_dir();
+
+/// The whole file (empty if it cannot be read).
+std::vector<std::uint8_t> read_bytes(const std::filesystem::path& path);
+
+/// Replaces `path` by a new file holding `bytes` (new rather than truncated:
+/// ext4 flushes a truncated file to disk on close); a failure fails the test.
+void write_bytes(const std::filesystem::path& path, std::span<const std::uint8_t> bytes);
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+/// Runs `command` through the shell.
+CommandResult run_command(const std::string& command);
+
+/// Lowers the soft address-space limit to the current size plus `extra`, so
+/// that allocating what a file merely claims fails (bad_alloc) instead of
+/// succeeding lazily; restored on destruction. Inactive under
+/// AddressSanitizer (which maps terabytes).
+class AddressSpaceCap {
+ public:
+  explicit AddressSpaceCap(std::uint64_t extra);
+  ~AddressSpaceCap();
+  AddressSpaceCap(const AddressSpaceCap&) = delete;
+  AddressSpaceCap& operator=(const AddressSpaceCap&) = delete;
+
+ private:
+  rlimit saved_{};
+  bool active_ = false;
+};
 
 }  // namespace umbra::test
 
