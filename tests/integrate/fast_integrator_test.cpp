@@ -277,13 +277,7 @@ TEST(FastIntegrator, AgreesWithTheSimpleIntegratorOnTheProceduralBuilding) {
   check_fast_integrator("procedural building", scans, 0.05, 30.0);
 }
 
-std::vector<Scan> read_all(const std::filesystem::path& path) {
-  std::vector<Scan> scans;
-  const auto source = open_scan_source(path);
-  Scan scan;
-  while (source->next(scan)) scans.push_back(scan);
-  return scans;
-}
+using test::read_all;
 
 TEST(FastIntegrator, AgreesWithTheSimpleIntegratorOnScanDat) {
   UMBRA_REQUIRE_SHARED_DATA(path, "octomap/scan.dat.bz2");

@@ -11,8 +11,6 @@
 #include "umbra/io/map_file.hpp"
 
 #include <gtest/gtest.h>
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <bit>
@@ -314,33 +312,6 @@ OccupancyMap random_map(const MapConfig& config, bool auto_prune, unsigned seed)
 /// Clears the test-only fault hook when a test ends, even a failing one.
 struct FaultHookGuard {
   ~FaultHookGuard() { detail::set_map_file_fault_for_testing({}); }
-};
-
-/// Lowers the soft address-space limit to what the process uses now plus
-/// `extra` bytes, so that an allocation of a size a file merely declares
-/// fails instead of succeeding lazily; restores the old limit at the end.
-class AddressSpaceLimit {
- public:
-  explicit AddressSpaceLimit(std::uint64_t extra) {
-    ::getrlimit(RLIMIT_AS, &old_);
-    std::ifstream statm("/proc/self/statm");
-    std::uint64_t pages = 0;
-    statm >> pages;
-    rlimit limit = old_;
-    const std::uint64_t wanted = pages * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE)) + extra;
-    limit.rlim_cur = old_.rlim_max == RLIM_INFINITY ? wanted : std::min<std::uint64_t>(wanted, old_.rlim_max);
-    active_ = pages > 0 && ::setrlimit(RLIMIT_AS, &limit) == 0;
-  }
-  ~AddressSpaceLimit() {
-    if (active_) ::setrlimit(RLIMIT_AS, &old_);
-  }
-  AddressSpaceLimit(const AddressSpaceLimit&) = delete;
-  AddressSpaceLimit& operator=(const AddressSpaceLimit&) = delete;
-  [[nodiscard]] bool active() const { return active_; }
-
- private:
-  rlimit old_{};
-  bool active_ = false;
 };
 
 // ===================================================================================
@@ -806,7 +777,7 @@ TEST(MapFile, AbsurdDeclaredSizesAreRejectedWithoutAllocating) {
 #if defined(__SANITIZE_ADDRESS__)
     const bool limited = false;  // AddressSanitizer reserves terabytes of address space itself
 #else
-    const AddressSpaceLimit limit(std::uint64_t{1} << 30);
+    const test::AddressSpaceCap limit(std::uint64_t{1} << 30);
     const bool limited = limit.active();
 #endif
     counts_message = load_error(bad, dir / "counts.umb");

@@ -100,24 +100,8 @@ class GraphBytes {
   std::string bytes_;
 };
 
-void write_file(const fs::path& path, const std::string& contents) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  ASSERT_TRUE(out) << path;
-  out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
-  ASSERT_TRUE(out) << path;
-}
-
-std::vector<Scan> read_all(ScanSource& source) {
-  std::vector<Scan> scans;
-  Scan scan;
-  while (source.next(scan)) scans.push_back(scan);
-  return scans;
-}
-
-std::vector<Scan> read_all(const fs::path& path, const ScanSourceOptions& options = {}) {
-  auto source = open_scan_source(path, options);
-  return read_all(*source);
-}
+using test::read_all;
+using test::write_file;
 
 /// what() of the FormatError that reading `path` completely throws, or a
 /// test failure when it throws nothing or something else.

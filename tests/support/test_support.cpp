@@ -63,6 +63,25 @@ void write_bytes(const std::filesystem::path& path, std::span<const std::uint8_t
   ASSERT_TRUE(out.good()) << path;
 }
 
+void write_file(const std::filesystem::path& path, std::string_view contents) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  ASSERT_TRUE(out) << path;
+  out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
+  ASSERT_TRUE(out) << path;
+}
+
+std::vector<Scan> read_all(ScanSource& source) {
+  std::vector<Scan> scans;
+  Scan scan;
+  while (source.next(scan)) scans.push_back(scan);
+  return scans;
+}
+
+std::vector<Scan> read_all(const std::filesystem::path& path, const ScanSourceOptions& options) {
+  const auto source = open_scan_source(path, options);
+  return read_all(*source);
+}
+
 CommandResult run_command(const std::string& command) {
   CommandResult result;
   std::FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");

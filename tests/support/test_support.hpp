@@ -9,7 +9,10 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
+
+#include "umbra/io/scan_source.hpp"
 
 #include <gtest/gtest.h>
 
@@ -31,6 +34,13 @@ std::vector<std::uint8_t> read_bytes(const std::filesystem::path& path);
 /// ext4 flushes a truncated file to disk on close); a failure fails the test.
 void write_bytes(const std::filesystem::path& path, std::span<const std::uint8_t> bytes);
 
+/// Writes `contents` to `path` (replacing it); a failure fails the test.
+void write_file(const std::filesystem::path& path, std::string_view contents);
+
+/// Every scan a source yields, in order.
+std::vector<Scan> read_all(ScanSource& source);
+std::vector<Scan> read_all(const std::filesystem::path& path, const ScanSourceOptions& options = {});
+
 struct CommandResult {
   int exit_code = -1;
   std::string output;  // stdout and stderr together
@@ -49,6 +59,8 @@ class AddressSpaceCap {
   ~AddressSpaceCap();
   AddressSpaceCap(const AddressSpaceCap&) = delete;
   AddressSpaceCap& operator=(const AddressSpaceCap&) = delete;
+  /// Whether the limit is in force (not under AddressSanitizer, setrlimit worked).
+  [[nodiscard]] bool active() const { return active_; }
 
  private:
   rlimit saved_{};
