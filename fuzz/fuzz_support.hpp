@@ -19,7 +19,9 @@
 #include <filesystem>
 #include <string>
 
+#include "map/map_access.hpp"
 #include "umbra/io/format_error.hpp"
+#include "umbra/map/occupancy_map.hpp"
 
 namespace umbra::fuzz {
 
@@ -75,6 +77,11 @@ void expect_only_format_errors(Read&& read) {
 }
 
 /// Crashes with a message when `condition` is false (a property of a successful read).
+/// Whether every invariant of the map's tree holds.
+inline bool invariants_hold(const OccupancyMap& map) {
+  return detail::MapAccess::read(map, [](const OccupancyTree& tree) { return tree.check_invariants().empty(); });
+}
+
 inline void require(bool condition, const char* what) {
   if (condition) return;
   std::fprintf(stderr, "property violated: %s\n", what);

@@ -167,7 +167,7 @@ int run_build(const BuildOptions& options) {
     std::printf(" (clear depth %d = %.3g m nodes, %d fine steps)", insert.resolved_clear_depth(map.grid()),
                 map.grid().node_size(insert.resolved_clear_depth(map.grid())), insert.fine_steps);
   }
-  std::printf(", %u threads\n", insert.threads == 0 ? ThreadPool::hardware_threads() : insert.threads);
+  std::printf(", %u threads\n", insert.threads == 0 ? hardware_threads() : insert.threads);
   if (total.non_finite > 0) std::printf("warning: %zu points were NaN or infinite and were skipped\n", total.non_finite);
   if (total.out_of_bounds > 0) {
     std::printf("warning: %zu points lie outside the map (half extent %.1f m) and were skipped; "

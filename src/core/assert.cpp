@@ -1,4 +1,4 @@
-#include "umbra/core/assert.hpp"
+#include "core/assert.hpp"
 
 namespace umbra {
 

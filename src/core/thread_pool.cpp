@@ -1,4 +1,4 @@
-#include "umbra/core/thread_pool.hpp"
+#include "core/thread_pool.hpp"
 
 namespace umbra {
 

@@ -1,13 +1,15 @@
-#include "umbra/integrate/integrator.hpp"
+#include "integrate/integrator.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-#include "umbra/core/radix_sort.hpp"
-#include "umbra/integrate/ray_walker.hpp"
+#include "core/radix_sort.hpp"
+#include "integrate/ray_walker.hpp"
 
 namespace umbra {
+
+unsigned hardware_threads() { return ThreadPool::hardware_threads(); }
 
 IntegratorKind parse_integrator_kind(const std::string& name) {
   if (name == "simple") return IntegratorKind::simple;
@@ -127,9 +129,10 @@ std::size_t Integrator::memory_bytes() const {
   return bytes;
 }
 
-InsertStats Integrator::insert(OccupancyTree& tree, const Grid& grid, const SensorModel& sensor, Vec3f origin,
-                               std::span<const Vec3f> points, std::span<const Rgb> colors,
-                               const InsertOptions& options, const std::optional<Aabb>& box) {
+InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f origin,
+                              std::span<const Vec3f> points, std::span<const Rgb> colors,
+                              const InsertOptions& options, const std::optional<Aabb>& box) {
+  discard();
   options.validate(grid.depth_levels());
   if (!colors.empty() && colors.size() != points.size()) {
     throw std::invalid_argument("one colour per point expected: " + std::to_string(colors.size()) + " colours, " +
@@ -247,10 +250,25 @@ InsertStats Integrator::insert(OccupancyTree& tree, const Grid& grid, const Sens
     batch.merge(tracers_[w]->batch(), /*with_hits=*/!scan.fast);
     tracers_[w]->start(grid.depth_levels());  // give its memory back
   }
-  tree.apply(batch, sensor.hit_log_odds(), sensor.miss_log_odds(), threads > 1 ? pool_.get() : nullptr);
-  tracers_[0]->start(grid.depth_levels());
-  if (!colors.empty()) tree.add_colors(color_samples(grid, origin, points, colors, options, scan.box_keys));
+  if (!colors.empty()) pending_colors_ = color_samples(grid, origin, points, colors, options, scan.box_keys);
+  pending_threads_ = threads;
   return stats;
+}
+
+void Integrator::apply(OccupancyTree& tree, const SensorModel& sensor) {
+  if (pending_threads_ == 0) throw std::logic_error("Integrator::apply: nothing traced");
+  const unsigned threads = pending_threads_;
+  pending_threads_ = 0;
+  tree.apply(tracers_[0]->batch(), sensor.hit_log_odds(), sensor.miss_log_odds(),
+             threads > 1 ? pool_.get() : nullptr);
+  tracers_[0]->start(tree.depth_levels());
+  if (!pending_colors_.empty()) tree.add_colors(pending_colors_);
+  std::vector<OccupancyTree::ColorSample>().swap(pending_colors_);
+}
+
+void Integrator::discard() {
+  pending_threads_ = 0;  // the next trace() empties the batches
+  std::vector<OccupancyTree::ColorSample>().swap(pending_colors_);
 }
 
 }  // namespace umbra

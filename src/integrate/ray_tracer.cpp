@@ -1,11 +1,11 @@
-#include "umbra/integrate/ray_tracer.hpp"
+#include "integrate/ray_tracer.hpp"
 
 #include <algorithm>
 
-#include "umbra/core/radix_sort.hpp"
+#include "core/radix_sort.hpp"
 
-#include "umbra/integrate/integrator.hpp"
-#include "umbra/integrate/ray_walker.hpp"
+#include "integrate/integrator.hpp"
+#include "integrate/ray_walker.hpp"
 
 namespace umbra {
 

@@ -12,6 +12,7 @@
 #include "umbra/io/map_file.hpp"
 
 #include "atomic_file.hpp"
+#include "map/map_access.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -33,6 +34,7 @@
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -668,7 +670,7 @@ class TreeEncoder {
 class TreeDecoder {
  public:
   /// `colors` is null for a map without colour.
-  TreeDecoder(OccupancyTree& tree, const MapFileInfo& info, FrameReader& structure, FrameReader& values,
+  TreeDecoder(detail::TreeBuilder& tree, const MapFileInfo& info, FrameReader& structure, FrameReader& values,
               FrameReader* colors)
       : tree_(tree),
         range_(LogOddsRange::from(info.config.sensor)),
@@ -795,7 +797,7 @@ class TreeDecoder {
                  "merged");
   }
 
-  OccupancyTree& tree_;
+  detail::TreeBuilder& tree_;
   LogOddsRange range_;
   bool pruned_;
   std::uint64_t declared_inner_;
@@ -818,18 +820,25 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path) {
   FrameWriter values(values_frame);
   std::optional<FrameWriter> colors;
   if (map.has_color()) colors.emplace(colors_frame);
-  TreeEncoder encoder(map.tree(), LogOddsRange::from(map.sensor_model()), map.auto_prune(), structure, values,
-                      colors ? &*colors : nullptr);
-  encoder.run();
+  // Encoded under one read of the map, so a concurrent insert cannot tear it.
+  const auto [inner_nodes, childless_nodes, config, auto_prune] =
+      detail::MapAccess::read(map, [&](const OccupancyTree& tree) {
+        const MapConfig map_config = map.config();
+        const bool pruned = map.auto_prune();
+        TreeEncoder encoder(tree, LogOddsRange::from(map_config.sensor), pruned, structure, values,
+                            colors ? &*colors : nullptr);
+        encoder.run();
+        return std::tuple(encoder.inner_nodes(), encoder.childless_nodes(), map_config, pruned);
+      });
   structure.finish();
   values.finish();
   if (colors) colors->finish();
 
   MapFileInfo info;
-  info.config = map.config();
-  info.auto_prune = map.auto_prune();
-  info.inner_nodes = encoder.inner_nodes();
-  info.childless_nodes = encoder.childless_nodes();
+  info.config = config;
+  info.auto_prune = auto_prune;
+  info.inner_nodes = inner_nodes;
+  info.childless_nodes = childless_nodes;
   info.structure_bytes = structure.raw_bytes();
   info.structure_compressed_bytes = structure_frame.size();
   info.values_compressed_bytes = values_frame.size();
@@ -895,8 +904,9 @@ OccupancyMap load_map(const std::filesystem::path& path) {
                    all.subspan(static_cast<std::size_t>(colors_at), static_cast<std::size_t>(info.colors_compressed_bytes)),
                    4 * info.childless_nodes);
   }
-  TreeDecoder(map.tree(), info, structure, values, colors ? &*colors : nullptr).run();
-  map.tree().refresh_all();
+  detail::MapAccess::build(map, [&](detail::TreeBuilder& builder) {
+    TreeDecoder(builder, info, structure, values, colors ? &*colors : nullptr).run();
+  });
   // Switching it off only sets the flag; a pruned file was checked to hold no equal childless siblings.
   if (!info.auto_prune) map.set_auto_prune(false);
   return map;

@@ -24,6 +24,7 @@
 #include <array>
 #include <bit>
 
+#include "map/map_access.hpp"
 #include "octomap_format.hpp"
 
 namespace umbra::octomap_io {
@@ -42,7 +43,7 @@ std::array<std::uint8_t, 8> child_codes(std::uint8_t low, std::uint8_t high) {
 
 class BtDecoder {
  public:
-  BtDecoder(ByteInput& in, const std::string& name, OccupancyTree& tree, LogOddsRange range)
+  BtDecoder(ByteInput& in, const std::string& name, detail::TreeBuilder& tree, LogOddsRange range)
       : in_(in), name_(name), tree_(tree), free_value_(range.min), occupied_value_(range.max) {}
 
   void run(std::uint64_t declared_nodes) {
@@ -129,7 +130,7 @@ class BtDecoder {
 
   ByteInput& in_;
   const std::string& name_;
-  OccupancyTree& tree_;
+  detail::TreeBuilder& tree_;
   float free_value_;
   float occupied_value_;
   std::uint64_t nodes_ = 0;
@@ -209,14 +210,19 @@ class BtEncoder {
 OccupancyMap decode_bt(ByteInput& in, const Header& header, const std::string& name, const SensorModel& sensor) {
   check_declared_size(header, name);
   OccupancyMap map = new_map(header, name, sensor, false);
-  BtDecoder decoder(in, name, map.tree(), LogOddsRange::from(sensor));
-  decoder.run(header.nodes);
-  map.tree().refresh_all();
+  bool mergeable = false;
+  detail::MapAccess::build(map, [&](detail::TreeBuilder& builder) {
+    BtDecoder decoder(in, name, builder, LogOddsRange::from(sensor));
+    decoder.run(header.nodes);
+    mergeable = decoder.has_mergeable_children();
+  });
   // Keep unmerged equal siblings as they are (so the file is written back unchanged).
-  if (decoder.has_mergeable_children()) map.set_auto_prune(false);
+  if (mergeable) map.set_auto_prune(false);
   return map;
 }
 
-EncodedTree encode_bt(const OccupancyMap& map) { return BtEncoder(map.tree()).run(); }
+EncodedTree encode_bt(const OccupancyMap& map) {
+  return detail::MapAccess::read(map, [](const OccupancyTree& tree) { return BtEncoder(tree).run(); });
+}
 
 }  // namespace umbra::octomap_io

@@ -26,6 +26,7 @@
 #include <limits>
 #include <optional>
 
+#include "map/map_access.hpp"
 #include "octomap_format.hpp"
 
 namespace umbra::octomap_io {
@@ -64,7 +65,7 @@ std::optional<double> clamp_probability_covering(float value, bool upper) {
 
 class OtDecoder {
  public:
-  OtDecoder(ByteInput& in, const std::string& name, OccupancyTree& tree, bool color)
+  OtDecoder(ByteInput& in, const std::string& name, detail::TreeBuilder& tree, bool color)
       : in_(in), name_(name), tree_(tree), color_(color), node_bytes_(node_bytes(color)) {}
 
   void run(std::uint64_t declared_nodes) {
@@ -151,7 +152,7 @@ class OtDecoder {
 
   ByteInput& in_;
   const std::string& name_;
-  OccupancyTree& tree_;
+  detail::TreeBuilder& tree_;
   bool color_;
   std::size_t node_bytes_;
   std::uint64_t nodes_ = 0;
@@ -244,29 +245,31 @@ class OtEncoder {
 OccupancyMap decode_ot(ByteInput& in, const Header& header, const std::string& name, const SensorModel& sensor) {
   check_declared_size(header, name);
   OccupancyMap map = new_map(header, name, sensor, header.color);
-  OtDecoder decoder(in, name, map.tree(), header.color);
-  decoder.run(header.nodes);
-  map.tree().refresh_all();
-  if (decoder.has_mergeable_children()) map.set_auto_prune(false);
+  std::optional<OtDecoder> decoder;
+  detail::MapAccess::build(map, [&](detail::TreeBuilder& builder) {
+    decoder.emplace(in, name, builder, header.color);
+    decoder->run(header.nodes);
+  });
+  if (decoder->has_mergeable_children()) map.set_auto_prune(false);
 
   // Values beyond the clamping range: widen the range so that every value stays as it is.
   const LogOddsRange range = LogOddsRange::from(sensor);
   SensorModel widened = sensor;
-  if (decoder.lowest() && *decoder.lowest() < range.min) {
-    const auto p = clamp_probability_covering(*decoder.lowest(), false);
+  if (decoder->lowest() && *decoder->lowest() < range.min) {
+    const auto p = clamp_probability_covering(*decoder->lowest(), false);
     if (!p) {
-      throw FormatError::at_byte(name, decoder.lowest_offset(),
-                                 "log-odds " + float_text(*decoder.lowest()) +
+      throw FormatError::at_byte(name, decoder->lowest_offset(),
+                                 "log-odds " + float_text(*decoder->lowest()) +
                                      " is too low for any clamping probability > 0 (umbra keeps every value "
                                      "inside its sensor model's clamping range)");
     }
     widened.clamp_min = *p;
   }
-  if (decoder.highest() && *decoder.highest() > range.max) {
-    const auto p = clamp_probability_covering(*decoder.highest(), true);
+  if (decoder->highest() && *decoder->highest() > range.max) {
+    const auto p = clamp_probability_covering(*decoder->highest(), true);
     if (!p) {
-      throw FormatError::at_byte(name, decoder.highest_offset(),
-                                 "log-odds " + float_text(*decoder.highest()) +
+      throw FormatError::at_byte(name, decoder->highest_offset(),
+                                 "log-odds " + float_text(*decoder->highest()) +
                                      " is too high for any clamping probability < 1 (umbra keeps every value "
                                      "inside its sensor model's clamping range)");
     }
@@ -276,6 +279,8 @@ OccupancyMap decode_ot(ByteInput& in, const Header& header, const std::string& n
   return map;
 }
 
-EncodedTree encode_ot(const OccupancyMap& map) { return OtEncoder(map.tree()).run(); }
+EncodedTree encode_ot(const OccupancyMap& map) {
+  return detail::MapAccess::read(map, [](const OccupancyTree& tree) { return OtEncoder(tree).run(); });
+}
 
 }  // namespace umbra::octomap_io

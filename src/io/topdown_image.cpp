@@ -116,7 +116,7 @@ Image render_topdown(const OccupancyMap& map, const TopdownOptions& options) {
 
   // A leaf counts if it is known and overlaps the height window; returns its
   // finest-key edge length, or 0 when it does not count.
-  auto counted_size = [&window](const LeafView& leaf) -> std::int64_t {
+  auto counted_size = [&window](const Node& leaf) -> std::int64_t {
     if (leaf.state == OccupancyState::unknown) return 0;
     const std::int64_t size = std::int64_t{1} << leaf.depth;
     const std::int64_t z = leaf.key.z;
@@ -126,7 +126,7 @@ Image render_topdown(const OccupancyMap& map, const TopdownOptions& options) {
 
   // Pass 1: the columns holding known space.
   ColumnBounds bounds;
-  map.for_each_leaf([&](const LeafView& leaf) {
+  map.for_each_leaf([&](const Node& leaf) {
     const std::int64_t size = counted_size(leaf);
     if (size == 0) return;
     bounds.min_x = std::min<std::int64_t>(bounds.min_x, leaf.key.x);
@@ -166,7 +166,7 @@ Image render_topdown(const OccupancyMap& map, const TopdownOptions& options) {
 
   // Pass 2: paint each counted leaf into the pixels it covers.
   std::vector<std::int32_t> cells(std::size_t(width) * std::size_t(height), kUnknownCell);
-  map.for_each_leaf([&](const LeafView& leaf) {
+  map.for_each_leaf([&](const Node& leaf) {
     const std::int64_t size = counted_size(leaf);
     if (size == 0) return;
     const std::int64_t column_begin = (std::int64_t(leaf.key.x) >> depth) - west_node + margin;

@@ -11,7 +11,7 @@ MapStatistics compute_statistics(const OccupancyMap& map) {
   stats.nodes = map.node_counts();
   stats.memory_bytes = map.memory_bytes();
   const Grid& grid = map.grid();
-  map.for_each_leaf([&](const LeafView& leaf) {
+  map.for_each_leaf([&](const Node& leaf) {
     if (leaf.state == OccupancyState::unknown) return;
     const std::uint64_t voxels = std::uint64_t{1} << (3 * leaf.depth);
     (leaf.state == OccupancyState::occupied ? stats.occupied_voxels : stats.free_voxels) += voxels;

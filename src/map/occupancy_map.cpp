@@ -1,8 +1,12 @@
 #include "umbra/map/occupancy_map.hpp"
 
 #include <cmath>
+#include <mutex>
 #include <stdexcept>
 #include <string>
+
+#include "map/make_node.hpp"
+#include "map/map_state.hpp"
 
 namespace umbra {
 
@@ -12,157 +16,270 @@ void MapConfig::validate() const {
   thresholds.validate();
 }
 
-OccupancyMap::OccupancyMap(const MapConfig& config)
-    : grid_(config.resolution, config.depth_levels),
-      sensor_((config.sensor.validate(), config.sensor)),
-      thresholds_((config.thresholds.validate(), config.thresholds)),
-      tree_(config.depth_levels, LogOddsRange::from(config.sensor), LogOddsThresholds::from(config.thresholds),
-            config.color),
-      integrator_() {}
-
-OccupancyMap::OccupancyMap(double resolution, int depth_levels, const SensorModel& sensor,
-                           const Thresholds& thresholds)
-    : OccupancyMap(MapConfig{resolution, depth_levels, sensor, thresholds, false}) {}
-
-MapConfig OccupancyMap::config() const {
-  return {grid_.resolution(), grid_.depth_levels(), sensor_, thresholds_, tree_.has_color()};
-}
-
-void OccupancyMap::set_sensor_model(const SensorModel& sensor) {
-  sensor.validate();
-  sensor_ = sensor;
-  tree_.set_range(LogOddsRange::from(sensor));
-}
-
-void OccupancyMap::set_thresholds(const Thresholds& thresholds) {
-  thresholds.validate();
-  thresholds_ = thresholds;
-  tree_.set_thresholds(LogOddsThresholds::from(thresholds));
-}
-
 namespace {
+
+const MapConfig& validated(const MapConfig& config) {
+  config.validate();
+  return config;
+}
+
+/// A change that readers must not see half done: the map's writer, with the
+/// gate closed. A thread that is itself reading the map (an open query
+/// range) would wait for itself: it gets std::logic_error before it waits.
+template <typename Change>
+decltype(auto) exclusively(detail::MapState& state, Change&& change) {
+  if (state.gate.held_by_this_thread()) state.gate.close();  // throws the logic_error
+  std::lock_guard writer(state.writer);
+  detail::ClosedGate closed(state.gate);
+  return std::forward<Change>(change)();
+}
+
+template <typename Read>
+decltype(auto) reading(const detail::MapState& state, Read&& read) {
+  detail::ReadLock lock(state.gate);
+  return std::forward<Read>(read)();
+}
+
 void require_finite(float value, const char* what) {
   if (!std::isfinite(value)) {
     throw std::invalid_argument(std::string(what) + " must be finite, got " + std::to_string(value));
   }
 }
+
+void require_color(bool has_color) {
+  if (!has_color) throw std::logic_error("the map was made without colour (MapConfig::color)");
+}
+
+void check_depth(const Grid& grid, int depth) {
+  if (depth < 0 || depth > grid.depth_levels()) {
+    throw std::out_of_range("depth " + std::to_string(depth) + " is outside [0, " +
+                            std::to_string(grid.depth_levels()) + "]");
+  }
+}
+
+void check_key(const Grid& grid, Key key) {
+  const std::uint32_t limit = grid.keys_per_axis();
+  if (key.x >= limit || key.y >= limit || key.z >= limit) {
+    throw std::out_of_range("key (" + std::to_string(key.x) + ", " + std::to_string(key.y) + ", " +
+                            std::to_string(key.z) + ") is outside [0, " + std::to_string(limit) + ")");
+  }
+}
+
 }  // namespace
 
-void OccupancyMap::update_log_odds(Vec3d coordinate, float delta) {
-  update_key_log_odds(grid_.key(coordinate), delta);
+OccupancyMap::OccupancyMap(const MapConfig& config)
+    : grid_(validated(config).resolution, config.depth_levels),
+      color_(config.color),
+      state_(std::make_unique<detail::MapState>(config.depth_levels, config.sensor, config.thresholds, config.color)) {}
+
+OccupancyMap::OccupancyMap(double resolution, int depth_levels, const SensorModel& sensor,
+                           const Thresholds& thresholds)
+    : OccupancyMap(MapConfig{resolution, depth_levels, sensor, thresholds, false}) {}
+
+OccupancyMap::~OccupancyMap() = default;
+OccupancyMap::OccupancyMap(OccupancyMap&& other) noexcept = default;
+OccupancyMap& OccupancyMap::operator=(OccupancyMap&& other) noexcept = default;
+
+OccupancyMap::OccupancyMap(const OccupancyMap& other) : grid_(other.grid_), color_(other.color_) {
+  reading(*other.state_, [&] {
+    const detail::MapState& from = *other.state_;
+    state_ = std::make_unique<detail::MapState>(grid_.depth_levels(), from.sensor, from.thresholds, color_);
+    state_->tree = from.tree;
+    state_->bounding_box = from.bounding_box;
+  });
 }
 
-void OccupancyMap::set_log_odds(Vec3d coordinate, float log_odds) {
-  set_key_log_odds(grid_.key(coordinate), log_odds);
+OccupancyMap& OccupancyMap::operator=(const OccupancyMap& other) {
+  if (this != &other) *this = OccupancyMap(other);
+  return *this;
 }
+
+MapConfig OccupancyMap::config() const {
+  return reading(*state_, [&] {
+    return MapConfig{grid_.resolution(), grid_.depth_levels(), state_->sensor, state_->thresholds, color_};
+  });
+}
+
+// --- sensor model and thresholds ------------------------------------------------
+
+SensorModel OccupancyMap::sensor_model() const {
+  return reading(*state_, [&] { return state_->sensor; });
+}
+
+void OccupancyMap::set_sensor_model(const SensorModel& sensor) {
+  sensor.validate();
+  exclusively(*state_, [&] {
+    state_->sensor = sensor;
+    state_->tree.set_range(LogOddsRange::from(sensor));
+  });
+}
+
+Thresholds OccupancyMap::thresholds() const {
+  return reading(*state_, [&] { return state_->thresholds; });
+}
+
+void OccupancyMap::set_thresholds(const Thresholds& thresholds) {
+  thresholds.validate();
+  exclusively(*state_, [&] {
+    state_->thresholds = thresholds;
+    state_->tree.set_thresholds(LogOddsThresholds::from(thresholds));
+  });
+}
+
+// --- single voxels ----------------------------------------------------------------
+
+void OccupancyMap::update_hit(Vec3d coordinate) {
+  const Key k = grid_.key(coordinate);
+  exclusively(*state_, [&] { state_->tree.update(morton::encode(k), state_->sensor.hit_log_odds()); });
+}
+
+void OccupancyMap::update_miss(Vec3d coordinate) {
+  const Key k = grid_.key(coordinate);
+  exclusively(*state_, [&] { state_->tree.update(morton::encode(k), state_->sensor.miss_log_odds()); });
+}
+
+void OccupancyMap::update_log_odds(Vec3d coordinate, float delta) { update_key_log_odds(grid_.key(coordinate), delta); }
+
+void OccupancyMap::set_log_odds(Vec3d coordinate, float log_odds) { set_key_log_odds(grid_.key(coordinate), log_odds); }
 
 void OccupancyMap::update_key_log_odds(Key key, float delta) {
   require_finite(delta, "log-odds delta");
-  tree_.update(morton::encode(key), delta);
+  check_key(grid_, key);
+  exclusively(*state_, [&] { state_->tree.update(morton::encode(key), delta); });
 }
 
 void OccupancyMap::set_key_log_odds(Key key, float log_odds) {
   require_finite(log_odds, "log-odds value");
-  tree_.set(morton::encode(key), log_odds);
+  check_key(grid_, key);
+  exclusively(*state_, [&] { state_->tree.set(morton::encode(key), log_odds); });
 }
+
+// --- colour -------------------------------------------------------------------------
+
+std::optional<Rgb> OccupancyMap::color(Vec3d coordinate, int depth) const { return node(coordinate, depth).color; }
+
+void OccupancyMap::add_color(Vec3d coordinate, Rgb rgb) {
+  require_color(color_);
+  const Key k = grid_.key(coordinate);
+  exclusively(*state_, [&] { state_->tree.add_color(morton::encode(k), rgb); });
+}
+
+void OccupancyMap::set_color(Key key, Rgb rgb) {
+  require_color(color_);
+  check_key(grid_, key);
+  exclusively(*state_, [&] { state_->tree.set_color(morton::encode(key), rgb); });
+}
+
+// --- bounding box -------------------------------------------------------------------
+
+void OccupancyMap::set_bounding_box(const std::optional<Aabb>& box) {
+  if (box) box->validate();
+  exclusively(*state_, [&] { state_->bounding_box = box; });
+}
+
+std::optional<Aabb> OccupancyMap::bounding_box() const {
+  return reading(*state_, [&] { return state_->bounding_box; });
+}
+
+// --- inserting ----------------------------------------------------------------------
 
 InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
                                              const InsertOptions& options) {
-  return integrator_.insert(tree_, grid_, sensor_, origin, points, {}, options, bounding_box_);
+  return insert_point_cloud(origin, points, {}, options);
 }
 
 InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
                                              std::span<const Rgb> colors, const InsertOptions& options) {
-  if (!colors.empty() && !has_color()) {
+  if (!colors.empty() && !color_) {
     throw std::invalid_argument("colours given, but the map was made without colour (MapConfig::color)");
   }
   if (!colors.empty() && colors.size() != points.size()) {
     throw std::invalid_argument("colours given for " + std::to_string(colors.size()) + " points, the scan has " +
                                 std::to_string(points.size()));
   }
-  return integrator_.insert(tree_, grid_, sensor_, origin, points, colors, options, bounding_box_);
-}
-
-void OccupancyMap::set_bounding_box(const std::optional<Aabb>& box) {
-  if (box) box->validate();
-  bounding_box_ = box;
-}
-
-namespace {
-void require_color(const OccupancyMap& map) {
-  if (!map.has_color()) throw std::logic_error("the map was made without colour (MapConfig::color)");
-}
-}  // namespace
-
-std::optional<Rgb> OccupancyMap::color(Vec3d coordinate, int depth) const {
-  return tree_.color(summary(coordinate, depth).node);
-}
-
-std::optional<Rgb> OccupancyMap::key_color(Key key, int depth) const { return tree_.color(node(key, depth).node); }
-
-void OccupancyMap::add_color(Vec3d coordinate, Rgb rgb) {
-  require_color(*this);
-  tree_.add_color(morton::encode(grid_.key(coordinate)), rgb);
-}
-
-void OccupancyMap::set_color(Key key, Rgb rgb) {
-  require_color(*this);
-  (void)node(key, 0);  // checks the key
-  tree_.set_color(morton::encode(key), rgb);
-}
-
-void OccupancyMap::check_depth(int depth) const {
-  if (depth < 0 || depth > grid_.depth_levels()) {
-    throw std::out_of_range("depth " + std::to_string(depth) + " is outside [0, " +
-                            std::to_string(grid_.depth_levels()) + "]");
+  detail::MapState& state = *state_;
+  if (state.gate.held_by_this_thread()) state.gate.close();  // throws: this thread is reading the map
+  std::lock_guard writer(state.writer);
+  // Tracing only reads the tree: readers go on meanwhile. Only the apply
+  // phase keeps them out.
+  const InsertStats stats = state.integrator.trace(state.tree, grid_, origin, points, colors, options,
+                                                   state.bounding_box);
+  {
+    detail::ClosedGate closed(state.gate);
+    state.integrator.apply(state.tree, state.sensor);
   }
+  state.integrator_bytes.store(state.integrator.memory_bytes(), std::memory_order_relaxed);
+  return stats;
 }
 
-NodeSummary OccupancyMap::node(Key key, int depth) const {
-  check_depth(depth);
-  const std::uint32_t limit = grid_.keys_per_axis();
-  if (key.x >= limit || key.y >= limit || key.z >= limit) {
-    throw std::out_of_range("key (" + std::to_string(key.x) + ", " + std::to_string(key.y) + ", " +
-                            std::to_string(key.z) + ") is outside [0, " + std::to_string(limit) + ")");
-  }
-  return tree_.find(morton::encode(key), depth);
+// --- reading ------------------------------------------------------------------------
+
+Node OccupancyMap::node(Key key, int depth) const {
+  check_depth(grid_, depth);
+  check_key(grid_, key);
+  const std::uint64_t code = morton::encode(key);
+  return reading(*state_, [&] {
+    const OccupancyTree& tree = state_->tree;
+    return detail::make_node(tree, grid_, tree.find(code, depth).node, code);
+  });
 }
 
-NodeSummary OccupancyMap::summary(Vec3d coordinate, int depth) const {
-  check_depth(depth);
-  return tree_.find(morton::encode(grid_.key(coordinate)), depth);
+Node OccupancyMap::node(Vec3d coordinate, int depth) const {
+  check_depth(grid_, depth);
+  return node(grid_.key(coordinate), depth);
 }
 
-OccupancyState OccupancyMap::state(Vec3d coordinate, int depth) const {
-  const NodeSummary s = summary(coordinate, depth);
-  const LogOddsThresholds& t = tree_.thresholds();
-  if (t.is_occupied(s.log_odds)) return OccupancyState::occupied;
-  // The value is the maximum: below the free threshold means every voxel is free.
-  if (t.is_free(s.log_odds)) return OccupancyState::free;
-  return OccupancyState::unknown;
-}
+OccupancyState OccupancyMap::state(Vec3d coordinate, int depth) const { return node(coordinate, depth).state; }
 
-float OccupancyMap::log_odds(Vec3d coordinate, int depth) const { return summary(coordinate, depth).log_odds; }
+float OccupancyMap::log_odds(Vec3d coordinate, int depth) const { return node(coordinate, depth).log_odds; }
 
-double OccupancyMap::occupancy(Vec3d coordinate, int depth) const {
-  return probability(log_odds(coordinate, depth));
-}
+double OccupancyMap::occupancy(Vec3d coordinate, int depth) const { return probability(log_odds(coordinate, depth)); }
 
 bool OccupancyMap::contains_occupied(Vec3d coordinate, int depth) const {
-  return tree_.thresholds().is_occupied(summary(coordinate, depth).log_odds);
+  return node(coordinate, depth).contains_occupied();
 }
 
-bool OccupancyMap::contains_free(Vec3d coordinate, int depth) const {
-  return summary(coordinate, depth).contains_free;
-}
+bool OccupancyMap::contains_free(Vec3d coordinate, int depth) const { return node(coordinate, depth).contains_free; }
 
 bool OccupancyMap::contains_unknown(Vec3d coordinate, int depth) const {
-  return summary(coordinate, depth).contains_unknown;
+  return node(coordinate, depth).contains_unknown;
+}
+
+void OccupancyMap::for_each_leaf(FunctionRef<void(const Node&)> visit) const {
+  reading(*state_, [&] {
+    const OccupancyTree& tree = state_->tree;
+    tree.for_each_leaf([&](NodeRef ref, std::uint64_t code) { visit(detail::make_node(tree, grid_, ref, code)); });
+  });
+}
+
+// --- pruning ------------------------------------------------------------------------
+
+void OccupancyMap::set_auto_prune(bool on) {
+  exclusively(*state_, [&] { state_->tree.set_auto_prune(on); });
+}
+
+bool OccupancyMap::auto_prune() const {
+  return reading(*state_, [&] { return state_->tree.auto_prune(); });
+}
+
+void OccupancyMap::prune() {
+  exclusively(*state_, [&] { state_->tree.prune(); });
+}
+
+void OccupancyMap::clear() {
+  exclusively(*state_, [&] { state_->tree.clear(); });
+}
+
+// --- statistics ---------------------------------------------------------------------
+
+NodeCounts OccupancyMap::node_counts() const {
+  return reading(*state_, [&] { return state_->tree.count_nodes(); });
 }
 
 std::size_t OccupancyMap::memory_bytes() const {
-  return sizeof(*this) - sizeof(tree_) - sizeof(integrator_) + tree_.memory_bytes() +
-         integrator_.memory_bytes();
+  const std::size_t tree_bytes = reading(*state_, [&] { return state_->tree.memory_bytes(); });
+  return sizeof(*this) + sizeof(detail::MapState) - sizeof(state_->tree) - sizeof(state_->integrator) + tree_bytes +
+         state_->integrator_bytes.load(std::memory_order_relaxed);
 }
 
 }  // namespace umbra

@@ -1,4 +1,4 @@
-#include "umbra/tree/occupancy_tree.hpp"
+#include "tree/occupancy_tree.hpp"
 
 #include <algorithm>
 #include <stdexcept>

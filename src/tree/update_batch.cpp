@@ -1,4 +1,4 @@
-#include "umbra/tree/update_batch.hpp"
+#include "tree/update_batch.hpp"
 
 #include <algorithm>
 

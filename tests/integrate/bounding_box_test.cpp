@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/map_internals.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {
@@ -65,7 +66,7 @@ TEST(BoundingBox, OnlyVoxelsTheClippedRayCrossesInsideTheBoxChange) {
         for (std::uint32_t y = 0; y < size; ++y) {
           for (std::uint32_t x = 0; x < size; ++x) {
             const Key key{x, y, z};
-            const OccupancyState state = map.tree().thresholds().classify(map.node(key).log_odds);
+            const OccupancyState state = test::log_odds_thresholds(map).classify(map.node(key).log_odds);
             const bool in_box = x >= box_low.x && x <= box_high.x && y >= box_low.y && y <= box_high.y &&
                                 z >= box_low.z && z <= box_high.z;
             if (!in_box) {

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "support/test_support.hpp"
+#include "support/map_internals.hpp"
 #include "umbra/io/scan_source.hpp"
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/sim/lidar.hpp"
@@ -20,7 +21,7 @@ namespace {
 
 std::vector<std::pair<std::uint64_t, std::uint32_t>> leaves(const OccupancyMap& map) {
   std::vector<std::pair<std::uint64_t, std::uint32_t>> out;
-  map.for_each_leaf([&](const LeafView& l) {
+  map.for_each_leaf([&](const Node& l) {
     out.emplace_back(morton::encode(l.key) * 32 + static_cast<std::uint64_t>(l.depth),
                      std::bit_cast<std::uint32_t>(l.log_odds));
   });
@@ -94,7 +95,7 @@ TEST(FastIntegrator, ClearsExactlyTheCoarseNodesARayCrosses) {
               (end_key.x >> depth) == x && (end_key.y >> depth) == y && (end_key.z >> depth) == z;
           const bool next_to_end_node = near(end_key.x >> depth, x) && near(end_key.y >> depth, y) &&
                                         near(end_key.z >> depth, z);
-          const NodeSummary s = map.node(first, depth);
+          const Node s = map.node(first, depth);
           if (is_end_node) {
             // Only the end voxel's hit; the rest of the end node stays unknown.
             EXPECT_TRUE(s.contains_unknown);
@@ -108,7 +109,7 @@ TEST(FastIntegrator, ClearsExactlyTheCoarseNodesARayCrosses) {
             continue;
           }
           if (inside > 1e-6) {
-            ASSERT_TRUE(!s.has_children && map.tree().thresholds().is_free(s.log_odds))
+            ASSERT_TRUE(!s.has_children && test::log_odds_thresholds(map).is_free(s.log_odds))
                 << "trial " << trial << ": node " << x << "," << y << "," << z << " crossed for " << inside
                 << " m but not cleared whole";
           } else if (!part) {
@@ -151,7 +152,7 @@ struct Comparison {
 
 Comparison compare(const OccupancyMap& simple, const OccupancyMap& fast) {
   Comparison c;
-  simple.for_each_leaf([&](const LeafView& l) {
+  simple.for_each_leaf([&](const Node& l) {
     if (l.state != OccupancyState::occupied) return;
     // A pruned node holds equal voxels: compare each of them.
     const std::uint32_t n = 1u << l.depth;
@@ -160,14 +161,14 @@ Comparison compare(const OccupancyMap& simple, const OccupancyMap& fast) {
         for (std::uint32_t x = 0; x < n; ++x) {
           ++c.simple_occupied;
           const Key voxel{l.key.x + x, l.key.y + y, l.key.z + z};
-          const OccupancyState other = fast.tree().thresholds().classify(fast.node(voxel).log_odds);
+          const OccupancyState other = test::log_odds_thresholds(fast).classify(fast.node(voxel).log_odds);
           c.both += other == OccupancyState::occupied;
           c.occupied_made_free += other == OccupancyState::free;
         }
       }
     }
   });
-  fast.for_each_leaf([&](const LeafView& l) {
+  fast.for_each_leaf([&](const Node& l) {
     if (l.state == OccupancyState::occupied) c.fast_occupied += std::size_t{1} << (3 * l.depth);
   });
   return c;
@@ -220,7 +221,7 @@ void check_fast_integrator(const std::string& name, const std::vector<Scan>& sca
               resolution, 100.0 * baseline.recall(), 100.0 * baseline.precision());
   for (const int fine_steps : {2, 0}) {
     const OccupancyMap fast = build(scans, resolution, max_range, IntegratorKind::fast, fine_steps);
-    ASSERT_EQ(fast.tree().check_invariants(), "");
+    ASSERT_EQ(test::check_invariants(fast), "");
     const Comparison to_simple = compare(simple, fast);
     const Comparison to_discrete = compare(discrete, fast);
     const std::string label = name + " n=" + std::to_string(fine_steps);

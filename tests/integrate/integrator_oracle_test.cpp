@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "support/dense_grid.hpp"
+#include "support/map_internals.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {
@@ -87,7 +88,7 @@ TEST_P(IntegratorOracle, EveryVoxelAndEveryNodeMatchesTheDenseGrid) {
     const InsertStats stats = map.insert_point_cloud(origin, points, options);
     oracle.insert_scan(origin, points, dense_options, sensor.hit_log_odds(), sensor.miss_log_odds());
     ASSERT_GT(stats.non_finite, 0u);
-    ASSERT_EQ(map.tree().check_invariants(), "") << "after scan " << scan;
+    ASSERT_EQ(test::check_invariants(map), "") << "after scan " << scan;
 
     // A few single-voxel updates in between, also through both models.
     for (int i = 0; i < 20; ++i) {
@@ -98,7 +99,7 @@ TEST_P(IntegratorOracle, EveryVoxelAndEveryNodeMatchesTheDenseGrid) {
       map.update_log_odds(key, delta);
       oracle.add(key, delta);
     }
-    ASSERT_EQ(map.tree().check_invariants(), "") << "after single updates " << scan;
+    ASSERT_EQ(test::check_invariants(map), "") << "after single updates " << scan;
   }
 
   // Every finest voxel, bit for bit.
@@ -119,14 +120,14 @@ TEST_P(IntegratorOracle, EveryVoxelAndEveryNodeMatchesTheDenseGrid) {
   EXPECT_GT(known * 20, voxels) << "the random scans should observe a good part of the map";
 
   // Every coarser node: maximum and indicators.
-  const LogOddsThresholds& t = map.tree().thresholds();
+  const LogOddsThresholds& t = test::log_odds_thresholds(map);
   for (int depth = 1; depth <= c.depth_levels; ++depth) {
     const std::uint32_t nodes = oracle.size() >> depth;
     for (std::uint32_t z = 0; z < nodes; ++z) {
       for (std::uint32_t y = 0; y < nodes; ++y) {
         for (std::uint32_t x = 0; x < nodes; ++x) {
           const Key key{x << depth, y << depth, z << depth};
-          const NodeSummary s = map.node(key, depth);
+          const Node s = map.node(key, depth);
           ASSERT_EQ(s.log_odds, oracle.max_in_node(key, depth)) << "depth " << depth;
           ASSERT_EQ(s.contains_free, oracle.any_in_node(key, depth, t.free, t.occupied, true)) << "depth " << depth;
           ASSERT_EQ(s.contains_unknown, oracle.any_in_node(key, depth, t.free, t.occupied, false))
@@ -179,7 +180,7 @@ TEST_P(ColorOracle, EveryVoxelAndNodeColourMatchesTheDenseGrid) {
     for (std::size_t i = 0; i < points.size(); ++i) colors.push_back(palette[rng() % 4]);
     map.insert_point_cloud(origin, points, colors, options);
     oracle.insert_scan(origin, points, dense_options, sensor.hit_log_odds(), sensor.miss_log_odds(), colors);
-    ASSERT_EQ(map.tree().check_invariants(), "") << "after scan " << scan;
+    ASSERT_EQ(test::check_invariants(map), "") << "after scan " << scan;
   }
   std::size_t coloured = 0;
   for (int depth = 0; depth <= c.depth_levels; ++depth) {

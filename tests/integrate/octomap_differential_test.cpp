@@ -12,6 +12,7 @@
 #include <octomap/OcTree.h>
 
 #include "support/test_support.hpp"
+#include "support/map_internals.hpp"
 #include "umbra/io/scan_source.hpp"
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/sim/lidar.hpp"
@@ -46,8 +47,8 @@ Agreement compare(const octomap::OcTree& octree, const OccupancyMap& map) {
     for (std::uint32_t z = 0; z < n; ++z) {
       for (std::uint32_t y = 0; y < n; ++y) {
         for (std::uint32_t x = 0; x < n; ++x) {
-          const float mine = map.node({base.x + x, base.y + y, base.z + z}, 0).log_odds;
-          const OccupancyState state = map.tree().thresholds().classify(mine);
+          const float mine = map.node(Key{base.x + x, base.y + y, base.z + z}, 0).log_odds;
+          const OccupancyState state = test::log_odds_thresholds(map).classify(mine);
           ++a.octomap_known;
           a.both_known += state != OccupancyState::unknown;
           a.same_class += (occupied && state == OccupancyState::occupied) || (!occupied && state == OccupancyState::free);
@@ -56,7 +57,7 @@ Agreement compare(const octomap::OcTree& octree, const OccupancyMap& map) {
       }
     }
   }
-  map.for_each_leaf([&](const LeafView& leaf) {
+  map.for_each_leaf([&](const Node& leaf) {
     if (leaf.state != OccupancyState::unknown) a.umbra_known += std::uint64_t{1} << (3 * leaf.depth);
   });
   return a;
@@ -91,7 +92,7 @@ void run_comparison(const Dataset& data, double resolution, double max_range) {
     testing::Test::RecordProperty(label + " agreement", std::to_string(a.fraction()));
     EXPECT_GT(a.octomap_known, 1000u) << label;
     EXPECT_GE(a.fraction(), 0.999) << label;
-    ASSERT_EQ(map.tree().check_invariants(), "");
+    ASSERT_EQ(test::check_invariants(map), "");
   }
 }
 

@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "support/dense_grid.hpp"
-#include "umbra/integrate/ray_walker.hpp"
+#include "integrate/ray_walker.hpp"
 
 namespace umbra {
 namespace {

@@ -4,22 +4,23 @@
 
 #include <gtest/gtest.h>
 
+#include "support/map_internals.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {
 namespace {
 
-struct Node {
+struct Leaf {
   std::uint64_t code;
   int depth;
   std::uint32_t bits;
   std::optional<Rgb> color;
-  friend bool operator==(const Node&, const Node&) = default;
+  friend bool operator==(const Leaf&, const Leaf&) = default;
 };
 
-std::vector<Node> contents(const OccupancyMap& map) {
-  std::vector<Node> out;
-  map.for_each_leaf([&](const LeafView& l) {
+std::vector<Leaf> contents(const OccupancyMap& map) {
+  std::vector<Leaf> out;
+  map.for_each_leaf([&](const Node& l) {
     out.push_back({morton::encode(l.key), l.depth, std::bit_cast<std::uint32_t>(l.log_odds), l.color});
   });
   return out;
@@ -32,7 +33,7 @@ TEST(Threads, EveryThreadCountBuildsTheSameMap) {
       const bool with_box = variant == 1;
       const bool with_color = variant == 2;
       SCOPED_TRACE(std::string(to_string(kind)) + (with_box ? " with box" : "") + (with_color ? " with colour" : ""));
-      std::vector<std::vector<Node>> results;
+      std::vector<std::vector<Leaf>> results;
       for (const unsigned threads : {1u, 2u, 3u, 8u}) {
         MapConfig config{0.05, 12, SensorModel{}, Thresholds{}, with_color};
         OccupancyMap map(config);
@@ -60,7 +61,7 @@ TEST(Threads, EveryThreadCountBuildsTheSameMap) {
             map.insert_point_cloud({0.3f * scan, 0.1f, 0.0f}, points, options);
           }
         }
-        ASSERT_EQ(map.tree().check_invariants(), "");
+        ASSERT_EQ(test::check_invariants(map), "");
         results.push_back(contents(map));
       }
       EXPECT_GT(results[0].size(), 1000u);

@@ -8,6 +8,7 @@
 // precise way while both checksums are valid. Cost: a few seconds with
 // asserts on; the largest map has ~260k voxels, the bit-flip and truncation
 // sweeps load a ~300-byte file a few thousand times.
+#include "support/map_internals.hpp"
 #include "umbra/io/map_file.hpp"
 
 #include <gtest/gtest.h>
@@ -154,7 +155,7 @@ struct Leaf {
 
 std::vector<Leaf> leaves(const OccupancyMap& map) {
   std::vector<Leaf> out;
-  map.for_each_leaf([&](const LeafView& l) { out.push_back({l.key, l.depth, std::bit_cast<std::uint32_t>(l.log_odds)}); });
+  map.for_each_leaf([&](const Node& l) { out.push_back({l.key, l.depth, std::bit_cast<std::uint32_t>(l.log_odds)}); });
   return out;
 }
 
@@ -204,9 +205,9 @@ void expect_same_map(const OccupancyMap& saved, const OccupancyMap& loaded) {
   EXPECT_EQ(a.inner_leaf, b.inner_leaf);
   EXPECT_EQ(a.leaf, b.leaf);
   EXPECT_TRUE(leaves(saved) == leaves(loaded)) << "childless nodes differ";
-  EXPECT_TRUE(shape(saved.tree()) == shape(loaded.tree())) << "tree shape, inner values or indicators differ";
-  EXPECT_TRUE(colours(saved.tree()) == colours(loaded.tree())) << "colours differ";
-  EXPECT_EQ(loaded.tree().check_invariants(), "");
+  EXPECT_TRUE(shape(test::tree_of(saved)) == shape(test::tree_of(loaded))) << "tree shape, inner values or indicators differ";
+  EXPECT_TRUE(colours(test::tree_of(saved)) == colours(test::tree_of(loaded))) << "colours differ";
+  EXPECT_EQ(test::check_invariants(loaded), "");
 }
 
 std::size_t count_all_same(const OccupancyTree& tree) {
@@ -323,10 +324,10 @@ TEST(MapFile, RoundTripIsExactAcrossDepthsAndConfigurations) {
     for (const bool auto_prune : {true, false}) {
       SCOPED_TRACE("depth levels " + std::to_string(depth_levels) + (auto_prune ? ", pruned" : ", unpruned"));
       const OccupancyMap saved = random_map(unusual_config(depth_levels), auto_prune, seed++);
-      ASSERT_EQ(saved.tree().check_invariants(), "");
+      ASSERT_EQ(test::check_invariants(saved), "");
       // The test means something only if the maps have structure to lose.
       if (!auto_prune) {
-        EXPECT_GT(count_all_same(saved.tree()), 0u) << "no unpruned equal siblings to preserve";
+        EXPECT_GT(count_all_same(test::tree_of(saved)), 0u) << "no unpruned equal siblings to preserve";
       }
       if (depth_levels >= 2) {
         EXPECT_GT(saved.node_counts().inner, 1u);
@@ -385,7 +386,7 @@ TEST(MapFile, LoadedMapKeepsUpdatingAndPruning) {
     const Key k = morton::decode(code);
     map.set_log_odds(Key{base.x + k.x, base.y + k.y, base.z + k.z}, 2.0f);
   }
-  EXPECT_EQ(map.tree().check_invariants(), "");
+  EXPECT_EQ(test::check_invariants(map), "");
   EXPECT_GT(map.node_counts().total(), before);  // the path down to the new inner leaf
   EXPECT_EQ(map.node(base, 0).depth, 1);         // the eight voxels are one inner leaf
 }
@@ -422,7 +423,7 @@ TEST(MapFile, WorkedExampleFromTheSpecLoads) {
   const fs::path path = test::scratch_dir() / "example.umb";
   write_bytes(path, spec_dump);
   const OccupancyMap map = load_map(path);
-  EXPECT_EQ(map.tree().check_invariants(), "");
+  EXPECT_EQ(test::check_invariants(map), "");
   const std::vector<Leaf> got = leaves(map);
   ASSERT_EQ(got.size(), 15u);
   for (std::uint32_t i = 0; i < 8; ++i) {
@@ -724,8 +725,8 @@ TEST(MapFile, BodyErrorsAreReportedEvenWithValidChecksums) {
     write_bytes(dir / "o.umb", make_file(leaf_map(same, 1)));
     const OccupancyMap map = load_map(dir / "o.umb");
     EXPECT_FALSE(map.auto_prune());
-    EXPECT_TRUE(map.tree().all_children_same(map.tree().root()));
-    EXPECT_EQ(map.tree().check_invariants(), "");
+    EXPECT_TRUE(test::tree_of(map).all_children_same(test::tree_of(map).root()));
+    EXPECT_EQ(test::check_invariants(map), "");
   }
 }
 
@@ -882,10 +883,13 @@ TEST(MapFile, SaveRefusesValuesOutsideTheClampingRange) {
   EXPECT_EQ(load_map(dir / "narrowed.umb").node(Key{100, 100, 100}).log_odds, map.sensor_model().clamp_max_log_odds());
   fs::remove(dir / "narrowed.umb");
 
-  OccupancyTree& tree = map.tree();
-  NodeRef node = tree.root();
-  while (tree.has_children(node)) node = tree.child(node, morton::slot(morton::encode({100, 100, 100}), node.depth - 1));
-  tree.set_childless_value(node, 3.0f);
+  detail::MapAccess::build(map, [](detail::TreeBuilder& tree) {
+    NodeRef node = tree.root();
+    while (tree.has_children(node)) {
+      node = tree.child(node, morton::slot(morton::encode({100, 100, 100}), node.depth - 1));
+    }
+    tree.set_childless_value(node, 3.0f);
+  });
   try {
     save_map(map, dir / "map.umb");
     ADD_FAILURE() << "saved a map its own loader would reject";
@@ -965,7 +969,7 @@ TEST(MapFile, ColouredMapsRoundTripExactly) {
       EXPECT_TRUE(read_map_info(path).config.color);
       expect_same_map(map, loaded);
       if (depth_levels == 8) {
-        EXPECT_GT(colours(map.tree()).size(), 100u);
+        EXPECT_GT(colours(test::tree_of(map)).size(), 100u);
       }
     }
   }

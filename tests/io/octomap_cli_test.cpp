@@ -10,6 +10,7 @@
 #include <string>
 
 #include "support/test_support.hpp"
+#include "support/map_internals.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/map_formats.hpp"
 #include "umbra/map/map_statistics.hpp"
@@ -66,8 +67,8 @@ TEST(OctoMapCli, ConvertChainKeepsTheMap) {
   const MapStatistics after = compute_statistics(chained);
   EXPECT_EQ(after.occupied_voxels, before.occupied_voxels);
   EXPECT_EQ(after.free_voxels, before.free_voxels);
-  map.for_each_leaf([&](const LeafView& leaf) {
-    ASSERT_EQ(chained.tree().thresholds().classify(chained.node(leaf.key, leaf.depth).log_odds), leaf.state);
+  map.for_each_leaf([&](const Node& leaf) {
+    ASSERT_EQ(test::log_odds_thresholds(chained).classify(chained.node(leaf.key, leaf.depth).log_odds), leaf.state);
   });
 
   // Through .ot alone every value and colour is kept.
@@ -75,8 +76,8 @@ TEST(OctoMapCli, ConvertChainKeepsTheMap) {
   ASSERT_EQ(run(cli() + " convert " + quoted(dir / "e.ot") + " " + quoted(dir / "f.umb")).exit_code, 0);
   const OccupancyMap exact = load_map(dir / "f.umb");
   ASSERT_TRUE(exact.has_color());
-  map.for_each_leaf([&](const LeafView& leaf) {
-    const NodeSummary node = exact.node(leaf.key, leaf.depth);
+  map.for_each_leaf([&](const Node& leaf) {
+    const Node node = exact.node(leaf.key, leaf.depth);
     ASSERT_EQ(node.log_odds, leaf.log_odds);
     ASSERT_EQ(node.depth, leaf.depth);
     ASSERT_EQ(exact.color(leaf.key, leaf.depth), leaf.color);

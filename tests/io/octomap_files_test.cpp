@@ -11,6 +11,7 @@
 // hostile headers and trees, and the depth rule. Cost: about 3 s in the
 // Release test build (30 s under ASan), mostly liboctomap inserting the
 // simulated scans and the 1.5 MB streaming test.
+#include "support/map_internals.hpp"
 #include "umbra/io/octomap_files.hpp"
 
 #include <gtest/gtest.h>
@@ -84,7 +85,7 @@ std::ostream& operator<<(std::ostream& out, const Leaf& leaf) {
 /// umbra's known childless nodes (value != 0): OctoMap's leaves (white is "no colour" there).
 std::vector<Leaf> umbra_leaves(const OccupancyMap& map) {
   std::vector<Leaf> leaves;
-  map.for_each_leaf([&](const LeafView& leaf) {
+  map.for_each_leaf([&](const Node& leaf) {
     if (leaf.log_odds == 0.0f) return;
     const bool white = leaf.color == Rgb{255, 255, 255};
     leaves.push_back({morton::encode(leaf.key), leaf.depth, leaf.log_odds, white ? std::nullopt : leaf.color});
@@ -96,7 +97,7 @@ std::vector<Leaf> umbra_leaves(const OccupancyMap& map) {
 /// Every childless node of an umbra map, unknown ones too (for exact round trips).
 std::vector<Leaf> all_umbra_leaves(const OccupancyMap& map) {
   std::vector<Leaf> leaves;
-  map.for_each_leaf([&](const LeafView& leaf) {
+  map.for_each_leaf([&](const Node& leaf) {
     leaves.push_back({morton::encode(leaf.key), leaf.depth, leaf.log_odds, leaf.color});
   });
   return leaves;
@@ -277,8 +278,8 @@ void check_bt_read_by_octomap(const OccupancyMap& map) {
   // Every known umbra leaf is known to liboctomap with the same class (merged nodes may be coarser) ...
   std::uint64_t occupied = 0;
   std::uint64_t free = 0;
-  const auto& thresholds = map.tree().thresholds();
-  map.for_each_leaf([&](const LeafView& leaf) {
+  const auto& thresholds = test::log_odds_thresholds(map);
+  map.for_each_leaf([&](const Node& leaf) {
     if (leaf.log_odds == 0.0f) return;
     const octomap::OcTreeNode* node = tree->search(octomap::OcTreeKey(leaf.key.x, leaf.key.y, leaf.key.z));
     ASSERT_NE(node, nullptr) << "leaf at depth " << leaf.depth << " missing";
@@ -340,8 +341,7 @@ TEST(OctoMapWrite, EdgeCasesOfTheRoot) {
   // The whole map one value: the root is childless in umbra.
   for (const float value : {map.sensor_model().clamp_min_log_odds(), map.sensor_model().clamp_max_log_odds()}) {
     map.clear();
-    map.tree().set_childless_value(map.tree().root(), value);
-    map.tree().refresh_all();
+    detail::MapAccess::build(map, [&](detail::TreeBuilder& tree) { tree.set_childless_value(tree.root(), value); });
     check_ot_read_by_octomap(map);
     check_bt_read_by_octomap(map);
     const OccupancyMap back = decode_octomap(encode_octomap(map, OctoMapFormat::bt));
@@ -352,11 +352,10 @@ TEST(OctoMapWrite, EdgeCasesOfTheRoot) {
   for (const float value : {map.sensor_model().clamp_min_log_odds(), map.sensor_model().clamp_max_log_odds()}) {
     OccupancyMap split(0.2);
     split.set_auto_prune(false);
-    split.tree().subdivide(split.tree().root());
-    for (unsigned slot = 0; slot < 8; ++slot) {
-      split.tree().set_childless_value(split.tree().child(split.tree().root(), slot), value);
-    }
-    split.tree().refresh_all();
+    detail::MapAccess::build(split, [&](detail::TreeBuilder& tree) {
+      tree.subdivide(tree.root());
+      for (unsigned slot = 0; slot < 8; ++slot) tree.set_childless_value(tree.child(tree.root(), slot), value);
+    });
     check_ot_read_by_octomap(split);
     check_bt_read_by_octomap(split);
     EXPECT_TRUE(contains(to_text(encode_octomap(split, OctoMapFormat::bt)), "size 9\n"));
@@ -440,13 +439,13 @@ TEST(OctoMapRead, LiboctomapOcTreeFromSimulatedScans) {
   const OccupancyMap from_ot = decode_octomap(ot, "office.ot");
   EXPECT_EQ(from_ot.resolution(), 0.1);
   EXPECT_FALSE(from_ot.has_color());
-  EXPECT_EQ(from_ot.tree().check_invariants(), "");
+  EXPECT_EQ(test::check_invariants(from_ot), "");
   expect_same_leaves(octomap_leaves(tree), umbra_leaves(from_ot));
   EXPECT_EQ(encode_octomap(from_ot, OctoMapFormat::ot), ot);
   // .bt: liboctomap converts to maximum likelihood; umbra reads what liboctomap reads back.
   const Bytes bt = octomap_bt_bytes(tree);
   const OccupancyMap from_bt = decode_octomap(bt, "office.bt");
-  EXPECT_EQ(from_bt.tree().check_invariants(), "");
+  EXPECT_EQ(test::check_invariants(from_bt), "");
   expect_same_leaves(octomap_leaves(*octomap_read_bt(bt)), umbra_leaves(from_bt));
   EXPECT_EQ(encode_octomap(from_bt, OctoMapFormat::bt), bt);
   // Every voxel's state agrees with liboctomap's own tree.
@@ -454,7 +453,7 @@ TEST(OctoMapRead, LiboctomapOcTreeFromSimulatedScans) {
     const Key key = morton::decode(leaf.code);
     const octomap::OcTreeNode* node = tree.search(octomap::OcTreeKey(key.x, key.y, key.z));
     ASSERT_NE(node, nullptr);
-    EXPECT_EQ(tree.isNodeOccupied(node), from_ot.tree().thresholds().is_occupied(leaf.value));
+    EXPECT_EQ(tree.isNodeOccupied(node), test::log_odds_thresholds(from_ot).is_occupied(leaf.value));
   }
 }
 
@@ -473,7 +472,7 @@ TEST(OctoMapRead, LiboctomapColorOcTree) {
   ASSERT_TRUE(contains(to_text(Bytes(ot.begin(), ot.begin() + 120)), "id ColorOcTree"));
   const OccupancyMap map = decode_octomap(ot, "office-color.ot");
   ASSERT_TRUE(map.has_color());
-  EXPECT_EQ(map.tree().check_invariants(), "");
+  EXPECT_EQ(test::check_invariants(map), "");
   const std::vector<Leaf> leaves = umbra_leaves(map);
   EXPECT_GT(std::count_if(leaves.begin(), leaves.end(), [](const Leaf& l) { return l.color.has_value(); }), 1000);
   expect_same_leaves(octomap_leaves(tree), leaves);
@@ -507,7 +506,7 @@ TEST(OctoMapRead, UnprunedTreesComeBackUnchangedWithAutoPruningOff) {
   const Bytes ot = octomap_ot_bytes(tree);
   const OccupancyMap map = decode_octomap(ot, "unpruned.ot");
   EXPECT_FALSE(map.auto_prune());
-  EXPECT_EQ(map.tree().check_invariants(), "");
+  EXPECT_EQ(test::check_invariants(map), "");
   expect_same_leaves(octomap_leaves(tree), umbra_leaves(map));
   EXPECT_EQ(encode_octomap(map, OctoMapFormat::ot), ot);
   // A pruned file keeps auto-pruning on.
@@ -592,13 +591,13 @@ TEST(OctoMapGeb079, ReadCountsAndByteIdenticalRewrite) {
   EXPECT_EQ(map.resolution(), 0.08);
   EXPECT_EQ(map.depth_levels(), 16);
   EXPECT_TRUE(map.auto_prune());
-  EXPECT_EQ(map.tree().check_invariants(), "");
+  EXPECT_EQ(test::check_invariants(map), "");
   // Leaves counted as OctoMap counts them (a merged node is one leaf), volumes in full.
   std::uint64_t occupied = 0;
   std::uint64_t free = 0;
   double occupied_volume = 0.0;
   double free_volume = 0.0;
-  map.for_each_leaf([&](const LeafView& leaf) {
+  map.for_each_leaf([&](const Node& leaf) {
     const double edge = map.grid().node_size(leaf.depth);
     if (leaf.state == OccupancyState::occupied) {
       ++occupied;
@@ -642,7 +641,7 @@ TEST(OctoMapGeb079, SameLeavesAsLiboctomapAlsoThroughOt) {
 
 void expect_exact_round_trip(const OccupancyMap& map) {
   const OccupancyMap back = decode_octomap(encode_octomap(map, OctoMapFormat::ot));
-  EXPECT_EQ(back.tree().check_invariants(), "");
+  EXPECT_EQ(test::check_invariants(back), "");
   EXPECT_EQ(back.resolution(), map.resolution());
   EXPECT_EQ(back.has_color(), map.has_color());
   const std::vector<Leaf> expected = all_umbra_leaves(map);
@@ -686,7 +685,7 @@ TEST(OctoMapRoundTrip, ValuesBeyondTheDefaultClampingWidenTheLoadedRange) {
   EXPECT_LT(back.sensor_model().clamp_min, SensorModel{}.clamp_min);
   EXPECT_LE(back.sensor_model().clamp_max_log_odds() - wide.clamp_max_log_odds(), 1e-5f);
   EXPECT_EQ(back.sensor_model().p_hit, SensorModel{}.p_hit);
-  EXPECT_EQ(back.tree().check_invariants(), "");
+  EXPECT_EQ(test::check_invariants(back), "");
   // The sensor model passed in is the one the map gets (and .bt leaves take its clamping values).
   const OccupancyMap with_model = decode_octomap(encode_octomap(map, OctoMapFormat::ot), "x.ot", wide);
   EXPECT_EQ(with_model.sensor_model(), wide);
@@ -698,10 +697,10 @@ TEST(OctoMapRoundTrip, BtKeepsEveryVoxelsClass) {
   const OccupancyMap map = random_map(5, true);
   const OccupancyMap back = decode_octomap(encode_octomap(map, OctoMapFormat::bt));
   EXPECT_FALSE(back.has_color());
-  EXPECT_EQ(back.tree().check_invariants(), "");
-  map.for_each_leaf([&](const LeafView& leaf) {
-    const NodeSummary node = back.node(leaf.key, leaf.depth);
-    EXPECT_EQ(back.tree().thresholds().classify(node.log_odds), leaf.state);
+  EXPECT_EQ(test::check_invariants(back), "");
+  map.for_each_leaf([&](const Node& leaf) {
+    const Node node = back.node(leaf.key, leaf.depth);
+    EXPECT_EQ(test::log_odds_thresholds(back).classify(node.log_odds), leaf.state);
     if (leaf.state == OccupancyState::unknown) return;
     EXPECT_EQ(node.log_odds, leaf.state == OccupancyState::occupied ? back.sensor_model().clamp_max_log_odds()
                                                                    : back.sensor_model().clamp_min_log_odds());
@@ -807,7 +806,7 @@ TEST(OctoMapMalformed, EveryBitFlipIsReadOrRefusedCleanly) {
         flipped[i] = static_cast<std::uint8_t>(flipped[i] ^ (1u << bit));
         try {
           const OccupancyMap map = decode_octomap(flipped, name);
-          ASSERT_EQ(map.tree().check_invariants(), "") << "byte " << i << " bit " << bit;
+          ASSERT_EQ(test::check_invariants(map), "") << "byte " << i << " bit " << bit;
         } catch (const FormatError&) {
           ++refused;
         }

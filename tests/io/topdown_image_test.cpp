@@ -71,7 +71,7 @@ std::string text(Rgb c) {
 TEST(TopdownImage, HandMadeMapHasThePrunedNodesItIsMeantToHave) {
   const OccupancyMap map = hand_made_map();
   int depth_one_leaves = 0;
-  map.for_each_leaf([&](const LeafView& leaf) {
+  map.for_each_leaf([&](const Node& leaf) {
     if (leaf.depth == 1 && leaf.state != OccupancyState::unknown) ++depth_one_leaves;
   });
   EXPECT_EQ(depth_one_leaves, 2);  // A and F: the renderer must handle inner leaves

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/map_internals.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {
@@ -162,7 +163,7 @@ TEST(OccupancyMap, LeavesCoverEveryKnownVoxelOnce) {
   std::size_t occupied = 0;
   std::size_t free = 0;
   std::uint64_t previous_end = 0;
-  map.for_each_leaf([&](const LeafView& leaf) {
+  map.for_each_leaf([&](const Node& leaf) {
     const std::uint64_t first = morton::encode(leaf.key);
     EXPECT_GE(first, previous_end) << "Morton order, no overlap";
     previous_end = first + (std::uint64_t{1} << (3 * leaf.depth));
@@ -173,7 +174,7 @@ TEST(OccupancyMap, LeavesCoverEveryKnownVoxelOnce) {
   EXPECT_EQ(previous_end, std::uint64_t{1} << 30) << "the leaves tile the whole map";
   EXPECT_GE(occupied, 150u);
   EXPECT_GT(free, 1000u);
-  EXPECT_GT(map.memory_bytes(), map.tree().memory_bytes());
+  EXPECT_GT(map.memory_bytes(), test::tree_of(map).memory_bytes());
 }
 
 }  // namespace
@@ -191,7 +192,7 @@ TEST(OccupancyMap, NarrowingTheClampingRangeClampsStoredValues) {
   EXPECT_EQ(map.log_odds({0.05, 0.05, 0.05}), narrow.clamp_max_log_odds());
   EXPECT_EQ(map.log_odds({0.15, 0.05, 0.05}), narrow.clamp_min_log_odds());
   EXPECT_EQ(map.log_odds({0.05, 0.05, 0.05}, 16), narrow.clamp_max_log_odds()) << "inner maxima follow";
-  EXPECT_EQ(map.tree().check_invariants(), "");
+  EXPECT_EQ(test::check_invariants(map), "");
   EXPECT_THROW(map.set_sensor_model(SensorModel{0.7, 0.4, 0.6, 0.8}), std::invalid_argument);
 }
 

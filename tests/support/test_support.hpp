@@ -72,7 +72,7 @@ class AddressSpaceCap {
 /// Declares `variable` as the path of the shared data file `relative`, or
 /// skips the test with a message saying what is missing.
 #define UMBRA_REQUIRE_SHARED_DATA(variable, relative)                                          \
-  const auto variable##_found = ::umbra::test::shared_data(relative);                          \
+  const auto variable##_found = test::shared_data(relative);                          \
   if (!variable##_found) {                                                                     \
     GTEST_SKIP() << "shared data file " << (relative)                                         \
                  << " not found (looked in " UMBRA_SHARED_DATA_DIR "); skipping this test";    \

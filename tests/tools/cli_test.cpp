@@ -76,8 +76,8 @@ TEST(Cli, BuildFromXyzMatchesTheLibrary) {
   const OccupancyMap built = load_map(dir / "room.umb");
   std::vector<std::pair<std::uint64_t, float>> a;
   std::vector<std::pair<std::uint64_t, float>> b;
-  expected.for_each_leaf([&](const LeafView& l) { a.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds); });
-  built.for_each_leaf([&](const LeafView& l) { b.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds); });
+  expected.for_each_leaf([&](const Node& l) { a.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds); });
+  built.for_each_leaf([&](const Node& l) { b.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds); });
   EXPECT_EQ(a, b);
 }
 
@@ -175,8 +175,8 @@ TEST(Cli, BuildWithTheFastIntegratorThreadsBoxAndColour) {
   ASSERT_TRUE(built.has_color());
   std::vector<std::tuple<std::uint64_t, float, std::optional<Rgb>>> a;
   std::vector<std::tuple<std::uint64_t, float, std::optional<Rgb>>> b;
-  expected.for_each_leaf([&](const LeafView& l) { a.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds, l.color); });
-  built.for_each_leaf([&](const LeafView& l) { b.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds, l.color); });
+  expected.for_each_leaf([&](const Node& l) { a.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds, l.color); });
+  built.for_each_leaf([&](const Node& l) { b.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds, l.color); });
   EXPECT_TRUE(a == b);
 
   const CommandResult boxed = run(cli() + " build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "box.umb") +

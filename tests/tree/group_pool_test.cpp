@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "umbra/tree/group_pool.hpp"
+#include "tree/group_pool.hpp"
 
 namespace umbra {
 namespace {

@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "umbra/core/grid.hpp"
-#include "umbra/tree/occupancy_tree.hpp"
+#include "tree/occupancy_tree.hpp"
 
 namespace umbra {
 namespace {

@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "umbra/tree/update_batch.hpp"
+#include "tree/update_batch.hpp"
 
 namespace umbra {
 namespace {

@@ -10,7 +10,7 @@
 
 #include "umbra/core/vec3.hpp"
 #include "umbra/map/occupancy_map.hpp"
-#include "umbra/tree/occupancy_tree.hpp"
+#include "umbra/core/node.hpp"
 
 namespace umbra {
 

@@ -12,22 +12,49 @@
 //
 // Errors: a coordinate outside the map throws std::out_of_range, a bad
 // parameter std::invalid_argument, each with a message naming the value.
-// Thread safety: const functions may run concurrently; writers need exclusive access.
+//
+// Concurrency. Every member function may be called from any thread at any
+// time; the map orders the calls itself:
+//  - queries (const functions, and the ranges of query()) run concurrently
+//    with each other and with insert_point_cloud. Each query sees the map as
+//    it was after some whole scan: never half a scan, never a coarse node
+//    that disagrees with its children.
+//  - insert_point_cloud traces its rays while queries go on (tracing only
+//    reads the map) and applies the traced scan in one short exclusive
+//    phase: a query waits at most for one such phase.
+//  - everything else that changes the map (single-voxel updates, colours,
+//    prune(), set_auto_prune(), thresholds, sensor model, clear(), the box)
+//    is exclusive in the same way; two writers take turns.
+//  - an open query range holds the map for reading until it is destroyed; a
+//    thread that changes the map while it holds a range of its own gets
+//    std::logic_error (it would wait for itself). Destroy a range on the
+//    thread that made it.
+// Nodes and results are values: they never point into the map. Moving or
+// destroying the map itself while other threads use it is the caller's
+// business, as for any object.
 #pragma once
 
 #include <concepts>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 
+#include "umbra/core/aabb.hpp"
 #include "umbra/core/color.hpp"
+#include "umbra/core/function_ref.hpp"
 #include "umbra/core/grid.hpp"
 #include "umbra/core/log_odds.hpp"
 #include "umbra/core/vec3.hpp"
-#include "umbra/integrate/integrator.hpp"
-#include "umbra/tree/occupancy_tree.hpp"
+#include "umbra/map/insert_options.hpp"
+#include "umbra/core/node.hpp"
 
 namespace umbra {
+
+namespace detail {
+struct MapState;
+class MapAccess;
+}  // namespace detail
 
 /// Everything that defines a map besides its contents.
 struct MapConfig {
@@ -41,23 +68,20 @@ struct MapConfig {
   void validate() const;
 };
 
-/// One childless node, as visited by for_each_leaf.
-struct LeafView {
-  Key key;          ///< finest key of the node's first (lowest) voxel
-  int depth;        ///< 0 for a voxel, > 0 for an inner leaf covering 8^depth voxels
-  float log_odds;
-  OccupancyState state;
-  std::optional<Rgb> color;  ///< only in a map with colour, for coloured nodes
-};
-
 class OccupancyMap {
  public:
   explicit OccupancyMap(const MapConfig& config);
   /// A map without colour.
   explicit OccupancyMap(double resolution, int depth_levels = 16, const SensorModel& sensor = {},
                         const Thresholds& thresholds = {});
+  ~OccupancyMap();
+  /// A deep copy (the source is read as one consistent whole).
+  OccupancyMap(const OccupancyMap& other);
+  OccupancyMap& operator=(const OccupancyMap& other);
+  OccupancyMap(OccupancyMap&& other) noexcept;
+  OccupancyMap& operator=(OccupancyMap&& other) noexcept;
 
-  // --- geometry -----------------------------------------------------------
+  // --- geometry (fixed for the map's life) ----------------------------------
   [[nodiscard]] const Grid& grid() const { return grid_; }
   [[nodiscard]] double resolution() const { return grid_.resolution(); }
   [[nodiscard]] int depth_levels() const { return grid_.depth_levels(); }
@@ -66,17 +90,17 @@ class OccupancyMap {
   [[nodiscard]] Key key(Vec3d coordinate) const { return grid_.key(coordinate); }
 
   // --- sensor model and thresholds ----------------------------------------
-  [[nodiscard]] const SensorModel& sensor_model() const { return sensor_; }
+  [[nodiscard]] SensorModel sensor_model() const;
   /// Applies to future updates; stored values outside the new clamping range
   /// are clamped into it (OctoMap would leave them until their next update).
   void set_sensor_model(const SensorModel& sensor);
-  [[nodiscard]] const Thresholds& thresholds() const { return thresholds_; }
+  [[nodiscard]] Thresholds thresholds() const;
   /// Changes the occupied / free thresholds; every indicator is updated at once.
   void set_thresholds(const Thresholds& thresholds);
 
   // --- updating single voxels ---------------------------------------------
-  void update_hit(Vec3d coordinate) { update_log_odds(coordinate, sensor_.hit_log_odds()); }
-  void update_miss(Vec3d coordinate) { update_log_odds(coordinate, sensor_.miss_log_odds()); }
+  void update_hit(Vec3d coordinate);
+  void update_miss(Vec3d coordinate);
   /// Adds `delta` (then clamps). Throws std::invalid_argument if delta is not finite.
   void update_log_odds(Vec3d coordinate, float delta);
   /// Sets the voxel's log-odds (clamped). Throws std::invalid_argument if not finite.
@@ -90,13 +114,13 @@ class OccupancyMap {
   void set_log_odds(K key, float log_odds) { set_key_log_odds(key, log_odds); }
 
   // --- colour (maps made with MapConfig::color) ---------------------------
-  [[nodiscard]] bool has_color() const { return tree_.has_color(); }
+  [[nodiscard]] bool has_color() const { return color_; }
   /// Colour of the depth-`depth` node containing the coordinate: a voxel's
   /// running average of the points that fell in it, a coarser node's the
   /// average of its coloured children; nothing when uncoloured.
   [[nodiscard]] std::optional<Rgb> color(Vec3d coordinate, int depth = 0) const;
   template <std::same_as<Key> K>
-  [[nodiscard]] std::optional<Rgb> color(K key, int depth = 0) const { return key_color(key, depth); }
+  [[nodiscard]] std::optional<Rgb> color(K key, int depth = 0) const { return node(key, depth).color; }
   /// One more colour sample for the voxel (running average).
   void add_color(Vec3d coordinate, Rgb rgb);
   /// Sets the voxel's colour outright.
@@ -107,10 +131,18 @@ class OccupancyMap {
   /// voxels change (points outside still clear the space inside). Nothing: no
   /// limit. Throws std::invalid_argument for a box with min > max.
   void set_bounding_box(const std::optional<Aabb>& box);
-  [[nodiscard]] const std::optional<Aabb>& bounding_box() const { return bounding_box_; }
+  [[nodiscard]] std::optional<Aabb> bounding_box() const;
 
   // --- inserting scans ----------------------------------------------------
-  /// Integrates one scan (see integrate/integrator.hpp for the exact rules).
+  /// Integrates one scan. Simple and discrete integrators: OctoMap's
+  /// insertPointCloud (discretize false / true), voxel for voxel: one miss
+  /// for every voxel a ray passes, one hit for the end voxel, each voxel at
+  /// most once per scan, a hit winning over a miss; points beyond max_range
+  /// clear up to it without a hit; NaN points and points outside the map are
+  /// skipped and counted. Fast: free space cleared a coarse node at a time
+  /// (see InsertOptions). Throws std::invalid_argument for a non-finite origin
+  /// or bad options and std::out_of_range for an origin outside the map; the
+  /// map is unchanged then.
   InsertStats insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
                                  const InsertOptions& options = {});
   /// The same with one colour per point: every point that gives a hit adds
@@ -119,7 +151,7 @@ class OccupancyMap {
   InsertStats insert_point_cloud(Vec3f origin, std::span<const Vec3f> points, std::span<const Rgb> colors,
                                  const InsertOptions& options = {});
 
-  // --- reading ------------------------------------------------------------
+  // --- reading single nodes -----------------------------------------------
   /// State of the depth-`depth` node containing the coordinate: occupied if
   /// any voxel in it is, free if all are, unknown otherwise.
   [[nodiscard]] OccupancyState state(Vec3d coordinate, int depth = 0) const;
@@ -129,47 +161,42 @@ class OccupancyMap {
   [[nodiscard]] bool contains_occupied(Vec3d coordinate, int depth = 0) const;
   [[nodiscard]] bool contains_free(Vec3d coordinate, int depth = 0) const;
   [[nodiscard]] bool contains_unknown(Vec3d coordinate, int depth = 0) const;
-  [[nodiscard]] NodeSummary node(Key key, int depth = 0) const;
+  /// The node at `depth` containing finest key `key`, or the childless node
+  /// above it that covers it (its depth is then larger). Throws
+  /// std::out_of_range for a key or depth outside the map.
+  [[nodiscard]] Node node(Key key, int depth = 0) const;
+  [[nodiscard]] Node node(Vec3d coordinate, int depth = 0) const;
 
-  /// Calls visit(const LeafView&) for every childless node, in Morton order.
-  template <typename Visit>
-  void for_each_leaf(Visit&& visit) const {
-    tree_.for_each_leaf([&](NodeRef node, std::uint64_t code) {
-      const float value = tree_.log_odds(node);
-      visit(LeafView{morton::decode(code), node.depth, value, tree_.thresholds().classify(value), tree_.color(node)});
-    });
-  }
+  /// Calls visit(node) for every childless node, in Morton order (a pruned
+  /// node once, at its depth). Holds the map for reading meanwhile: `visit`
+  /// must not change the map.
+  void for_each_leaf(FunctionRef<void(const Node&)> visit) const;
 
   // --- pruning ------------------------------------------------------------
-  /// On by default. Switch off while readers iterate during insertion;
-  /// switching it on again prunes the whole map.
-  void set_auto_prune(bool on) { tree_.set_auto_prune(on); }
-  [[nodiscard]] bool auto_prune() const { return tree_.auto_prune(); }
-  void prune() { tree_.prune(); }
-  void clear() { tree_.clear(); }
+  /// On by default: eight equal children are merged into their parent. With
+  /// it off no node ever disappears (readers may keep keys of nodes), and
+  /// queries still treat eight equal childless children as one leaf.
+  /// Switching it on prunes the whole map.
+  void set_auto_prune(bool on);
+  [[nodiscard]] bool auto_prune() const;
+  void prune();
+  /// Everything unknown again.
+  void clear();
 
   // --- statistics ---------------------------------------------------------
-  [[nodiscard]] NodeCounts node_counts() const { return tree_.count_nodes(); }
-  /// Bytes allocated for the map (the tree's capacity, and this object).
+  [[nodiscard]] NodeCounts node_counts() const;
+  /// Bytes allocated for the map (the tree's capacity, the integrator's
+  /// buffers kept between scans, and this object).
   [[nodiscard]] std::size_t memory_bytes() const;
 
-  /// The octree itself, for file readers/writers and tests.
-  [[nodiscard]] const OccupancyTree& tree() const { return tree_; }
-  [[nodiscard]] OccupancyTree& tree() { return tree_; }
-
  private:
-  void check_depth(int depth) const;
-  [[nodiscard]] NodeSummary summary(Vec3d coordinate, int depth) const;
+  friend class detail::MapAccess;
   void update_key_log_odds(Key key, float delta);
   void set_key_log_odds(Key key, float log_odds);
-  [[nodiscard]] std::optional<Rgb> key_color(Key key, int depth) const;
 
   Grid grid_;
-  SensorModel sensor_;
-  Thresholds thresholds_;
-  OccupancyTree tree_;
-  Integrator integrator_;
-  std::optional<Aabb> bounding_box_;
+  bool color_;
+  std::unique_ptr<detail::MapState> state_;
 };
 
 }  // namespace umbra

@@ -53,12 +53,17 @@
 
 #include "umbra/core/color.hpp"
 #include "umbra/core/log_odds.hpp"
-#include "umbra/core/thread_pool.hpp"
+#include "core/thread_pool.hpp"
 #include "umbra/core/morton.hpp"
-#include "umbra/tree/group_pool.hpp"
-#include "umbra/tree/update_batch.hpp"
+#include "umbra/core/node.hpp"
+#include "tree/group_pool.hpp"
+#include "tree/update_batch.hpp"
 
 namespace umbra {
+
+namespace detail {
+class TreeBuilder;
+}
 
 /// A node's position in the tree. The root is {0, 0, depth_levels}.
 struct NodeRef {
@@ -72,13 +77,6 @@ enum class NodeKind : unsigned char {
   inner,       ///< has eight children
   inner_leaf,  ///< depth >= 1, no children: its value covers its whole region
   leaf,        ///< depth 0
-};
-
-struct NodeCounts {
-  std::size_t inner = 0;
-  std::size_t inner_leaf = 0;
-  std::size_t leaf = 0;
-  [[nodiscard]] std::size_t total() const { return inner + inner_leaf + leaf; }
 };
 
 /// What a query finds at a position and depth.
@@ -217,7 +215,16 @@ class OccupancyTree {
   /// Merges every group of eight equal childless children, bottom up.
   void prune();
 
-  // --- building (used by file readers) -----------------------------------
+  // --- statistics, checks ------------------------------------------------
+  [[nodiscard]] NodeCounts count_nodes() const;
+  /// Bytes allocated for the tree (capacity, not use).
+  [[nodiscard]] std::size_t memory_bytes() const;
+  /// Empty when every invariant in the file comment holds, else the first violation.
+  [[nodiscard]] std::string check_invariants() const;
+
+ private:
+  // --- building: only through TreeBuilder (file readers) ------------------
+  friend class detail::TreeBuilder;
   /// Gives a childless node eight children that all carry its value.
   void subdivide(NodeRef node);
   /// Sets a childless node's value without touching its ancestors; call
@@ -228,14 +235,6 @@ class OccupancyTree {
   /// Recomputes every inner value and indicator bottom up (no pruning).
   void refresh_all();
 
-  // --- statistics, checks ------------------------------------------------
-  [[nodiscard]] NodeCounts count_nodes() const;
-  /// Bytes allocated for the tree (capacity, not use).
-  [[nodiscard]] std::size_t memory_bytes() const;
-  /// Empty when every invariant in the file comment holds, else the first violation.
-  [[nodiscard]] std::string check_invariants() const;
-
- private:
   template <typename Visit>
   void visit_leaves(NodeRef node, std::uint64_t first_code, Visit& visit) const {
     if (!has_children(node)) {

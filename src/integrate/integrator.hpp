@@ -49,51 +49,13 @@
 #include "umbra/core/color.hpp"
 #include "umbra/core/grid.hpp"
 #include "umbra/core/log_odds.hpp"
-#include "umbra/core/thread_pool.hpp"
+#include "core/thread_pool.hpp"
 #include "umbra/core/vec3.hpp"
-#include "umbra/integrate/ray_tracer.hpp"
-#include "umbra/tree/occupancy_tree.hpp"
+#include "integrate/ray_tracer.hpp"
+#include "tree/occupancy_tree.hpp"
+#include "umbra/map/insert_options.hpp"
 
 namespace umbra {
-
-enum class IntegratorKind { simple, discrete, fast };
-
-/// "simple" / "discrete" / "fast"; throws std::invalid_argument for anything else.
-IntegratorKind parse_integrator_kind(const std::string& name);
-const char* to_string(IntegratorKind kind);
-
-struct InsertOptions {
-  IntegratorKind integrator = IntegratorKind::simple;
-  /// Metres; <= 0 means unlimited (OctoMap's default -1).
-  double max_range = -1.0;
-  /// fast: depth of the nodes cleared whole; -1: the depth whose nodes are
-  /// closest to 16 cm (the UFOMap paper's setting). At depth 0 the fast
-  /// integrator is the discrete one.
-  int clear_depth = -1;
-  /// fast: coarse nodes before the end point traced voxel by voxel; 0: none.
-  int fine_steps = 2;
-  /// Threads tracing rays; 0: all cores.
-  unsigned threads = 0;
-
-  /// Throws std::invalid_argument naming the bad field (NaN max_range,
-  /// clear_depth above the map's depth levels, negative fine_steps).
-  void validate(int depth_levels) const;
-  /// The clear depth used for a map with this grid.
-  [[nodiscard]] int resolved_clear_depth(const Grid& grid) const;
-};
-
-/// What happened to the points of one scan.
-struct InsertStats {
-  std::size_t points = 0;          ///< points given
-  std::size_t rays = 0;            ///< rays traced (after per-voxel de-duplication when discrete / fast)
-  std::size_t hits = 0;            ///< rays whose end voxel got a hit
-  std::size_t truncated = 0;       ///< rays beyond max_range, cut there, without a hit
-  std::size_t non_finite = 0;      ///< NaN / infinite points, skipped
-  std::size_t out_of_bounds = 0;   ///< points (or truncated ends) outside the map, skipped
-  std::size_t outside_box = 0;     ///< rays that miss the bounding box entirely, skipped
-
-  InsertStats& operator+=(const InsertStats& other);
-};
 
 class Integrator {
  public:
@@ -102,14 +64,20 @@ class Integrator {
   Integrator(Integrator&&) noexcept;
   Integrator& operator=(Integrator&&) noexcept;
 
-  /// Integrates one scan into `tree`, whose voxels are laid out by `grid`.
-  /// `colors` is empty or holds one colour per point (the tree must have
-  /// colour then). `box`: clip rays to it. Throws std::invalid_argument for
-  /// a non-finite origin or bad options and std::out_of_range for an origin
-  /// outside the map; the tree is unchanged then.
-  InsertStats insert(OccupancyTree& tree, const Grid& grid, const SensorModel& sensor, Vec3f origin,
-                     std::span<const Vec3f> points, std::span<const Rgb> colors, const InsertOptions& options,
-                     const std::optional<Aabb>& box = std::nullopt);
+  /// Traces one scan against `tree` (which it only reads: queries may run
+  /// meanwhile) into the pending update; apply() then writes it. `colors` is
+  /// empty or holds one colour per point (the tree must have colour then).
+  /// `box`: clip rays to it. Throws std::invalid_argument for a non-finite
+  /// origin or bad options and std::out_of_range for an origin outside the
+  /// map; nothing is pending then.
+  InsertStats trace(const OccupancyTree& tree, const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
+                    std::span<const Rgb> colors, const InsertOptions& options,
+                    const std::optional<Aabb>& box = std::nullopt);
+  /// Writes the pending update of the last trace() into `tree` (the same
+  /// tree, unchanged since) and forgets it.
+  void apply(OccupancyTree& tree, const SensorModel& sensor);
+  /// Forgets the pending update (after a failed trace).
+  void discard();
 
   /// Bytes held between scans: the tracers' scratch buffers and empty batches.
   [[nodiscard]] std::size_t memory_bytes() const;
@@ -119,6 +87,9 @@ class Integrator {
 
   std::unique_ptr<ThreadPool> pool_;
   std::vector<std::unique_ptr<RayTracer>> tracers_;  // one per worker
+  // Pending between trace() and apply(): the merged batch is tracers_[0]'s.
+  unsigned pending_threads_ = 0;  // 0: nothing pending
+  std::vector<OccupancyTree::ColorSample> pending_colors_;
 };
 
 }  // namespace umbra

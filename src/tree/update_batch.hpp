@@ -36,7 +36,7 @@
 #include <vector>
 
 #include "umbra/core/morton.hpp"
-#include "umbra/tree/group_pool.hpp"
+#include "tree/group_pool.hpp"
 
 namespace umbra {
 

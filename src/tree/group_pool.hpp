@@ -31,7 +31,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "umbra/core/assert.hpp"
+#include "core/assert.hpp"
 
 namespace umbra {
 

@@ -30,9 +30,9 @@
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/grid.hpp"
 #include "umbra/core/vec3.hpp"
-#include "umbra/integrate/node_walker.hpp"
-#include "umbra/tree/occupancy_tree.hpp"
-#include "umbra/tree/update_batch.hpp"
+#include "integrate/node_walker.hpp"
+#include "tree/occupancy_tree.hpp"
+#include "tree/update_batch.hpp"
 
 namespace umbra {
 

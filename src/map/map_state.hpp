@@ -1,0 +1,41 @@
+// MapState: what an OccupancyMap holds behind its public face.
+//
+// The tree, the integrator and the settings, with the two locks of the
+// concurrency contract (occupancy_map.hpp): `writer` lets one writer in at a
+// time (inserting, or any other change), and `gate` keeps readers out only
+// while the tree itself changes. A reader holds `gate`; a writer holds
+// `writer` throughout and closes `gate` for its exclusive phase.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <mutex>
+#include <optional>
+
+#include "integrate/integrator.hpp"
+#include "map/read_gate.hpp"
+#include "tree/occupancy_tree.hpp"
+#include "umbra/core/aabb.hpp"
+#include "umbra/core/log_odds.hpp"
+
+namespace umbra::detail {
+
+struct MapState {
+  MapState(int depth_levels, const SensorModel& sensor_model, const Thresholds& occupancy_thresholds, bool color)
+      : sensor(sensor_model),
+        thresholds(occupancy_thresholds),
+        tree(depth_levels, LogOddsRange::from(sensor_model), LogOddsThresholds::from(occupancy_thresholds), color) {}
+
+  SensorModel sensor;
+  Thresholds thresholds;
+  OccupancyTree tree;
+  Integrator integrator;
+  /// integrator.memory_bytes() after the last scan: the integrator changes
+  /// while readers run (tracing), so readers see only this copy.
+  std::atomic<std::size_t> integrator_bytes{0};
+  std::optional<Aabb> bounding_box;
+  std::mutex writer;
+  ReadGate gate;
+};
+
+}  // namespace umbra::detail
