@@ -36,6 +36,7 @@
 
 #include <concepts>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -47,6 +48,9 @@
 #include "umbra/core/log_odds.hpp"
 #include "umbra/core/vec3.hpp"
 #include "umbra/map/insert_options.hpp"
+#include "umbra/query/predicate.hpp"
+#include "umbra/query/query_range.hpp"
+#include "umbra/query/shapes.hpp"
 #include "umbra/core/node.hpp"
 
 namespace umbra {
@@ -171,6 +175,19 @@ class OccupancyMap {
   /// node once, at its depth). Holds the map for reading meanwhile: `visit`
   /// must not change the map.
   void for_each_leaf(FunctionRef<void(const Node&)> visit) const;
+
+  // --- queries (include/umbra/query/) ---------------------------------------
+  /// The nodes `predicate` holds for, visiting the tree down to `depth`
+  /// (depth-`depth` nodes count as leaves), parents before children, in
+  /// Morton order. Only subtrees that can match are visited. See
+  /// predicate.hpp and query_range.hpp; throws std::out_of_range for a bad depth.
+  [[nodiscard]] QueryRange query(const Predicate& predicate, int depth = 0) const;
+  /// The same, nearest to `point` first (distance to the node's cube, 0
+  /// inside), up to `max_distance` metres.
+  [[nodiscard]] NearestRange query_nearest(Vec3d point, const Predicate& predicate, int depth = 0,
+                                           double max_distance = std::numeric_limits<double>::infinity()) const;
+  /// How many nodes query(predicate, depth) yields.
+  [[nodiscard]] std::size_t count(const Predicate& predicate, int depth = 0) const;
 
   // --- pruning ------------------------------------------------------------
   /// On by default: eight equal children are merged into their parent. With
