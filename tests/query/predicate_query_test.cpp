@@ -375,9 +375,9 @@ TEST_P(PredicateQuery, YieldsExactlyTheNodesBruteForceFinds) {
 INSTANTIATE_TEST_SUITE_P(Maps, PredicateQuery,
                          testing::Values(Config{4, true, 1}, Config{4, false, 2}, Config{5, true, 3},
                                          Config{5, false, 4}),
-                         [](const testing::TestParamInfo<Config>& info) {
-                           return "levels" + std::to_string(info.param.depth_levels) +
-                                  (info.param.auto_prune ? "_pruned" : "_unpruned");
+                         [](const testing::TestParamInfo<Config>& param_info) {
+                           return "levels" + std::to_string(param_info.param.depth_levels) +
+                                  (param_info.param.auto_prune ? "_pruned" : "_unpruned");
                          });
 
 TEST(PredicateQuery, LeavesTileTheMapExactlyOnce) {
