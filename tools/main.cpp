@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   commands.push_back(umbra::cli::add_build_command(app));
   commands.push_back(umbra::cli::add_info_command(app));
   commands.push_back(umbra::cli::add_convert_command(app));
+  commands.push_back(umbra::cli::add_query_command(app));
 
   try {
     app.parse(argc, argv);
