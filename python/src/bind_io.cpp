@@ -103,7 +103,7 @@ class ScanReader {
   std::mutex mutex_;
 };
 
-ScanReader read_scans(const fs::path& path, const std::optional<std::string>& format, py::handle origin,
+std::unique_ptr<ScanReader> read_scans(const fs::path& path, const std::optional<std::string>& format, py::handle origin,
                       const std::optional<fs::path>& poses, const std::optional<fs::path>& calibration,
                       const std::optional<fs::path>& association, const std::optional<DepthCamera>& camera) {
   ScanSourceOptions options;
@@ -115,7 +115,7 @@ ScanReader read_scans(const fs::path& path, const std::optional<std::string>& fo
   if (camera) options.depth_camera = *camera;
   require_exists(path);
   py::gil_scoped_release released;
-  return ScanReader(file_operation([&] { return open_scan_source(path, options); }));
+  return std::make_unique<ScanReader>(file_operation([&] { return open_scan_source(path, options); }));
 }
 
 }  // namespace

@@ -34,13 +34,13 @@ void for_each_point(const PointArray& points, const Answer& answer) {
   }
 }
 
-/// map.f(points, depth) -> array of T, one per point.
-template <typename T, typename Read>
-py::array_t<T> per_point(const OccupancyMap& map, py::handle object, int depth, const Read& read) {
+/// map.f(points, depth) -> array of T, one per point: answer(map, point, depth, out).
+template <typename T, typename Answer>
+py::array_t<T> per_point(const OccupancyMap& map, py::handle object, int depth, const Answer& answer) {
   const PointArray points(object, "points");
   py::array_t<T> answers(points.leading_shape());
   T* out = answers.mutable_data();
-  for_each_point(points, [&](std::size_t i) { out[i] = read(map, points[i], depth); });
+  for_each_point(points, [&](std::size_t i) { answer(map, points[i], depth, out[i]); });
   return answers;
 }
 
@@ -152,7 +152,7 @@ void bind_insertion_and_updates(MapClass& map) {
           [](OccupancyMap& m, py::handle points, py::handle deltas) {
             const PointArray p(points, "points");
             const ValueArray d(deltas, "deltas");
-            batch_count({{"points", p.size()}, {d.name(), d.count()}});
+            batch_count({{"points", std::optional(p.size())}, {d.name(), d.count()}});
             for_each_point(p, [&](std::size_t i) { m.update_log_odds(p[i], static_cast<float>(d[i])); });
           },
           py::arg("points"), py::arg("deltas"), "Adds deltas (N,) or one number to the voxels' log-odds, then clamps.")
@@ -161,16 +161,18 @@ void bind_insertion_and_updates(MapClass& map) {
           [](OccupancyMap& m, py::handle points, py::handle values) {
             const PointArray p(points, "points");
             const ValueArray v(values, "values");
-            batch_count({{"points", p.size()}, {v.name(), v.count()}});
+            batch_count({{"points", std::optional(p.size())}, {v.name(), v.count()}});
             for_each_point(p, [&](std::size_t i) { m.set_log_odds(p[i], static_cast<float>(v[i])); });
           },
           py::arg("points"), py::arg("values"), "Sets the voxels' log-odds (clamped) to values (N,) or one number.")
       .def(
           "add_color",
           [](OccupancyMap& m, py::handle points, py::handle colors) {
+            // The library says std::logic_error here (RuntimeError); insert() says invalid_argument.
+            if (!m.has_color()) throw py::value_error("the map was made without colour (MapConfig::color)");
             const PointArray p(points, "points");
             const ColorArray c(colors, "colors");
-            batch_count({{"points", p.size()}, {"colors", c.span().size()}});
+            batch_count({{"points", std::optional(p.size())}, {"colors", std::optional(c.span().size())}});
             for_each_point(p, [&](std::size_t i) { m.add_color(p[i], c.span()[i]); });
           },
           py::arg("points"), py::arg("colors"),
@@ -181,8 +183,8 @@ void bind_point_lookups(MapClass& map) {
   map.def(
          "states",
          [](const OccupancyMap& m, py::handle points, int depth) {
-           return per_point<std::uint8_t>(m, points, depth, [](const OccupancyMap& mm, Vec3d p, int d) {
-             return static_cast<std::uint8_t>(mm.state(p, d));
+           return per_point<std::uint8_t>(m, points, depth, [](const OccupancyMap& mm, Vec3d p, int d, auto& out) {
+             out = static_cast<std::uint8_t>(mm.state(p, d));
            });
          },
          py::arg("points"), py::arg("depth") = 0,
@@ -191,24 +193,26 @@ void bind_point_lookups(MapClass& map) {
       .def(
           "log_odds",
           [](const OccupancyMap& m, py::handle points, int depth) {
-            return per_point<float>(m, points, depth,
-                                    [](const OccupancyMap& mm, Vec3d p, int d) { return mm.log_odds(p, d); });
+            return per_point<float>(m, points, depth, [](const OccupancyMap& mm, Vec3d p, int d, auto& out) {
+              out = mm.log_odds(p, d);
+            });
           },
           py::arg("points"), py::arg("depth") = 0,
           "Log-odds of the node holding each point (the maximum over its voxels): a float32 array (...).")
       .def(
           "occupancy",
           [](const OccupancyMap& m, py::handle points, int depth) {
-            return per_point<double>(m, points, depth,
-                                     [](const OccupancyMap& mm, Vec3d p, int d) { return mm.occupancy(p, d); });
+            return per_point<double>(m, points, depth, [](const OccupancyMap& mm, Vec3d p, int d, auto& out) {
+              out = mm.occupancy(p, d);
+            });
           },
           py::arg("points"), py::arg("depth") = 0,
           "Occupancy probability of the node holding each point: a float64 array (...).")
       .def(
           "nodes",
           [](const OccupancyMap& m, py::handle points, int depth) {
-            return per_point<NodeRecord>(m, points, depth, [](const OccupancyMap& mm, Vec3d p, int d) {
-              return record_of(mm.node(p, d));
+            return per_point<NodeRecord>(m, points, depth, [](const OccupancyMap& mm, Vec3d p, int d, auto& out) {
+              write_record(mm.node(p, d), out);
             });
           },
           py::arg("points"), py::arg("depth") = 0,

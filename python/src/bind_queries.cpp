@@ -54,10 +54,12 @@ class RotationArray {
       throw py::value_error("rotations must be an array of shape (N, 3, 3) or (3, 3), got shape " +
                             shape_text(array_));
     }
-    count_ = many ? static_cast<std::size_t>(array_.shape(0)) : 0;
+    count_ = many ? static_cast<std::size_t>(array_.shape(0)) : 1;
     data_ = array_.data();
   }
-  [[nodiscard]] std::size_t count() const { return count_; }
+  [[nodiscard]] std::optional<std::size_t> count() const {
+    return broadcast_ ? std::nullopt : std::optional(count_);
+  }
   /// The box axes: the columns of matrix i.
   [[nodiscard]] std::array<Vec3d, 3> axes(std::size_t i) const {
     const double* r = data_ + (broadcast_ ? 0 : 9 * i);

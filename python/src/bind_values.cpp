@@ -2,6 +2,7 @@
 // thresholds, nodes (as objects and as rows of a structured array), node
 // counts, insertion statistics and map statistics. All are immutable
 // copies: they never point into a map.
+#include <cstring>
 #include <sstream>
 
 #include <pybind11/operators.h>
@@ -13,8 +14,8 @@
 
 namespace umbra::python {
 
-NodeRecord record_of(const Node& node) {
-  NodeRecord r{};
+void write_record(const Node& node, NodeRecord& r) {
+  std::memset(&r, 0, sizeof r);  // padding too: no stray bytes in the array
   for (int axis = 0; axis < 3; ++axis) {
     r.center[axis] = node.center[static_cast<std::size_t>(axis)];
     r.key[axis] = node.key[axis];
@@ -32,13 +33,12 @@ NodeRecord record_of(const Node& node) {
     r.color[1] = node.color->g;
     r.color[2] = node.color->b;
   }
-  return r;
 }
 
 py::array node_array(const std::vector<Node>& nodes) {
   py::array_t<NodeRecord> array(static_cast<py::ssize_t>(nodes.size()));
   NodeRecord* out = array.mutable_data();
-  for (std::size_t i = 0; i < nodes.size(); ++i) out[i] = record_of(nodes[i]);
+  for (std::size_t i = 0; i < nodes.size(); ++i) write_record(nodes[i], out[i]);
   return array;
 }
 

@@ -41,7 +41,8 @@ struct NodeRecord {
   std::uint8_t color[3];  ///< (0, 0, 0) without colour
 };
 
-NodeRecord record_of(const Node& node);
+/// Writes the node into a row (all of it, padding included).
+void write_record(const Node& node, NodeRecord& row);
 /// The nodes as a structured array of NodeRecord (made with the GIL held).
 py::array node_array(const std::vector<Node>& nodes);
 

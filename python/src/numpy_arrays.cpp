@@ -71,18 +71,20 @@ ValueArray::ValueArray(py::handle object, const char* name) : array_(as_array<Fl
   data_ = array_.data();
 }
 
-std::size_t batch_count(std::initializer_list<std::pair<const char*, std::size_t>> counts) {
-  std::pair<const char*, std::size_t> first{nullptr, 0};
+std::size_t batch_count(std::initializer_list<std::pair<const char*, std::optional<std::size_t>>> counts) {
+  const char* first_name = nullptr;
+  std::size_t first = 1;  // all broadcast: one
   for (const auto& [name, count] : counts) {
-    if (count == 0) continue;  // broadcast
-    if (first.first == nullptr) {
-      first = {name, count};
-    } else if (count != first.second) {
-      throw py::value_error(std::string(first.first) + " has " + std::to_string(first.second) + " rows but " + name +
-                            " has " + std::to_string(count));
+    if (!count) continue;  // broadcast
+    if (first_name == nullptr) {
+      first_name = name;
+      first = *count;
+    } else if (*count != first) {
+      throw py::value_error(std::string(first_name) + " has " + std::to_string(first) + " rows but " + name +
+                            " has " + std::to_string(*count));
     }
   }
-  return first.first == nullptr ? 1 : first.second;
+  return first;
 }
 
 ScanPoints::ScanPoints(py::handle object, const char* name)

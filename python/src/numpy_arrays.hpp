@@ -21,6 +21,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -65,8 +66,10 @@ class RowArray {
  public:
   /// Throws ValueError unless the shape is (N, 3) or (3,).
   RowArray(py::handle object, const char* name);
-  /// N, or 0 for a broadcast row (it fits any count).
-  [[nodiscard]] std::size_t count() const { return broadcast_ ? 0 : count_; }
+  /// N, or nothing for a broadcast row (it fits any count).
+  [[nodiscard]] std::optional<std::size_t> count() const {
+    return broadcast_ ? std::nullopt : std::optional(count_);
+  }
   [[nodiscard]] const char* name() const { return name_; }
   [[nodiscard]] Vec3d operator[](std::size_t i) const {
     const double* p = data_ + (broadcast_ ? 0 : 3 * i);
@@ -86,7 +89,9 @@ class ValueArray {
  public:
   /// Throws ValueError unless the shape is (N,) or ().
   ValueArray(py::handle object, const char* name);
-  [[nodiscard]] std::size_t count() const { return broadcast_ ? 0 : count_; }
+  [[nodiscard]] std::optional<std::size_t> count() const {
+    return broadcast_ ? std::nullopt : std::optional(count_);
+  }
   [[nodiscard]] const char* name() const { return name_; }
   [[nodiscard]] double operator[](std::size_t i) const { return data_[broadcast_ ? 0 : i]; }
 
@@ -100,7 +105,7 @@ class ValueArray {
 
 /// The count N the arguments of one batch agree on (1 when all broadcast).
 /// Throws ValueError naming two arguments whose counts differ.
-std::size_t batch_count(std::initializer_list<std::pair<const char*, std::size_t>> counts);
+std::size_t batch_count(std::initializer_list<std::pair<const char*, std::optional<std::size_t>>> counts);
 
 /// The points of a scan, (N, 3) float32 as the integrator reads them
 /// (converted once when given as another dtype).

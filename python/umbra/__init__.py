@@ -45,9 +45,11 @@ from ._umbra import (
 _sys.modules[__name__ + ".pred"] = pred
 _sys.modules[__name__ + ".sim"] = sim
 
-# Errors and classes show as umbra.X, where users find them.
-for _name in ("FormatError",):
-    getattr(_umbra, _name).__module__ = __name__
+# The error shows as umbra.FormatError, where users find it.
+FormatError.__module__ = __name__
+FormatError.__doc__ = (
+    "A file that is not what it claims to be; the message names the file and the line or byte offset."
+)
 
 __all__ = [
     "FREE",
