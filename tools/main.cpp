@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
   commands.push_back(umbra::cli::add_info_command(app));
   commands.push_back(umbra::cli::add_convert_command(app));
   commands.push_back(umbra::cli::add_query_command(app));
+  commands.push_back(umbra::cli::add_render_command(app));
+  commands.push_back(umbra::cli::add_view_command(app));
 
   try {
     app.parse(argc, argv);
