@@ -166,10 +166,19 @@ MapPicture render_slice(const OccupancyMap& map, const RenderOptions& options) {
   }
   const Frame frame = frame_for(options.view, known, options);
 
-  // The plane through the layer's centre, over the whole picture (margins
-  // included): the leaves it meets are exactly the layer's nodes there.
-  const double reach = double(options.margin_pixels + 1) * frame.camera.metres_per_pixel;
-  Aabb plane{known.min - Vec3d{reach, reach, reach}, known.max + Vec3d{reach, reach, reach}};
+  // The plane through the layer's centre, over the picture (margins
+  // included, shrunk by a millionth of a pixel so that nodes merely touching
+  // its edges stay out): the leaves it meets are the layer's nodes there.
+  const RenderCamera& camera = frame.camera;
+  const double inset = 1e-6 * camera.metres_per_pixel;
+  const double right_low = camera.left + inset;
+  const double right_high = camera.left + double(frame.width) * camera.metres_per_pixel - inset;
+  const double up_low = camera.top - double(frame.height) * camera.metres_per_pixel + inset;
+  const double up_high = camera.top - inset;
+  Aabb plane{camera.right * right_low + camera.up * up_low, camera.right * right_high + camera.up * up_high};
+  for (std::size_t a = 0; a < 3; ++a) {
+    if (plane.min[a] > plane.max[a]) std::swap(plane.min[a], plane.max[a]);
+  }
   plane.min[axis] = plane.max[axis] = slice_plane(map.grid(), slice.position, options.depth);
   const Predicate layer = pred::leaf() && pred::intersects(plane);
 

@@ -112,7 +112,9 @@ struct MapPicture {
   Image image;
   RenderCamera camera;
   int depth = 0;                ///< depth of the nodes drawn
-  std::size_t nodes_drawn = 0;  ///< nodes painted (a view: occupied nodes; a slice: all)
+  /// Nodes drawn: a view, the occupied nodes; a slice, the layer's nodes
+  /// (any state) that overlap the picture.
+  std::size_t nodes_drawn = 0;
   double ramp_low_z = 0.0;      ///< heights at the ends of the height ramp (0 when unused)
   double ramp_high_z = 0.0;
 };
