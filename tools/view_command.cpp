@@ -75,11 +75,7 @@ void print_summary(const OccupancyMap& map, const ViewerData& data) {
   }
 }
 
-int run_view(const ViewOptions& options) {
-  if (options.output.empty() && !options.serve) {
-    std::fprintf(stderr, "umbra view: error: say where the page goes: -o FILE.html, --serve, or both\n");
-    return 2;
-  }
+int write_and_serve(const ViewOptions& options) {
   const OccupancyMap map = load_any_map(options.map_path);
   const ViewerData data = collect_viewer_data(map, options.budget);
   const std::string page = page_for(map, data, std::filesystem::path(options.map_path).filename().string());
@@ -97,7 +93,7 @@ int run_view(const ViewOptions& options) {
 
 #else
 
-int run_view(const ViewOptions&) {
+int write_and_serve(const ViewOptions&) {
   std::fprintf(stderr,
                "umbra view: this umbra was built without the browser viewer: node and npm were missing when it was "
                "configured (or `npm ci` failed). Install them (Debian: apt-get install nodejs npm), then configure "
@@ -106,6 +102,14 @@ int run_view(const ViewOptions&) {
 }
 
 #endif
+
+int run_view(const ViewOptions& options) {
+  if (options.output.empty() && !options.serve) {
+    std::fprintf(stderr, "umbra view: error: say where the page goes: -o FILE.html, --serve, or both\n");
+    return 2;
+  }
+  return write_and_serve(options);
+}
 
 }  // namespace
 
