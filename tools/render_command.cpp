@@ -26,6 +26,8 @@ struct RenderCommandOptions {
   std::string slice;  // "z=1.2"
   int depth = 0;
   int width = 1024;
+  std::optional<double> min_z;
+  std::optional<double> max_z;
 };
 
 /// "z=1.2" -> {2, 1.2}; nothing when the text is not AXIS=NUMBER.
@@ -63,6 +65,8 @@ RenderOptions render_options(const RenderCommandOptions& command) {
   RenderOptions options;
   options.depth = command.depth;
   options.width = command.width;
+  options.min_z = command.min_z;
+  options.max_z = command.max_z;
   if (!command.slice.empty()) options.slice = parse_slice(command.slice);  // CLI11 checked the form
   if (!command.view.empty()) {
     options.view = view_named(command.view);
@@ -138,6 +142,9 @@ Command add_render_command(CLI::App& app) {
   command->add_option("--depth", options->depth, "depth of the nodes drawn (0 = finest voxels)")
       ->capture_default_str()
       ->check(CLI::Range(0, 21));
+  command->add_option("--min-z", options->min_z, "a view draws only nodes reaching above this height (metres)");
+  command->add_option("--max-z", options->max_z,
+                      "a view draws only nodes reaching below this height (metres), e.g. to cut a ceiling away");
   command->add_option("--width", options->width, "picture width in pixels")
       ->capture_default_str()
       ->check(CLI::Range(17, kMaxRenderPixels));

@@ -101,7 +101,12 @@ Rgb occupied_colour(const Node& node, const RenderOptions& options, const Height
 }
 
 MapPicture render_view(const OccupancyMap& map, const RenderOptions& options) {
-  const Predicate obstacles = pred::leaf() && pred::occupied();
+  Predicate obstacles = pred::leaf() && pred::occupied();
+  if (options.min_z || options.max_z) {
+    const double extent = map.grid().half_extent();
+    obstacles = obstacles && pred::intersects(Aabb{{-extent, -extent, options.min_z.value_or(-extent)},
+                                                   {extent, extent, options.max_z.value_or(extent)}});
+  }
   Bounds content;
   HeightRange ramp;
   for (const Node& node : map.query(obstacles, options.depth)) {
@@ -110,6 +115,7 @@ MapPicture render_view(const OccupancyMap& map, const RenderOptions& options) {
   }
   if (content.empty()) {
     throw std::invalid_argument("render_map: the map has no occupied node at depth " + std::to_string(options.depth) +
+                                (options.min_z || options.max_z ? " in the height window" : "") +
                                 ", so a view shows nothing (a slice shows free and unknown space)");
   }
   const Frame frame = frame_for(options.view, content, options);
@@ -276,7 +282,11 @@ void RenderOptions::validate() const {
     bad_option("margin_pixels", "at most " + std::to_string((kMaxRenderPixels - 1) / 2), margin_pixels);
   }
   if (depth < 0 || depth > 21) bad_option("depth", "in [0, 21]", depth);
+  if (min_z && !std::isfinite(*min_z)) bad_option("min_z", "finite", *min_z);
+  if (max_z && !std::isfinite(*max_z)) bad_option("max_z", "finite", *max_z);
+  if (min_z && max_z && *min_z > *max_z) bad_option("max_z", ">= min_z (" + std::to_string(*min_z) + ")", *max_z);
   if (slice) {
+    if (min_z || max_z) bad_option("min_z and max_z", "unset for a slice (a height window is for views)", "a window");
     if (slice->axis < 0 || slice->axis > 2) bad_option("slice->axis", "0 (x), 1 (y) or 2 (z)", slice->axis);
     if (!std::isfinite(slice->position)) bad_option("slice->position", "finite", slice->position);
     if (view != slice_view(slice->axis)) {

@@ -209,6 +209,16 @@ TEST(MapRender, NearerVoxelsHideFartherOnes) {
   EXPECT_EQ(at(front, voxel(10, 0, 5)), shaded(height_ramp(0.5), front_shade));
   EXPECT_EQ(at(front, voxel(0, 0, 10)), shaded(height_ramp(1.0), front_shade));
   EXPECT_EQ(at(front, voxel(0, 0, 0)), shaded(height_ramp(0.0), front_shade));
+
+  // A height window: only nodes whose cube meets z <= 0.45 (the voxel at k = 0).
+  options.view = RenderView::top;
+  options.max_z = 0.45;
+  const MapPicture low = render_map(map, options);
+  EXPECT_EQ(low.nodes_drawn, 1u);
+  EXPECT_EQ(at(low, voxel(0, 0, 0)), shaded(height_ramp(0.0), top_shade));  // the lower voxel shows now
+  options.max_z.reset();
+  options.min_z = 0.5;  // meets the voxels at k = 5 (z 0.5..0.6) and k = 10
+  EXPECT_EQ(render_map(map, options).nodes_drawn, 3u);
 }
 
 TEST(MapRender, CoarserDepthDrawsParentCubes) {
@@ -518,6 +528,15 @@ TEST(MapRender, BadOptionsAreNamed) {
   expect_named(options, "slice->position");
   options.slice->position = 1e7;
   expect_named(options, "outside the map");
+  options.slice->position = 0.1;
+  options.max_z = 1.0;
+  expect_named(options, "min_z and max_z");
+  options = {};
+  options.min_z = 2.0;
+  options.max_z = 1.0;
+  expect_named(options, "max_z");
+  options.max_z = std::numeric_limits<double>::infinity();
+  expect_named(options, "max_z");
 
   EXPECT_THROW((void)render_map(OccupancyMap(0.1)), std::invalid_argument);  // nothing occupied
   RenderOptions slice;

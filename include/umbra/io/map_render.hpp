@@ -80,6 +80,10 @@ struct RenderOptions {
   /// Depth of the nodes drawn (0 = finest voxels); coarser nodes are drawn
   /// as their own cubes (occupied if any voxel in them is).
   int depth = 0;
+  /// Height window of a view: only nodes whose cube meets z in [min_z,
+  /// max_z] are drawn (e.g. to cut a building's ceiling away). Not for slices.
+  std::optional<double> min_z;
+  std::optional<double> max_z;
   int width = 1024;       ///< pixels, in [2 * margin_pixels + 1, kMaxRenderPixels]
   int margin_pixels = 8;  ///< >= 0
   Rgb background{255, 255, 255};
