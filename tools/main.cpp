@@ -1,4 +1,4 @@
-// umbra: build, inspect, convert and demonstrate occupancy maps from the command line.
+// umbra: build, inspect, convert, draw, view and demonstrate occupancy maps from the command line.
 //
 // Exit codes: 0 success, 1 bad input or failure (the message says what and
 // where), 2 bad usage.

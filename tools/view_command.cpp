@@ -96,8 +96,8 @@ int write_and_serve(const ViewOptions& options) {
 int write_and_serve(const ViewOptions&) {
   std::fprintf(stderr,
                "umbra view: this umbra was built without the browser viewer: node and npm were missing when it was "
-               "configured (or `npm ci` failed). Install them (Debian: apt-get install nodejs npm), then configure "
-               "and build again.\n");
+               "configured, `npm ci` failed, or UMBRA_BUILD_VIEWER was OFF (the configure messages say which). "
+               "Install them (Debian: apt-get install nodejs npm), then configure and build again.\n");
   return 1;
 }
 
