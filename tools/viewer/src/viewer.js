@@ -244,7 +244,9 @@ function setUpScene() {
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   renderer.setClearColor(0x15161c);
   const radius = Math.max(size.length() / 2, resolution);
-  const distance = (radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2))) * 1.05;
+  // A little inside the distance at which the bounding sphere fits: maps are
+  // flat, and the sphere around them is mostly empty.
+  const distance = (radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2))) * 0.8;
   camera.up.set(0, 0, 1);
   camera.near = distance / 1000;
   camera.far = distance * 10;
