@@ -8,12 +8,14 @@
 // their volume, equal what the library counts for the same depth and state;
 // that the budget picks the finest depth that fits and the page says so;
 // that a screenshot shows a drawn map; and that `umbra view --serve` serves
-// the same page. The expected numbers come from umbra_count_nodes
-// (tests/viewer/count_nodes.cpp: map.count with the page's predicates),
-// because the CLI's `umbra query ... --count` did not exist when this test
-// was written.
+// the same page. The expected numbers come from the library through the
+// CLI: `umbra query MAP nodes --state S --depth D --count` for the counts,
+// and the same query's node list (centre, size) for the volumes; unknown
+// nodes are limited, as on the page, to those meeting the box around the
+// known space (`umbra info --json`) shrunk by half a voxel, and their volume
+// to the part inside it.
 //
-//   node viewer_test.mjs --umbra PATH --count PATH --modules NODE_MODULES --work DIR
+//   node viewer_test.mjs --umbra PATH --modules NODE_MODULES --work DIR
 // Exit codes: 0 passed, 1 failed, 77 skipped (no Chromium).
 import { execFileSync, spawn } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
@@ -22,11 +24,11 @@ import { pathToFileURL } from 'node:url';
 import { parseArgs } from 'node:util';
 
 const { values: args } = parseArgs({
-  options: { umbra: { type: 'string' }, count: { type: 'string' }, modules: { type: 'string' }, work: { type: 'string' } },
+  options: { umbra: { type: 'string' }, modules: { type: 'string' }, work: { type: 'string' } },
 });
-for (const name of ['umbra', 'count', 'modules', 'work']) {
+for (const name of ['umbra', 'modules', 'work']) {
   if (!args[name]) {
-    console.error('usage: node viewer_test.mjs --umbra PATH --count PATH --modules NODE_MODULES --work DIR');
+    console.error('usage: node viewer_test.mjs --umbra PATH --modules NODE_MODULES --work DIR');
     process.exit(2);
   }
 }
@@ -50,12 +52,34 @@ function check(condition, message) {
   }
 }
 
-const umbra = (...command) => execFileSync(args.umbra, command, { encoding: 'utf8' });
+const umbra = (...command) => execFileSync(args.umbra, command, { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
 const expectedAt = new Map();
+/// What the library reports for a depth: per state, the node count and volume.
 function expected(map, depth) {
   const key = map + '@' + depth;
-  if (!expectedAt.has(key)) expectedAt.set(key, JSON.parse(execFileSync(args.count, [map, String(depth)], { encoding: 'utf8' })));
-  return expectedAt.get(key);
+  if (expectedAt.has(key)) return expectedAt.get(key);
+  const info = JSON.parse(umbra('info', map, '--json'));
+  const half = info.resolution / 2;
+  const box = [...info.known_min.map((v) => v + half), ...info.known_max.map((v) => v - half)];
+  const result = {};
+  for (const state of ['occupied', 'free', 'unknown']) {
+    const query = ['query', map, 'nodes', '--state', state, '--depth', String(depth)];
+    if (state === 'unknown') query.push('--box=' + box.map((v) => v.toPrecision(17)).join(','));
+    const count = Number(umbra(...query, '--count').trim());
+    let volume = 0;
+    for (const line of umbra(...query).split('\n')) {
+      if (!line.trim()) continue;
+      const [x, y, z, size] = line.split(' ').map(Number);
+      let inside = 1;
+      for (const [axis, centre] of [x, y, z].entries()) {
+        inside *= Math.min(centre + size / 2, info.known_max[axis]) - Math.max(centre - size / 2, info.known_min[axis]);
+      }
+      volume += inside;
+    }
+    result[state] = { count, volume };
+  }
+  expectedAt.set(key, result);
+  return result;
 }
 const close = (a, b) => Math.abs(a - b) <= 1e-6 * Math.max(1, Math.abs(b));
 
