@@ -36,6 +36,7 @@
 #include <cstdlib>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "map_messages.hpp"
@@ -104,6 +105,20 @@ class Child {
       return false;
     }
     return true;
+  }
+
+  /// The exit code once the process has ended by itself, within `limit`; nothing if it still runs.
+  std::optional<int> exit_code(std::chrono::seconds limit) {
+    const auto end = Clock::now() + limit;
+    while (pid_ > 0 && Clock::now() < end) {
+      int status = 0;
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return std::nullopt;
   }
 
   void stop() {
@@ -371,6 +386,24 @@ TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
   ASSERT_TRUE(wait_for([&] { return full_.count > before_reset && binary_.count == full_.count; }, kMessageLimit));
   EXPECT_TRUE(full_.get()->data.empty());
   EXPECT_TRUE(binary_.get()->data.empty());
+}
+
+TEST_F(Loopback, BadParametersStopTheNodeWithAMessage) {
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"_integrator:=bogus", "bad parameter ~integrator"},
+      {"_resolution:=-0.1", "bad parameter ~resolution"},
+      {"_sensor_model/hit:=0.3", "bad parameter ~sensor_model/{hit,miss,min,max}"},
+  };
+  int run = 0;
+  for (const auto& [argument, expected] : cases) {
+    const fs::path log = dir_ / "bad.log";
+    // A name of its own: private parameters stay on the master after a node ends.
+    Child server({UMBRA_SERVER_PATH, argument, "__name:=umbra_server_bad_" + std::to_string(run++)}, log);
+    const std::optional<int> code = server.exit_code(kStartLimit);
+    ASSERT_TRUE(code.has_value()) << argument << ": umbra_server kept running";
+    EXPECT_EQ(*code, 1) << argument;
+    EXPECT_NE(log_text(log).find(expected), std::string::npos) << argument << ":\n" << log_text(log);
+  }
 }
 
 TEST_F(Loopback, SharedThreeDtkScans) {

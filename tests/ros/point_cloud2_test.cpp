@@ -8,6 +8,8 @@
 // and the problem.
 #include "umbra_ros/point_cloud2.hpp"
 
+#include "umbra/io/scan_source.hpp"
+
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -293,6 +295,19 @@ TEST(PointCloud2, BadCloudsAreClearErrors) {
   v = good.view;
   v.fields.push_back(v.fields[2]);
   EXPECT_TRUE(contains(decode_error(v), "field 'z' appears twice")) << decode_error(v);
+}
+
+// The library (umbra_io) knows .bag files but reads them only through the ROS build (ros/src/rosbag_source.cpp,
+// used by the umbra program); asked directly it says so.
+TEST(RosbagWithoutRos, OpenScanSourceSaysItNeedsTheRosBuild) {
+  EXPECT_EQ(scan_format_for("run.bag"), "rosbag");
+  EXPECT_EQ(scan_format_for("x.txt", "rosbag"), "rosbag");
+  try {
+    (void)open_scan_source("run.bag");
+    ADD_FAILURE() << "opened";
+  } catch (const std::runtime_error& e) {
+    EXPECT_TRUE(contains(e.what(), "ROS bag files (.bag) are read only by umbra built with ROS 1")) << e.what();
+  }
 }
 
 }  // namespace
