@@ -388,6 +388,35 @@ TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
   EXPECT_TRUE(binary_.get()->data.empty());
 }
 
+TEST_F(Loopback, IntegratorRangeAndHeightParameters) {
+  const double resolution = 0.1;
+  const std::vector<RosScan> scans = office_scans(3);
+  ASSERT_NO_FATAL_FAILURE(start_server(resolution, {"_integrator:=fast", "_fine_steps:=1", "_clear_depth:=2",
+                                                    "_sensor_model/max_range:=8.0", "_pointcloud_min_z:=0.5",
+                                                    "_pointcloud_max_z:=2.0"}));
+  ASSERT_NO_FATAL_FAILURE(publish(scans, 3000.0));
+  // The library with the same settings on the points whose z lies in [0.5, 2.0].
+  OccupancyMap expected(resolution, kOctoMapDepthLevels);
+  InsertOptions options;
+  options.integrator = IntegratorKind::fast;
+  options.fine_steps = 1;
+  options.clear_depth = 2;
+  options.max_range = 8.0;
+  std::size_t dropped = 0;
+  for (const RosScan& scan : scans) {
+    std::vector<Vec3f> kept;
+    for (const Vec3f& p : scan.points) {
+      if (p.z >= 0.5f && p.z <= 2.0f) kept.push_back(p);
+    }
+    dropped += scan.points.size() - kept.size();
+    expected.insert_point_cloud(Vec3f(scan.position), kept, options);
+  }
+  EXPECT_GT(dropped, 1000u);  // the floor, at least
+  ASSERT_NO_FATAL_FAILURE(expect_published(expected));
+  // Not the map of the unfiltered points.
+  EXPECT_NE(data_of(*full_.get()), tree_bytes(reference_map(scans, resolution), OctoMapFormat::ot));
+}
+
 TEST_F(Loopback, BadParametersStopTheNodeWithAMessage) {
   const std::vector<std::pair<std::string, std::string>> cases{
       {"_integrator:=bogus", "bad parameter ~integrator"},
