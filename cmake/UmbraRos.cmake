@@ -83,7 +83,7 @@ if(UMBRA_ROS_MISSING)
   set(UMBRA_ROS_FOUND FALSE)
 else()
   set(UMBRA_ROS_FOUND TRUE)
-  add_library(umbra_ros_deps INTERFACE IMPORTED)
+  add_library(umbra_ros_deps INTERFACE IMPORTED GLOBAL)  # GLOBAL: tests/ros links it too
   # SYSTEM: ROS headers do not pass umbra's warning flags (old-style casts, shadowing).
   set_target_properties(umbra_ros_deps PROPERTIES
     INTERFACE_SYSTEM_INCLUDE_DIRECTORIES "${_umbra_ros_include_dirs}"

@@ -13,6 +13,9 @@ namespace umbra::ros_io {
 namespace {
 
 constexpr std::uint32_t kCloudQueue = 5;  // as octomap_server: clouds waiting for their transform
+/// ~clear_bbx sets voxels one by one (the map has no whole-node setter): boxes with more known voxels than this
+/// (about a minute of work) are refused rather than stalling the node.
+constexpr std::uint64_t kMaxClearedVoxels = std::uint64_t{1} << 26;
 
 /// Keys from..to (inclusive) on each axis.
 struct KeyBox {
@@ -148,6 +151,15 @@ bool MapServer::clear_bbx(octomap_msgs::BoundingBoxQuery::Request& request, octo
     }
     parts.push_back(part);
   });
+  std::uint64_t voxels = 0;
+  for (const KeyBox& part : parts) {
+    voxels += std::uint64_t{part.max.x - part.min.x + 1} * (part.max.y - part.min.y + 1) * (part.max.z - part.min.z + 1);
+  }
+  if (voxels > kMaxClearedVoxels) {
+    ROS_ERROR("umbra_server: ~clear_bbx refused: the box holds %llu known voxels to set, more than %llu; clear smaller "
+              "boxes", static_cast<unsigned long long>(voxels), static_cast<unsigned long long>(kMaxClearedVoxels));
+    return false;
+  }
   for (const KeyBox& part : parts) {
     for (std::uint32_t x = part.min.x; x <= part.max.x; ++x) {
       for (std::uint32_t y = part.min.y; y <= part.max.y; ++y) {

@@ -22,7 +22,8 @@
 //
 // Cost per cloud: the insertion, then one pass over the map per published
 // message kind (as octomap_server). Clearing a box sets each known voxel in
-// it that is not already at the clamping minimum, one by one.
+// it that is not already at the clamping minimum, one by one (boxes of more
+// than 2^26 such voxels are refused with an error).
 #pragma once
 
 #include <message_filters/subscriber.h>
