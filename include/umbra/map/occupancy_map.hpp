@@ -40,6 +40,7 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/color.hpp"
@@ -48,6 +49,7 @@
 #include "umbra/core/log_odds.hpp"
 #include "umbra/core/vec3.hpp"
 #include "umbra/map/insert_options.hpp"
+#include "umbra/query/information_gain.hpp"
 #include "umbra/query/predicate.hpp"
 #include "umbra/query/query_range.hpp"
 #include "umbra/query/shapes.hpp"
@@ -188,6 +190,18 @@ class OccupancyMap {
                                            double max_distance = std::numeric_limits<double>::infinity()) const;
   /// How many nodes query(predicate, depth) yields.
   [[nodiscard]] std::size_t count(const Predicate& predicate, int depth = 0) const;
+
+  // --- information gain (query/information_gain.hpp) ------------------------
+  /// The unknown finest voxels a sensor with this field of view would see:
+  /// centre in the frustum, no occupied voxel on the ray from its origin.
+  /// Throws std::invalid_argument for a bad frustum or options,
+  /// std::out_of_range when the frustum's origin lies outside the map.
+  [[nodiscard]] GainResult information_gain(const Frustum& frustum, const GainOptions& options = {}) const;
+  /// The same for many poses: result[i] is the gain of frustums[i]. Poses
+  /// run on options.threads threads; the map is held for reading one pose
+  /// at a time. Every frustum is checked before any is answered.
+  [[nodiscard]] std::vector<GainResult> information_gain(std::span<const Frustum> frustums,
+                                                         const GainOptions& options = {}) const;
 
   // --- pruning ------------------------------------------------------------
   /// On by default: eight equal children are merged into their parent. With
