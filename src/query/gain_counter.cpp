@@ -1,11 +1,14 @@
 #include "query/gain_counter.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 
 #include "integrate/ray_walker.hpp"
 
 namespace umbra::detail {
+struct GainStats { double setup_ns = 0, visit_ns = 0; unsigned long long obstacles = 0, pixels = 0, draw_visits = 0, image_pixels = 0; unsigned long long sweep_calls[22] = {}, sweep_ok[22] = {}; unsigned long long nodes, node_visible, node_hidden, voxels, img_vis, img_block, walks, steps, origin; ~GainStats() { if (nodes) for (int d = 1; d < 10; ++d) fprintf(stderr, "depth %d sweeps %llu ok %llu\n", d, sweep_calls[d], sweep_ok[d]); fprintf(stderr, "DRAW obstacles %llu pixels %llu visits %llu image %llu\n", obstacles, pixels, draw_visits, image_pixels); fprintf(stderr, "TIME setup %.0f ms visit %.0f ms\n", setup_ns * 1e-6, visit_ns * 1e-6); fprintf(stderr, "STATS nodes %llu node_visible %llu hidden %llu voxels %llu img_vis %llu img_block %llu walks %llu steps %llu\n", nodes, node_visible, node_hidden, voxels, img_vis, img_block, walks, steps); } } g_stats;
 namespace {
 
 double binary_entropy_bits(float log_odds) {
@@ -37,24 +40,37 @@ Aabb grown(const Aabb& box, double by) {
   return {box.min - Vec3d{by, by, by}, box.max + Vec3d{by, by, by}};
 }
 
-/// Whether the segment from `a` to `b` meets the box (slab test).
-bool segment_meets(Vec3d a, Vec3d b, const Aabb& box) {
-  double t0 = 0.0;
-  double t1 = 1.0;
+/// Whether the segment from `a` to `b` meets the box shrunk by `margin` on
+/// every side (`inside`) and the box grown by it (`near`): one slab test for both.
+struct SegmentBox {
+  bool inside;
+  bool near;
+};
+SegmentBox segment_meets(Vec3d a, Vec3d b, const Aabb& box, double margin) {
+  double in0 = 0.0, in1 = 1.0, out0 = 0.0, out1 = 1.0;
   for (int axis = 0; axis < 3; ++axis) {
     const double d = b[axis] - a[axis];
+    const double low = box.min[axis] - a[axis];
+    const double high = box.max[axis] - a[axis];
     if (d == 0.0) {
-      if (a[axis] < box.min[axis] || a[axis] > box.max[axis]) return false;
+      if (low - margin > 0.0 || high + margin < 0.0) return {false, false};
+      if (low + margin > 0.0 || high - margin < 0.0) in0 = 2.0;  // never inside the shrunk box
       continue;
     }
-    double enter = (box.min[axis] - a[axis]) / d;
-    double leave = (box.max[axis] - a[axis]) / d;
+    const double inverse = 1.0 / d;
+    double enter = (low + margin) * inverse;
+    double leave = (high - margin) * inverse;
     if (enter > leave) std::swap(enter, leave);
-    t0 = std::max(t0, enter);
-    t1 = std::min(t1, leave);
-    if (t0 > t1) return false;
+    in0 = std::max(in0, enter);
+    in1 = std::min(in1, leave);
+    enter = (low - margin) * inverse;
+    leave = (high + margin) * inverse;
+    if (enter > leave) std::swap(enter, leave);
+    out0 = std::max(out0, enter);
+    out1 = std::min(out1, leave);
+    if (out0 > out1) return {false, false};
   }
-  return true;
+  return {in0 <= in1, true};
 }
 
 /// A bound on how far the voxels a walk from `origin` visits stray from
@@ -73,6 +89,8 @@ double margin_for(Vec3d origin, double range, double resolution) {
 // within a pixel budget.
 constexpr double kPixelsPerFarVoxel = 1.0;
 constexpr double kMaxPixels = 400000.0;
+// Widest cone (in voxels across, where its obstacles are) worth sweeping.
+constexpr double kMaxSweepWidth = 16.0;
 
 }  // namespace
 
@@ -82,6 +100,18 @@ Aabb GainCounter::centres_of(Key key, int depth) const {
   const Vec3d low = grid_.center(key);
   const double span = grid_.resolution() * double((1u << depth) - 1u);
   return {low, low + Vec3d{span, span, span}};
+}
+
+bool GainCounter::in_frustum(Key key, Overlap parent) const {
+  if (parent == Overlap::inside) return true;
+  // The plane tests decide all but the centres right at the boundary.
+  const Vec3d centre = grid_.center(key);
+  switch (frustum_->overlap({centre, centre})) {
+    case Overlap::inside: return true;
+    case Overlap::outside: return false;
+    case Overlap::partly: return frustum_->contains(centre);
+  }
+  return false;
 }
 
 Aabb GainCounter::cube_of(Key key, int depth) const {
@@ -98,10 +128,14 @@ GainResult GainCounter::count(const OccupancyTree& tree, const Frustum& frustum,
   voxels_ = 0;
   entropy_ = 0.0;
   clear_shift_ = 64;
+  auto t0 = std::chrono::steady_clock::now();
   setup_pose(frustum);
+  auto t1 = std::chrono::steady_clock::now();
+  g_stats.setup_ns += std::chrono::duration<double, std::nano>(t1 - t0).count();
   OccupancyTree::Cursor cursor(tree);
   const bool inside_obstacle = thresholds_.is_occupied(cursor.max_log_odds(morton::encode(origin_key_), 0));
   if (!inside_obstacle) visit_node(tree_->root(), Key{}, Overlap::partly);
+  g_stats.visit_ns += std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t1).count();
   GainResult result;
   result.unknown_voxels = voxels_;
   const double r = grid_.resolution();
@@ -147,6 +181,7 @@ void GainCounter::setup_pose(const Frustum& frustum) {
   setup.pixel = pixel;
   setup.near_plane = res * 1e-3;
   image_.reset(setup);
+  g_stats.image_pixels += image_.width() * image_.height();
 
   // Obstacles anywhere in the image's pyramid up to the range (also before
   // min_range: they block just the same).
@@ -156,17 +191,42 @@ void GainCounter::setup_pose(const Frustum& frustum) {
   view.vfov = 2.0 * std::atan(setup.half_height);
   view.min_range = 0.0;
   view.max_range = range + 2.0 * margin_;
+  // The occupied voxels of the same region, as bits (the box of the
+  // pyramid cut at the range, within the box of the range's ball).
+  Vec3d low = apex;
+  Vec3d high = apex;
+  for (const double side : {-setup.half_width, setup.half_width}) {
+    for (const double up : {-setup.half_height, setup.half_height}) {
+      const Vec3d corner = apex + (setup.f + setup.l * side + setup.u * up) * view.max_range;
+      for (int a = 0; a < 3; ++a) {
+        low[a] = std::min(low[a], corner[a]);
+        high[a] = std::max(high[a], corner[a]);
+      }
+    }
+  }
+  Key low_key;
+  Key high_key;
+  const auto last = std::int64_t{grid_.keys_per_axis()} - 1;
+  for (int a = 0; a < 3; ++a) {
+    const double from = std::max(low[a], apex[a] - view.max_range) / res;
+    const double to = std::min(high[a], apex[a] + view.max_range) / res;
+    low_key[a] = std::uint32_t(std::clamp<std::int64_t>(std::int64_t(std::floor(from)) + grid_.key_offset() - 1, 0, last));
+    high_key[a] = std::uint32_t(std::clamp<std::int64_t>(std::int64_t(std::floor(to)) + grid_.key_offset() + 1, 0, last));
+  }
+  occupied_.reset(low_key, high_key);
   draw_obstacles(FrustumGeometry(view), tree_->root(), Key{});
   image_.finish();
+  sweep_pose_ = {&occupied_, &grid_, apex, origin_key_, margin_};
 }
 
 void GainCounter::draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key key) {
+  ++g_stats.draw_visits;
   if (!thresholds_.is_occupied(tree_->log_odds(ref))) return;
   const int depth = ref.depth;
   const Aabb cube = cube_of(key, depth);
   const Aabb reach = grown(cube, margin_);
-  if (view.overlap(reach) == Overlap::outside) return;
   if (tree_->has_children(ref) && !tree_->all_children_same(ref)) {
+    if (view.overlap(reach) == Overlap::outside) return;
     const std::uint32_t half = 1u << (depth - 1);
     for (unsigned slot = 0; slot < 8; ++slot) {
       const Key child{key.x + ((slot & 1u) ? half : 0u), key.y + ((slot & 2u) ? half : 0u),
@@ -179,15 +239,20 @@ void GainCounter::draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key k
   // near plane lies within near_plane / cos(widest angle) of the apex; an
   // obstacle that close could block rays there without showing in their
   // pixels, so the image then proves no visibility at all.
+  // (Its footprint below tells whether it is in the view's angles.)
   const ViewImage::Setup& s = image_.setup();
   const double near = std::sqrt(distance_squared(s.apex, reach));
+  if (near > view.frustum.max_range) return;
   const double widest = std::sqrt(1.0 + s.half_width * s.half_width + s.half_height * s.half_height);
   if (near <= s.near_plane * widest) touching_ = true;
   PixelRect rect;
   bool clipped = false;
   if (!image_.footprint(reach, rect, clipped)) return;
   image_.draw(rect, near, static_cast<std::uint32_t>(obstacles_.size()));
+  ++g_stats.obstacles; g_stats.pixels += (rect.x1 - rect.x0 + 1) * (rect.y1 - rect.y0 + 1);
   obstacles_.push_back(cube);
+  const std::uint32_t last = (1u << depth) - 1;
+  occupied_.set_box(key, {key.x + last, key.y + last, key.z + last});
 }
 
 // --- the walk over unknown space ------------------------------------------------------
@@ -205,6 +270,7 @@ void GainCounter::visit_node(NodeRef ref, Key key, Overlap overlap) {
     return;
   }
   const Visibility visibility = node_visibility(key, depth);
+  if (visibility == Visibility::blocked) return;
   if (visibility == Visibility::visible || (probe_here(depth) && voxel_visible(middle_of(key, depth)))) {
     count_node(ref, key, overlap);
     return;
@@ -219,16 +285,17 @@ void GainCounter::visit_node(NodeRef ref, Key key, Overlap overlap) {
 }
 
 void GainCounter::visit_region(Key key, int depth, float value, Overlap overlap) {
+  if (depth == 0) {
+    if (!in_frustum(key, overlap)) return;
+    if (voxel_visible(key)) add(1, value);
+    return;
+  }
   if (overlap != Overlap::inside) {
     overlap = frustum_->overlap(centres_of(key, depth));
     if (overlap == Overlap::outside) return;
   }
-  if (depth == 0) {
-    if (overlap != Overlap::inside && !frustum_->contains(grid_.center(key))) return;
-    if (voxel_visible(key)) add(1, value);
-    return;
-  }
   const Visibility visibility = node_visibility(key, depth);
+  if (visibility == Visibility::blocked) return;
   if (visibility == Visibility::visible || (probe_here(depth) && voxel_visible(middle_of(key, depth)))) {
     count_region(key, depth, value, overlap);
     return;
@@ -262,16 +329,16 @@ void GainCounter::count_node(NodeRef ref, Key key, Overlap overlap) {
 }
 
 void GainCounter::count_region(Key key, int depth, float value, Overlap overlap) {
+  if (depth == 0) {
+    if (in_frustum(key, overlap)) add(1, value);
+    return;
+  }
   if (overlap != Overlap::inside) {
     overlap = frustum_->overlap(centres_of(key, depth));
     if (overlap == Overlap::outside) return;
   }
   if (overlap == Overlap::inside) {
     add(std::uint64_t{1} << (3 * depth), value);
-    return;
-  }
-  if (depth == 0) {
-    if (frustum_->contains(grid_.center(key))) add(1, value);
     return;
   }
   const std::uint32_t half = 1u << (depth - 1);
@@ -293,28 +360,41 @@ void GainCounter::add(std::uint64_t voxels, float value) {
 
 // --- visibility --------------------------------------------------------------------
 
-GainCounter::Visibility GainCounter::node_visibility(Key key, int depth) const {
-  if (!use_image_ || touching_) return Visibility::undecided;
+GainCounter::Visibility GainCounter::node_visibility(Key key, int depth) {
+  if (!use_image_) return Visibility::undecided;
   // The centres the walks aim at (rounded to float: within the margin).
   const Aabb targets = grown(centres_of(key, depth), margin_);
   const ViewImage::Setup& s = image_.setup();
   // Near the apex directions are not what the image assumes (and the
-  // origin's own voxel has an empty walk): leave those nodes to the rays.
-  if (distance_squared(s.apex, targets) < 0.0625 * grid_.resolution() * grid_.resolution()) {
-    return Visibility::undecided;
-  }
+  // origin's own voxel has an empty walk): the image says nothing there.
   PixelRect rect;
   bool clipped = false;
-  if (!image_.footprint(targets, rect, clipped) || clipped) return Visibility::undecided;
-  const double farthest = std::sqrt(farthest_distance_squared(s.apex, targets));
-  return double(image_.nearest(rect)) > farthest ? Visibility::visible : Visibility::undecided;
+  if (touching_ || distance_squared(s.apex, targets) < 0.0625 * grid_.resolution() * grid_.resolution() ||
+      !image_.footprint(targets, rect, clipped) || clipped) {
+    return Visibility::undecided;
+  }
+  const double obstacle_free = double(image_.nearest(rect));  // no obstacle nearer in the cone
+  ++g_stats.nodes;
+  if (obstacle_free > std::sqrt(farthest_distance_squared(s.apex, targets))) { ++g_stats.node_visible; return Visibility::visible; }
+  if (depth == 0) return Visibility::undecided;
+  // Some rays reach the node's near side without passing an obstacle: a
+  // sweep would not prove it hidden.
+  const double obstacles_before = double(image_.nearest_in_every_pixel(rect));
+  if (obstacles_before >= std::sqrt(distance_squared(s.apex, targets))) return Visibility::undecided;
+  // Wide cones straddle the edges of what hides them: their parts will do.
+  const double across = double(std::max(rect.x1 - rect.x0, rect.y1 - rect.y0) + 1) * s.pixel * obstacles_before;
+  if (across > kMaxSweepWidth * grid_.resolution()) return Visibility::undecided;
+  ++g_stats.sweep_calls[depth];
+  if (sweep_.hidden(sweep_pose_, targets, obstacle_free)) { ++g_stats.sweep_ok[depth]; ++g_stats.node_hidden; return Visibility::blocked; }
+  return Visibility::undecided;
 }
 
 bool GainCounter::voxel_visible(Key key) {
+  ++g_stats.voxels;
   if (key == origin_key_) return true;  // the walk to the origin's own voxel is empty
   switch (ray_visibility_from_image(key)) {
-    case Visibility::visible: return true;
-    case Visibility::blocked: return false;
+    case Visibility::visible: ++g_stats.img_vis; return true;
+    case Visibility::blocked: ++g_stats.img_block; return false;
     case Visibility::undecided: break;
   }
   return walk_is_clear(key);
@@ -338,8 +418,9 @@ GainCounter::Visibility GainCounter::ray_visibility_from_image(Key key) const {
     const Aabb& cube = obstacles_[candidates[i].index];
     // Through the inside, shrunk by the margin: the walk surely visits it
     // (before the target's voxel, which is unknown and so not in it).
-    if (segment_meets(apex, target, grown(cube, -margin_))) return Visibility::blocked;
-    grazed |= segment_meets(apex, target, grown(cube, margin_));
+    const SegmentBox meets = segment_meets(apex, target, cube, margin_);
+    if (meets.inside) return Visibility::blocked;
+    grazed |= meets.near;
   }
   if (!grazed && !overflow && !touching_) return Visibility::visible;
   return Visibility::undecided;
@@ -347,7 +428,9 @@ GainCounter::Visibility GainCounter::ray_visibility_from_image(Key key) const {
 
 bool GainCounter::walk_is_clear(Key key) {
   bool blocked = false;
+  ++g_stats.walks;
   auto visit = [&](std::uint64_t code) {
+    ++g_stats.steps;
     if (clear_shift_ < 64 && (code >> clear_shift_) == clear_prefix_) return true;
     NodeRef ref = tree_->root();
     for (;;) {

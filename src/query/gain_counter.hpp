@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "query/geometry.hpp"
+#include "query/occlusion_sweep.hpp"
 #include "query/view_image.hpp"
 #include "tree/occupancy_tree.hpp"
 #include "umbra/core/grid.hpp"
@@ -69,11 +70,13 @@ class GainCounter {
   void count_node(NodeRef ref, Key key, Overlap overlap);
   void count_region(Key key, int depth, float value, Overlap overlap);
   void add(std::uint64_t voxels, float value);
-  [[nodiscard]] Visibility node_visibility(Key key, int depth) const;
+  [[nodiscard]] Visibility node_visibility(Key key, int depth);
   bool voxel_visible(Key key);
   [[nodiscard]] Visibility ray_visibility_from_image(Key key) const;
   bool walk_is_clear(Key key);
   [[nodiscard]] Aabb centres_of(Key key, int depth) const;
+  /// Whether the centre of voxel `key` lies in the frustum, given what its parent region's overlap was.
+  [[nodiscard]] bool in_frustum(Key key, Overlap parent) const;
   [[nodiscard]] Aabb cube_of(Key key, int depth) const;
   [[nodiscard]] bool probe_here(int depth) const { return fast_ && depth > 0 && depth <= fast_depth_; }
 
@@ -92,6 +95,9 @@ class GainCounter {
   int fast_depth_ = 0;
 
   ViewImage image_;
+  OccupiedBitmap occupied_;  // the drawn obstacles' voxels
+  OcclusionSweep sweep_;
+  OcclusionSweep::Pose sweep_pose_{};
   std::vector<Aabb> obstacles_;  // cubes of the drawn obstacles (not grown)
 
   // The result so far.

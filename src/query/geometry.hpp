@@ -12,6 +12,7 @@
 // axis test is the dearest (15 axes).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -47,7 +48,7 @@ inline double distance_squared(Vec3d p, const Aabb& box) {
 inline double farthest_distance_squared(Vec3d p, const Aabb& box) {
   double sum = 0.0;
   for (int axis = 0; axis < 3; ++axis) {
-    const double d = std::fmax(std::fabs(p[axis] - box.min[axis]), std::fabs(p[axis] - box.max[axis]));
+    const double d = std::max(std::fabs(p[axis] - box.min[axis]), std::fabs(p[axis] - box.max[axis]));
     sum += d * d;
   }
   return sum;

@@ -28,8 +28,9 @@ void ViewImage::reset(const Setup& setup) {
     w = (w + 1) / 2;
     h = (h + 1) / 2;
   }
-  levels_.resize(level_sizes_.size());
-  levels_[0].assign(std::size_t(width_) * std::size_t(height_), std::numeric_limits<float>::infinity());
+  minima_.resize(level_sizes_.size());
+  maxima_.resize(level_sizes_.size());
+  minima_[0].assign(std::size_t(width_) * std::size_t(height_), std::numeric_limits<float>::infinity());
   candidates_.resize(std::size_t(width_) * std::size_t(height_) * kCandidates);
   counts_.assign(std::size_t(width_) * std::size_t(height_), 0);
 }
@@ -110,7 +111,7 @@ bool ViewImage::pixel_of(Vec3d d, int& px, int& py) const {
 
 void ViewImage::draw(const PixelRect& rect, double near, std::uint32_t obstacle) {
   const float distance = round_down(near);
-  std::vector<float>& nearest = levels_[0];
+  std::vector<float>& nearest = minima_[0];
   for (int py = rect.y0; py <= rect.y1; ++py) {
     for (int px = rect.x0; px <= rect.x1; ++px) {
       const std::size_t i = index(px, py);
@@ -136,41 +137,47 @@ void ViewImage::draw(const PixelRect& rect, double near, std::uint32_t obstacle)
 }
 
 void ViewImage::finish() {
-  for (std::size_t level = 1; level < levels_.size(); ++level) {
+  maxima_[0] = minima_[0];
+  build(minima_, false);
+  build(maxima_, true);
+}
+
+void ViewImage::build(Pyramid& pyramid, bool greatest) {
+  for (std::size_t level = 1; level < pyramid.size(); ++level) {
     const auto [w, h] = level_sizes_[level];
     const auto [below_w, below_h] = level_sizes_[level - 1];
-    const std::vector<float>& below = levels_[level - 1];
-    std::vector<float>& out = levels_[level];
+    const std::vector<float>& below = pyramid[level - 1];
+    std::vector<float>& out = pyramid[level];
     out.resize(std::size_t(w) * std::size_t(h));
     for (int py = 0; py < h; ++py) {
       for (int px = 0; px < w; ++px) {
-        float m = std::numeric_limits<float>::infinity();
-        for (int dy = 0; dy < 2; ++dy) {
-          for (int dx = 0; dx < 2; ++dx) {
-            const int bx = 2 * px + dx;
-            const int by = 2 * py + dy;
-            if (bx < below_w && by < below_h) m = std::min(m, below[std::size_t(by) * std::size_t(below_w) + std::size_t(bx)]);
-          }
-        }
-        out[std::size_t(py) * std::size_t(w) + std::size_t(px)] = m;
+        // Blocks at the right and top edges may have fewer than four pixels.
+        const int x0 = 2 * px;
+        const int y0 = 2 * py;
+        const int x1 = std::min(x0 + 1, below_w - 1);
+        const int y1 = std::min(y0 + 1, below_h - 1);
+        auto at = [&](int x, int y) { return below[std::size_t(y) * std::size_t(below_w) + std::size_t(x)]; };
+        const float a = greatest ? std::max(at(x0, y0), at(x1, y0)) : std::min(at(x0, y0), at(x1, y0));
+        const float b = greatest ? std::max(at(x0, y1), at(x1, y1)) : std::min(at(x0, y1), at(x1, y1));
+        out[std::size_t(py) * std::size_t(w) + std::size_t(px)] = greatest ? std::max(a, b) : std::min(a, b);
       }
     }
   }
 }
 
-float ViewImage::nearest(const PixelRect& rect) const {
+float ViewImage::read(const Pyramid& pyramid, const PixelRect& rect, bool greatest) const {
   int level = 0;
   while ((rect.x1 >> level) - (rect.x0 >> level) > 1 || (rect.y1 >> level) - (rect.y0 >> level) > 1) ++level;
-  const auto [w, h] = level_sizes_[std::size_t(level)];
-  (void)h;
-  const std::vector<float>& image = levels_[std::size_t(level)];
-  float m = std::numeric_limits<float>::infinity();
+  const int w = level_sizes_[std::size_t(level)][0];
+  const std::vector<float>& image = pyramid[std::size_t(level)];
+  float value = greatest ? -std::numeric_limits<float>::infinity() : std::numeric_limits<float>::infinity();
   for (int py = rect.y0 >> level; py <= rect.y1 >> level; ++py) {
     for (int px = rect.x0 >> level; px <= rect.x1 >> level; ++px) {
-      m = std::min(m, image[std::size_t(py) * std::size_t(w) + std::size_t(px)]);
+      const float v = image[std::size_t(py) * std::size_t(w) + std::size_t(px)];
+      value = greatest ? std::max(value, v) : std::min(value, v);
     }
   }
-  return m;
+  return value;
 }
 
 }  // namespace umbra::detail

@@ -17,8 +17,9 @@
 //                  ray through p meets no obstacle before that distance.
 //   candidates(p): the `kCandidates` nearest of them, to test a single ray
 //                  against exactly, and whether more were drawn (overflow).
-// A pyramid of minima over 2x2 blocks answers "nearest obstacle anywhere in
-// this footprint" with at most four reads.
+// Pyramids of minima and of maxima over 2x2 blocks answer "nearest obstacle
+// anywhere in this footprint" and "is there an obstacle before d in every
+// pixel of it" with at most four reads each.
 //
 // Layout: row-major float arrays, level 0 is the image; candidates are
 // kCandidates slots per pixel, sorted by distance, plus a count byte.
@@ -76,13 +77,16 @@ class ViewImage {
 
   /// Draws an obstacle at distance `near` into the pixels of `rect`.
   void draw(const PixelRect& rect, double near, std::uint32_t index);
-  /// Builds the pyramid of minima; call after the last draw().
+  /// Builds the pyramids; call after the last draw().
   void finish();
 
-  /// The nearest obstacle distance over the pixels of `rect` (a lower bound:
-  /// the pyramid may read a few pixels more).
-  [[nodiscard]] float nearest(const PixelRect& rect) const;
-  [[nodiscard]] float nearest(int x, int y) const { return levels_[0][index(x, y)]; }
+  /// The least nearest-obstacle distance over the pixels of `rect` (a lower
+  /// bound: the pyramid may read a few pixels more).
+  [[nodiscard]] float nearest(const PixelRect& rect) const { return read(minima_, rect, false); }
+  /// The greatest nearest-obstacle distance over the pixels of `rect` (an
+  /// upper bound, for the same reason).
+  [[nodiscard]] float nearest_in_every_pixel(const PixelRect& rect) const { return read(maxima_, rect, true); }
+  [[nodiscard]] float nearest(int x, int y) const { return minima_[0][index(x, y)]; }
   /// The candidates of a pixel, nearest first; `overflow` when more obstacles were drawn there.
   [[nodiscard]] const Candidate* candidates(int x, int y, int& count, bool& overflow) const {
     const std::uint8_t c = counts_[index(x, y)];
@@ -93,11 +97,15 @@ class ViewImage {
 
  private:
   [[nodiscard]] std::size_t index(int x, int y) const { return std::size_t(y) * std::size_t(width_) + std::size_t(x); }
+  using Pyramid = std::vector<std::vector<float>>;  // level 0 is the image, then 2x2 blocks, 4x4, ...
+  [[nodiscard]] float read(const Pyramid& pyramid, const PixelRect& rect, bool greatest) const;
+  void build(Pyramid& pyramid, bool greatest);
 
   Setup setup_{};
   int width_ = 0;
   int height_ = 0;
-  std::vector<std::vector<float>> levels_;      // nearest, then its minima over 2x2, 4x4, ...
+  Pyramid minima_;  // nearest obstacle per pixel, then minima of blocks
+  Pyramid maxima_;  // the same pixels, then maxima of blocks
   std::vector<std::array<int, 2>> level_sizes_;  // width, height per level
   std::vector<Candidate> candidates_;
   std::vector<std::uint8_t> counts_;
