@@ -22,7 +22,7 @@
 //
 // Usage: umbra_query_benchmark [--data DIR] [--datasets 3dtk-20cm,3dtk-5cm,tum-2cm,geb079-8cm]
 //          [--sections gain] [--poses 100] [--octomap-poses 3dtk-20cm=100,3dtk-5cm=10,...]
-//          [--repeat 3] [--seed 1] [--markdown FILE]
+//          [--repeat 3] [--seed 1] [--exact-only] [--markdown FILE]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -236,6 +236,8 @@ struct GainRow {
   std::size_t poses = 0;
   double exact_us = 0.0;
   double fast_us = 0.0;
+  double exact_batch_us = 0.0;  // per pose, the poses as one batch (scratch memory reused)
+  double fast_batch_us = 0.0;
   std::size_t octomap_poses = 0;
   double octomap_us = 0.0;
   double exact_us_on_octomap_poses = 0.0;
@@ -265,15 +267,28 @@ std::vector<double> time_umbra(const umbra::OccupancyMap& map, const std::vector
 }
 
 GainRow run_gain(const Dataset& data, std::size_t pose_count, std::size_t octomap_pose_count, int repeat,
-                 std::uint64_t seed) {
+                 std::uint64_t seed, bool run_fast) {
   GainRow row;
   row.dataset = data.name;
   const std::vector<umbra::Frustum> poses = gain_poses(*data.map, pose_count, seed);
   row.poses = poses.size();
   std::vector<std::uint64_t> exact;
   std::vector<std::uint64_t> fast;
-  const std::vector<double> exact_us = time_umbra(*data.map, poses, {.method = umbra::GainMethod::exact}, repeat, exact);
-  const std::vector<double> fast_us = time_umbra(*data.map, poses, {.method = umbra::GainMethod::fast}, repeat, fast);
+  for (const umbra::GainMethod method : {umbra::GainMethod::exact, umbra::GainMethod::fast}) {
+    if (getenv("FAST_ONLY")) break;
+    std::vector<double> runs;
+    for (int r = 0; r < repeat; ++r) {
+      const double start = thread_seconds();
+      (void)data.map->information_gain(std::span<const umbra::Frustum>(poses), {.method = method});
+      runs.push_back(1e6 * (thread_seconds() - start) / double(poses.size()));
+    }
+    (method == umbra::GainMethod::exact ? row.exact_batch_us : row.fast_batch_us) = median(runs);
+  }
+  const std::vector<double> exact_us = getenv("FAST_ONLY") ? std::vector<double>(poses.size(), 1.0) : time_umbra(*data.map, poses, {.method = umbra::GainMethod::exact}, repeat, exact);
+  if (getenv("FAST_ONLY")) exact.assign(poses.size(), 1);
+  const std::vector<double> fast_us = run_fast ? time_umbra(*data.map, poses, {.method = umbra::GainMethod::fast}, repeat, fast)
+                                              : std::vector<double>(poses.size(), 0.0);
+  if (!run_fast) fast = exact;
   double sum_error = 0.0;
   std::size_t with_gain = 0;
   for (std::size_t i = 0; i < poses.size(); ++i) {
@@ -338,6 +353,7 @@ int main(int argc, char** argv) {
   std::string markdown_path;
   std::size_t poses = 100;
   int repeat = 3;
+  bool run_fast = true;
   std::uint64_t seed = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -354,12 +370,13 @@ int main(int argc, char** argv) {
     else if (arg == "--poses") poses = std::stoul(value());
     else if (arg == "--octomap-poses") octomap_poses_text = value();
     else if (arg == "--repeat") repeat = std::stoi(value());
+    else if (arg == "--exact-only") run_fast = false;
     else if (arg == "--seed") seed = std::stoull(value());
     else if (arg == "--markdown") markdown_path = value();
     else if (arg == "--help" || arg == "-h") {
       std::printf(
           "usage: umbra_query_benchmark [--data DIR] [--datasets LIST] [--sections gain] [--poses 100]\n"
-          "         [--octomap-poses NAME=N,...] [--repeat 3] [--seed 1] [--markdown FILE]\n"
+          "         [--octomap-poses NAME=N,...] [--repeat 3] [--seed 1] [--exact-only] [--markdown FILE]\n"
           "datasets:");
       for (const DatasetSpec& d : kDatasets) std::printf(" %s", d.name.c_str());
       std::printf("\n");
@@ -400,8 +417,11 @@ int main(int argc, char** argv) {
     }
     for (const std::string& section : split(sections)) {
       if (section == "gain") {
-        gain_rows.push_back(run_gain(data, poses, octomap_poses.count(name) ? octomap_poses[name] : 0, repeat, seed));
+        gain_rows.push_back(
+            run_gain(data, poses, octomap_poses.count(name) ? octomap_poses[name] : 0, repeat, seed, run_fast));
         std::fputs(gain_table({gain_rows.back()}).c_str(), stderr);
+        std::fprintf(stderr, "batch: exact %.0f us/pose, fast %.0f us/pose\n", gain_rows.back().exact_batch_us,
+                     gain_rows.back().fast_batch_us);
       } else {
         std::fprintf(stderr, "unknown section %s\n", section.c_str());
         return 2;

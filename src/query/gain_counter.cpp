@@ -1,14 +1,11 @@
 #include "query/gain_counter.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <cstdio>
 
 #include "integrate/ray_walker.hpp"
 
 namespace umbra::detail {
-struct GainStats { double setup_ns = 0, visit_ns = 0; unsigned long long obstacles = 0, pixels = 0, draw_visits = 0, image_pixels = 0; unsigned long long sweep_calls[22] = {}, sweep_ok[22] = {}; unsigned long long nodes, node_visible, node_hidden, voxels, img_vis, img_block, walks, steps, origin; ~GainStats() { if (nodes) for (int d = 1; d < 10; ++d) fprintf(stderr, "depth %d sweeps %llu ok %llu\n", d, sweep_calls[d], sweep_ok[d]); fprintf(stderr, "DRAW obstacles %llu pixels %llu visits %llu image %llu\n", obstacles, pixels, draw_visits, image_pixels); fprintf(stderr, "TIME setup %.0f ms visit %.0f ms\n", setup_ns * 1e-6, visit_ns * 1e-6); fprintf(stderr, "STATS nodes %llu node_visible %llu hidden %llu voxels %llu img_vis %llu img_block %llu walks %llu steps %llu\n", nodes, node_visible, node_hidden, voxels, img_vis, img_block, walks, steps); } } g_stats;
 namespace {
 
 double binary_entropy_bits(float log_odds) {
@@ -30,10 +27,10 @@ Vec3d widen(Vec3f p) {
   return {double(x), double(y), double(z)};
 }
 
-/// The voxel at the middle of a node (the first of the upper half on each axis).
-Key middle_of(Key key, int depth) {
+/// Key of child `slot` (x = 1, y = 2, z = 4) of the node at `depth` whose first voxel is `key`.
+Key child_key(Key key, int depth, unsigned slot) {
   const std::uint32_t half = 1u << (depth - 1);
-  return {key.x + half, key.y + half, key.z + half};
+  return {key.x + ((slot & 1u) ? half : 0u), key.y + ((slot & 2u) ? half : 0u), key.z + ((slot & 4u) ? half : 0u)};
 }
 
 Aabb grown(const Aabb& box, double by) {
@@ -104,14 +101,7 @@ Aabb GainCounter::centres_of(Key key, int depth) const {
 
 bool GainCounter::in_frustum(Key key, Overlap parent) const {
   if (parent == Overlap::inside) return true;
-  // The plane tests decide all but the centres right at the boundary.
-  const Vec3d centre = grid_.center(key);
-  switch (frustum_->overlap({centre, centre})) {
-    case Overlap::inside: return true;
-    case Overlap::outside: return false;
-    case Overlap::partly: return frustum_->contains(centre);
-  }
-  return false;
+  return frustum_->contains_quickly(grid_.center(key));
 }
 
 Aabb GainCounter::cube_of(Key key, int depth) const {
@@ -128,14 +118,11 @@ GainResult GainCounter::count(const OccupancyTree& tree, const Frustum& frustum,
   voxels_ = 0;
   entropy_ = 0.0;
   clear_shift_ = 64;
-  auto t0 = std::chrono::steady_clock::now();
   setup_pose(frustum);
-  auto t1 = std::chrono::steady_clock::now();
-  g_stats.setup_ns += std::chrono::duration<double, std::nano>(t1 - t0).count();
+  // A sensor inside an obstacle sees nothing: every walk starts in its voxel.
   OccupancyTree::Cursor cursor(tree);
   const bool inside_obstacle = thresholds_.is_occupied(cursor.max_log_odds(morton::encode(origin_key_), 0));
   if (!inside_obstacle) visit_node(tree_->root(), Key{}, Overlap::partly);
-  g_stats.visit_ns += std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t1).count();
   GainResult result;
   result.unknown_voxels = voxels_;
   const double r = grid_.resolution();
@@ -180,8 +167,8 @@ void GainCounter::setup_pose(const Frustum& frustum) {
   setup.half_height = tan_v + border;
   setup.pixel = pixel;
   setup.near_plane = res * 1e-3;
+  setup.candidates = true;
   image_.reset(setup);
-  g_stats.image_pixels += image_.width() * image_.height();
 
   // Obstacles anywhere in the image's pyramid up to the range (also before
   // min_range: they block just the same).
@@ -214,24 +201,23 @@ void GainCounter::setup_pose(const Frustum& frustum) {
     high_key[a] = std::uint32_t(std::clamp<std::int64_t>(std::int64_t(std::floor(to)) + grid_.key_offset() + 1, 0, last));
   }
   occupied_.reset(low_key, high_key);
-  draw_obstacles(FrustumGeometry(view), tree_->root(), Key{});
+  draw_obstacles(FrustumGeometry(view), tree_->root(), Key{}, Overlap::partly);
   image_.finish();
   sweep_pose_ = {&occupied_, &grid_, apex, origin_key_, margin_};
 }
 
-void GainCounter::draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key key) {
-  ++g_stats.draw_visits;
+void GainCounter::draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key key, Overlap overlap) {
   if (!thresholds_.is_occupied(tree_->log_odds(ref))) return;
   const int depth = ref.depth;
   const Aabb cube = cube_of(key, depth);
   const Aabb reach = grown(cube, margin_);
   if (tree_->has_children(ref) && !tree_->all_children_same(ref)) {
-    if (view.overlap(reach) == Overlap::outside) return;
-    const std::uint32_t half = 1u << (depth - 1);
+    if (overlap != Overlap::inside) {
+      overlap = view.overlap(reach);
+      if (overlap == Overlap::outside) return;
+    }
     for (unsigned slot = 0; slot < 8; ++slot) {
-      const Key child{key.x + ((slot & 1u) ? half : 0u), key.y + ((slot & 2u) ? half : 0u),
-                      key.z + ((slot & 4u) ? half : 0u)};
-      draw_obstacles(view, tree_->child(ref, slot), child);
+      draw_obstacles(view, tree_->child(ref, slot), child_key(key, depth, slot), overlap);
     }
     return;
   }
@@ -249,7 +235,6 @@ void GainCounter::draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key k
   bool clipped = false;
   if (!image_.footprint(reach, rect, clipped)) return;
   image_.draw(rect, near, static_cast<std::uint32_t>(obstacles_.size()));
-  ++g_stats.obstacles; g_stats.pixels += (rect.x1 - rect.x0 + 1) * (rect.y1 - rect.y0 + 1);
   obstacles_.push_back(cube);
   const std::uint32_t last = (1u << depth) - 1;
   occupied_.set_box(key, {key.x + last, key.y + last, key.z + last});
@@ -260,72 +245,65 @@ void GainCounter::draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key k
 void GainCounter::visit_node(NodeRef ref, Key key, Overlap overlap) {
   if (!tree_->contains_unknown(ref)) return;
   const int depth = ref.depth;
+  if (!tree_->has_children(ref) || tree_->all_children_same(ref)) {
+    visit_region(key, depth, tree_->log_odds(ref), overlap);
+    return;
+  }
   if (overlap != Overlap::inside) {
     overlap = frustum_->overlap(centres_of(key, depth));
     if (overlap == Overlap::outside) return;
   }
-  const bool uniform = !tree_->has_children(ref) || tree_->all_children_same(ref);
-  if (uniform) {
-    visit_region(key, depth, tree_->log_odds(ref), overlap);
-    return;
+  switch (decide(key, depth, tree_->log_odds(ref))) {
+    case Visibility::visible: count_node(ref, key, overlap); return;
+    case Visibility::blocked: return;
+    case Visibility::undecided: break;
   }
-  const Visibility visibility = node_visibility(key, depth);
-  if (visibility == Visibility::blocked) return;
-  if (visibility == Visibility::visible || (probe_here(depth) && voxel_visible(middle_of(key, depth)))) {
-    count_node(ref, key, overlap);
-    return;
-  }
-  if (probe_here(depth)) return;
-  const std::uint32_t half = 1u << (depth - 1);
-  for (unsigned slot = 0; slot < 8; ++slot) {
-    const Key child{key.x + ((slot & 1u) ? half : 0u), key.y + ((slot & 2u) ? half : 0u),
-                    key.z + ((slot & 4u) ? half : 0u)};
-    visit_node(tree_->child(ref, slot), child, overlap);
-  }
+  for (unsigned slot = 0; slot < 8; ++slot) visit_node(tree_->child(ref, slot), child_key(key, depth, slot), overlap);
 }
 
 void GainCounter::visit_region(Key key, int depth, float value, Overlap overlap) {
   if (depth == 0) {
-    if (!in_frustum(key, overlap)) return;
-    if (voxel_visible(key)) add(1, value);
+    if (in_frustum(key, overlap) && voxel_visible(key)) add(1, value);
     return;
   }
   if (overlap != Overlap::inside) {
     overlap = frustum_->overlap(centres_of(key, depth));
     if (overlap == Overlap::outside) return;
   }
-  const Visibility visibility = node_visibility(key, depth);
-  if (visibility == Visibility::blocked) return;
-  if (visibility == Visibility::visible || (probe_here(depth) && voxel_visible(middle_of(key, depth)))) {
-    count_region(key, depth, value, overlap);
-    return;
+  switch (decide(key, depth, value)) {
+    case Visibility::visible: count_region(key, depth, value, overlap); return;
+    case Visibility::blocked: return;
+    case Visibility::undecided: break;
   }
-  if (probe_here(depth)) return;
-  const std::uint32_t half = 1u << (depth - 1);
-  for (unsigned slot = 0; slot < 8; ++slot) {
-    const Key child{key.x + ((slot & 1u) ? half : 0u), key.y + ((slot & 2u) ? half : 0u),
-                    key.z + ((slot & 4u) ? half : 0u)};
-    visit_region(child, depth - 1, value, overlap);
-  }
+  for (unsigned slot = 0; slot < 8; ++slot) visit_region(child_key(key, depth, slot), depth - 1, value, overlap);
+}
+
+GainCounter::Visibility GainCounter::decide(Key key, int depth, float value) {
+  const Visibility surely = node_visibility(key, depth);
+  if (surely != Visibility::undecided || !fast_ || depth > fast_depth_) return surely;
+  // Fast: the two opposite corner voxels decide a node without obstacles
+  // inside when they agree (with an obstacle inside, the voxels in front of
+  // it and behind it differ).
+  if (thresholds_.is_occupied(value)) return Visibility::undecided;
+  const std::uint32_t last = (1u << depth) - 1;
+  const bool low = voxel_visible(key);
+  const bool high = voxel_visible({key.x + last, key.y + last, key.z + last});
+  if (low != high) return Visibility::undecided;
+  return low ? Visibility::visible : Visibility::blocked;
 }
 
 void GainCounter::count_node(NodeRef ref, Key key, Overlap overlap) {
   if (!tree_->contains_unknown(ref)) return;
   const int depth = ref.depth;
-  if (overlap != Overlap::inside) {
-    overlap = frustum_->overlap(centres_of(key, depth));
-    if (overlap == Overlap::outside) return;
-  }
   if (!tree_->has_children(ref) || tree_->all_children_same(ref)) {
     count_region(key, depth, tree_->log_odds(ref), overlap);
     return;
   }
-  const std::uint32_t half = 1u << (depth - 1);
-  for (unsigned slot = 0; slot < 8; ++slot) {
-    const Key child{key.x + ((slot & 1u) ? half : 0u), key.y + ((slot & 2u) ? half : 0u),
-                    key.z + ((slot & 4u) ? half : 0u)};
-    count_node(tree_->child(ref, slot), child, overlap);
+  if (overlap != Overlap::inside) {
+    overlap = frustum_->overlap(centres_of(key, depth));
+    if (overlap == Overlap::outside) return;
   }
+  for (unsigned slot = 0; slot < 8; ++slot) count_node(tree_->child(ref, slot), child_key(key, depth, slot), overlap);
 }
 
 void GainCounter::count_region(Key key, int depth, float value, Overlap overlap) {
@@ -341,12 +319,7 @@ void GainCounter::count_region(Key key, int depth, float value, Overlap overlap)
     add(std::uint64_t{1} << (3 * depth), value);
     return;
   }
-  const std::uint32_t half = 1u << (depth - 1);
-  for (unsigned slot = 0; slot < 8; ++slot) {
-    const Key child{key.x + ((slot & 1u) ? half : 0u), key.y + ((slot & 2u) ? half : 0u),
-                    key.z + ((slot & 4u) ? half : 0u)};
-    count_region(child, depth - 1, value, overlap);
-  }
+  for (unsigned slot = 0; slot < 8; ++slot) count_region(child_key(key, depth, slot), depth - 1, value, overlap);
 }
 
 void GainCounter::add(std::uint64_t voxels, float value) {
@@ -374,9 +347,9 @@ GainCounter::Visibility GainCounter::node_visibility(Key key, int depth) {
     return Visibility::undecided;
   }
   const double obstacle_free = double(image_.nearest(rect));  // no obstacle nearer in the cone
-  ++g_stats.nodes;
-  if (obstacle_free > std::sqrt(farthest_distance_squared(s.apex, targets))) { ++g_stats.node_visible; return Visibility::visible; }
-  if (depth == 0) return Visibility::undecided;
+  if (obstacle_free > std::sqrt(farthest_distance_squared(s.apex, targets))) return Visibility::visible;
+  // For eight voxels or fewer a sweep costs more than the rays it saves.
+  if (depth < 2) return Visibility::undecided;
   // Some rays reach the node's near side without passing an obstacle: a
   // sweep would not prove it hidden.
   const double obstacles_before = double(image_.nearest_in_every_pixel(rect));
@@ -384,17 +357,14 @@ GainCounter::Visibility GainCounter::node_visibility(Key key, int depth) {
   // Wide cones straddle the edges of what hides them: their parts will do.
   const double across = double(std::max(rect.x1 - rect.x0, rect.y1 - rect.y0) + 1) * s.pixel * obstacles_before;
   if (across > kMaxSweepWidth * grid_.resolution()) return Visibility::undecided;
-  ++g_stats.sweep_calls[depth];
-  if (sweep_.hidden(sweep_pose_, targets, obstacle_free)) { ++g_stats.sweep_ok[depth]; ++g_stats.node_hidden; return Visibility::blocked; }
-  return Visibility::undecided;
+  return sweep_.hidden(sweep_pose_, targets, obstacle_free) ? Visibility::blocked : Visibility::undecided;
 }
 
 bool GainCounter::voxel_visible(Key key) {
-  ++g_stats.voxels;
   if (key == origin_key_) return true;  // the walk to the origin's own voxel is empty
   switch (ray_visibility_from_image(key)) {
-    case Visibility::visible: ++g_stats.img_vis; return true;
-    case Visibility::blocked: ++g_stats.img_block; return false;
+    case Visibility::visible: return true;
+    case Visibility::blocked: return false;
     case Visibility::undecided: break;
   }
   return walk_is_clear(key);
@@ -428,9 +398,7 @@ GainCounter::Visibility GainCounter::ray_visibility_from_image(Key key) const {
 
 bool GainCounter::walk_is_clear(Key key) {
   bool blocked = false;
-  ++g_stats.walks;
   auto visit = [&](std::uint64_t code) {
-    ++g_stats.steps;
     if (clear_shift_ < 64 && (code >> clear_shift_) == clear_prefix_) return true;
     NodeRef ref = tree_->root();
     for (;;) {

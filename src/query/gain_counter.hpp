@@ -5,25 +5,28 @@
 // For a pose it
 //  1. draws the occupied voxels and solid occupied nodes of the field of
 //     view into a ViewImage (the obstacles, grown by the margin that covers
-//     the ray walk's rounding);
+//     the ray walk's rounding) and into an OccupiedBitmap;
 //  2. walks the tree through the nodes that hold unknown space and whose
-//     voxel centres can lie in the frustum. A node whose footprint in the
-//     image shows no obstacle nearer than its farthest centre is surely
-//     wholly visible: its unknown voxels in the frustum are counted without
-//     looking at rays. Any other node is split (a childless node into
-//     virtual children of its value);
+//     voxel centres can lie in the frustum, and decides whole nodes:
+//     visible when the node's footprint in the image shows no obstacle
+//     nearer than its farthest centre (its unknown voxels in the frustum
+//     are then counted without looking at rays); hidden when an
+//     OcclusionSweep proves every walk to it blocked. Any other node is
+//     split (a childless node into virtual children of its value);
 //  3. decides each remaining voxel by its own ray: visible when its pixel
 //     shows no obstacle before it, or none of the pixel's candidate
 //     obstacles comes near the ray; blocked when the ray passes through the
 //     inside of a candidate; otherwise (rays grazing an obstacle, pixels
 //     with too many obstacles) the voxel walk itself decides, stopping at
 //     the first occupied voxel.
-// The fast method stops splitting at nodes of 2^fast_depth voxels per edge
-// and decides each by the ray to its middle voxel.
+// The fast method also decides an undecided node of at most 2^fast_depth
+// voxels per edge by the rays to its two opposite corner voxels when they
+// agree (both visible: counted whole; both blocked: skipped), and splits it
+// when they do not.
 //
 // Every "surely" uses `margin_`, a bound on how far the walk's float
-// arithmetic strays from the exact segment (see margin_for()); a voxel the
-// walk might visit is always within the margin of the segment, and the walk
+// arithmetic strays from the exact segment (see margin_for()): a voxel the
+// walk visits is always within the margin of the segment, and the walk
 // always visits a voxel whose inside, shrunk by the margin, the segment
 // crosses. When the margin is not small against the voxels (huge
 // coordinates), nothing is decided from the image and every voxel is walked.
@@ -61,7 +64,7 @@ class GainCounter {
   enum class Visibility : unsigned char { visible, blocked, undecided };
 
   void setup_pose(const Frustum& frustum);
-  void draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key key);
+  void draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key key, Overlap overlap);
   // The walk over unknown space: a tree node, or a region of one value (a
   // childless node or part of one).
   void visit_node(NodeRef ref, Key key, Overlap overlap);
@@ -72,13 +75,16 @@ class GainCounter {
   void add(std::uint64_t voxels, float value);
   [[nodiscard]] Visibility node_visibility(Key key, int depth);
   bool voxel_visible(Key key);
+  /// What the image and the sweep prove of a node (whose value, the maximum
+  /// of its voxels, is `value`); for the fast method also what its corner
+  /// voxels suggest.
+  Visibility decide(Key key, int depth, float value);
   [[nodiscard]] Visibility ray_visibility_from_image(Key key) const;
   bool walk_is_clear(Key key);
   [[nodiscard]] Aabb centres_of(Key key, int depth) const;
   /// Whether the centre of voxel `key` lies in the frustum, given what its parent region's overlap was.
   [[nodiscard]] bool in_frustum(Key key, Overlap parent) const;
   [[nodiscard]] Aabb cube_of(Key key, int depth) const;
-  [[nodiscard]] bool probe_here(int depth) const { return fast_ && depth > 0 && depth <= fast_depth_; }
 
   const Grid& grid_;
   const OccupancyTree* tree_ = nullptr;  // the tree of the current count()

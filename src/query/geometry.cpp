@@ -128,6 +128,24 @@ bool FrustumGeometry::contains(Vec3d point) const {
   return distance >= frustum.min_range && distance <= frustum.max_range;
 }
 
+bool FrustumGeometry::contains_quickly(Vec3d point) const {
+  const Vec3d d = point - frustum.origin;
+  const double distance2 = d.dot(d);
+  // The margins of overlap() for a single point.
+  const double margin = 1e-9 * (std::sqrt(distance2) + 1.0);
+  const double range_margin = 1e-9 * (frustum.max_range + 1.0);
+  bool sure = true;
+  for (const Vec3d& normal : side) {
+    const double s = normal.dot(d);
+    if (s < -margin) return false;
+    if (s <= margin) sure = false;
+  }
+  const double low = frustum.min_range + range_margin;
+  const double high = frustum.max_range - range_margin;
+  if (sure && distance2 >= low * low && distance2 <= high * high) return true;
+  return contains(point);
+}
+
 Overlap FrustumGeometry::overlap(const Aabb& box) const {
   const Vec3d o = frustum.origin;
   const double nearest2 = distance_squared(o, box);

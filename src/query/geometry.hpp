@@ -96,6 +96,9 @@ struct FrustumGeometry {
   /// exact near the boundary (a margin keeps it safe): callers resolve
   /// "partly" down to single points with contains().
   [[nodiscard]] Overlap overlap(const Aabb& box) const;
+  /// contains(point), deciding with the side planes and the squared range
+  /// where the margin allows and with contains() only near the boundary.
+  [[nodiscard]] bool contains_quickly(Vec3d point) const;
 
   Frustum frustum;
   Vec3d f, l, u;

@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 namespace umbra::detail {
-struct SweepStats { unsigned long long calls, noaxis, nolayers, wide, cells, layers, ok; ~SweepStats() { fprintf(stderr, "SWEEP calls %llu noaxis %llu nolayers %llu wide %llu cells %llu layers %llu ok %llu\n", calls, noaxis, nolayers, wide, cells, layers, ok); } } g_sweep;
 namespace {
 
 /// The bits of `open` reachable from the bits of `reach` by moving to
@@ -87,8 +85,7 @@ bool OcclusionSweep::hidden(const Pose& pose, const Aabb& targets, double obstac
       s = -1;
     }
   }
-  ++g_sweep.calls;
-  if (a < 0) { ++g_sweep.noaxis; return false; }
+  if (a < 0) return false;
   // Rows run along b, x whenever possible (the bitmap's rows).
   const int b = a == 0 ? 1 : 0;
   const int c = 3 - a - b;
@@ -133,8 +130,9 @@ bool OcclusionSweep::hidden(const Pose& pose, const Aabb& targets, double obstac
   auto near_face = [&](std::int64_t k) {
     return s > 0 ? double(k - offset) * res - o[a] : o[a] - double(k - offset + 1) * res;
   };
-  // The first layer whose part of the cone may hold an obstacle: the points
-  // of the cone (grown by the margin) in layer k lie within
+  // Start at the first layer whose part of the cone may hold an obstacle
+  // (the layers before are taken as wholly reachable): the points of the
+  // cone (grown by the margin) in layer k lie within
   // (far face + margin) * secant + margin of the apex.
   const double clear_along = (obstacle_free - m) / secant - m;  // layers ending before this are clear
   std::int64_t layer = apex_layer + s;
@@ -156,9 +154,7 @@ bool OcclusionSweep::hidden(const Pose& pose, const Aabb& targets, double obstac
     };
     range(low_b, high_b, o[b], current.b0, current.b1);
     range(low_c, high_c, o[c], current.c0, current.c1);
-    if (current.b1 - current.b0 >= kMaxWidth || current.c1 - current.c0 >= kMaxWidth) { ++g_sweep.wide; return false; }
-    ++g_sweep.layers;
-    g_sweep.cells += (current.b1 - current.b0 + 1) * (current.c1 - current.c0 + 1);
+    if (current.b1 - current.b0 >= kMaxWidth || current.c1 - current.c0 >= kMaxWidth) return false;
     const int width = static_cast<int>(current.b1 - current.b0 + 1);
     const int rows = static_cast<int>(current.c1 - current.c0 + 1);
     const std::uint64_t row_mask = width == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << width) - 1;
@@ -193,7 +189,7 @@ bool OcclusionSweep::hidden(const Pose& pose, const Aabb& targets, double obstac
       current.reach[std::size_t(row)] = seeds & bits;
       any |= (seeds & bits) != 0;
     }
-    if (!any) { ++g_sweep.ok; return true; }
+    if (!any) return true;
     // Within the layer: from voxel to face neighbour the way walks step,
     // row by row in the walks' direction along c (both ways: until stable).
     for (bool changed = true; changed;) {

@@ -13,14 +13,18 @@
 // layers across the cone and keeps, per layer, the voxels a walk could have
 // reached without meeting an occupied voxel: a free or unknown voxel of the
 // layer's part of the cone that lies next to a reachable voxel of the layer
-// before, or to a reachable voxel of its own layer. When a layer has no
-// reachable voxel, no walk gets past it: the targets are hidden. Layers
-// nearer than the nearest obstacle in the cone (read from the ViewImage)
-// hold no obstacle and are taken as wholly reachable, so the sweep starts
-// where the obstacles start. It proves only (an answer "no" means "not
-// proven"), it allows more paths than walks take (any direction within a
-// layer, the cone's bounding rectangle per layer), and it gives up after a
-// few layers or on wide cones, leaving those targets to smaller nodes.
+// before, or to a reachable voxel of its own layer that a walk could step
+// from (where all the cone's directions agree in sign along an axis, only
+// from that side). When a layer has no
+// reachable voxel, no walk gets past it: the targets are hidden. Taking a
+// layer as wholly reachable only weakens the proof, never falsifies it, so
+// the sweep starts with the layer before the nearest obstacle in the cone
+// (read from the ViewImage) taken as wholly reachable instead of walking
+// from the sensor through empty layers. It proves only (an answer "no" means "not
+// proven"), it allows more paths than walks take (the cone's bounding
+// rectangle per layer; both directions along an axis the cone straddles),
+// and it gives up after a few layers or on wide cones, leaving those
+// targets to smaller nodes. Voxels outside the bitmap count as open.
 //
 // Layout: one row of up to 64 voxels per 64-bit mask (b axis, x where it
 // can), rows along the c axis; two layers (the one before and the current)
@@ -54,8 +58,9 @@ class OcclusionSweep {
   };
 
   /// Whether every walk from the apex to a point of `targets` surely meets
-  /// an occupied voxel, given that no obstacle lies nearer than
-  /// `obstacle_free` to the apex in the cone over `targets`.
+  /// an occupied voxel. `obstacle_free`: no obstacle lies nearer than this
+  /// to the apex in the cone over `targets` (where the sweep starts; any
+  /// value is safe, a good one makes the proof succeed).
   bool hidden(const Pose& pose, const Aabb& targets, double obstacle_free);
 
  private:

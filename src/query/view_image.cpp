@@ -31,8 +31,10 @@ void ViewImage::reset(const Setup& setup) {
   minima_.resize(level_sizes_.size());
   maxima_.resize(level_sizes_.size());
   minima_[0].assign(std::size_t(width_) * std::size_t(height_), std::numeric_limits<float>::infinity());
-  candidates_.resize(std::size_t(width_) * std::size_t(height_) * kCandidates);
-  counts_.assign(std::size_t(width_) * std::size_t(height_), 0);
+  if (setup.candidates) {
+    candidates_.resize(std::size_t(width_) * std::size_t(height_) * kCandidates);
+    counts_.assign(std::size_t(width_) * std::size_t(height_), 0);
+  }
 }
 
 bool ViewImage::footprint(const Aabb& box, PixelRect& rect, bool& clipped) const {
@@ -116,6 +118,7 @@ void ViewImage::draw(const PixelRect& rect, double near, std::uint32_t obstacle)
     for (int px = rect.x0; px <= rect.x1; ++px) {
       const std::size_t i = index(px, py);
       nearest[i] = std::min(nearest[i], distance);
+      if (!setup_.candidates) continue;
       Candidate* list = &candidates_[i * kCandidates];
       std::uint8_t& count = counts_[i];
       int n = count & ~kOverflow;

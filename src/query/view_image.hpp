@@ -58,6 +58,7 @@ class ViewImage {
     double half_height;      // tan(vfov / 2) plus the border
     double pixel;            // pixel edge, image units
     double near_plane;       // boxes are clipped at d.f = near_plane (> 0)
+    bool candidates;         // keep candidate lists (else only the nearest distances)
   };
 
   /// Starts an empty image (nothing drawn: nearest is +infinity everywhere).
@@ -87,8 +88,14 @@ class ViewImage {
   /// upper bound, for the same reason).
   [[nodiscard]] float nearest_in_every_pixel(const PixelRect& rect) const { return read(maxima_, rect, true); }
   [[nodiscard]] float nearest(int x, int y) const { return minima_[0][index(x, y)]; }
-  /// The candidates of a pixel, nearest first; `overflow` when more obstacles were drawn there.
+  /// The candidates of a pixel, nearest first; `overflow` when more
+  /// obstacles were drawn there (always, when the image keeps no lists).
   [[nodiscard]] const Candidate* candidates(int x, int y, int& count, bool& overflow) const {
+    if (!setup_.candidates) {
+      count = 0;
+      overflow = true;
+      return nullptr;
+    }
     const std::uint8_t c = counts_[index(x, y)];
     count = c & ~kOverflow;
     overflow = (c & kOverflow) != 0;

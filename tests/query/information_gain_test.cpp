@@ -167,7 +167,10 @@ class RandomMapGain : public ::testing::TestWithParam<RandomCase> {};
 
 TEST_P(RandomMapGain, ExactEqualsBruteForce) {
   const RandomCase param = GetParam();
-  for (unsigned seed = 1; seed <= 2; ++seed) {
+  // Fewer, dearer brute forces on the larger maps.
+  const unsigned seeds = param.depth_levels >= 6 ? 1 : 2;
+  const int frustums = param.depth_levels >= 6 ? 4 : 10;
+  for (unsigned seed = 1; seed <= seeds; ++seed) {
     test::RandomMapSpec spec;
     spec.depth_levels = param.depth_levels;
     spec.auto_prune = param.auto_prune;
@@ -180,7 +183,7 @@ TEST_P(RandomMapGain, ExactEqualsBruteForce) {
     const std::vector<Thresholds> settings = {{}, {0.62, 0.45}, {0.55, 0.5}};
     for (const Thresholds& thresholds : settings) {
       map.set_thresholds(thresholds);
-      for (int i = 0; i < 12; ++i) {
+      for (int i = 0; i < frustums; ++i) {
         const Frustum f = random_frustum(map, rng);
         expect_exact(map, f, describe(f) + " seed " + std::to_string(seed));
         // fast_depth 0 is exact too.
@@ -194,9 +197,9 @@ TEST_P(RandomMapGain, ExactEqualsBruteForce) {
 INSTANTIATE_TEST_SUITE_P(DepthsAndPruning, RandomMapGain,
                          ::testing::Values(RandomCase{4, true}, RandomCase{5, true}, RandomCase{5, false},
                                            RandomCase{6, true}, RandomCase{6, false}),
-                         [](const auto& info) {
-                           return "depth" + std::to_string(info.param.depth_levels) +
-                                  (info.param.auto_prune ? "_pruned" : "_unpruned");
+                         [](const ::testing::TestParamInfo<RandomCase>& test) {
+                           return "depth" + std::to_string(test.param.depth_levels) +
+                                  (test.param.auto_prune ? "_pruned" : "_unpruned");
                          });
 
 // --- hand-made cases ------------------------------------------------------------------
@@ -231,7 +234,7 @@ TEST(InformationGain, OriginsOnGridCornersNextToObstacles) {
   map.set_log_odds(Vec3d{0.35, 0.05, 0.05}, 2.0f);
   map.update_miss(Vec3d{0.55, 0.35, 0.05});
   for (const Vec3d origin : {Vec3d{0, 0, 0}, Vec3d{0.1, 0.0, 0.0}, Vec3d{0.0, 0.1, 0.05}, Vec3d{0.0, 0.0, 0.1}}) {
-    for (double yaw = -180; yaw < 180; yaw += 45) {
+    for (double yaw = -180; yaw < 180; yaw += 90) {
       for (const double pitch : {-50.0, 0.0, 35.0}) {
         const Frustum f = Frustum::from_degrees(origin, yaw, pitch, 115, 60, 0.0, 1.2);
         expect_exact(map, f, describe(f));
@@ -321,22 +324,24 @@ const OccupancyMap& office_map() {
 }
 
 /// Poses along the path (in the open) and poses 3 to 25 cm from a surface,
-/// facing it or away from it.
+/// some with a min_range, at random headings and pitches.
 std::vector<Frustum> office_poses() {
   const sim::Scene scene = sim::make_demo_scene();
+  const std::vector<sim::SensorPose> path = sim::demo_path();
   std::vector<Frustum> poses;
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  for (const sim::SensorPose& pose : sim::demo_path()) {
-    poses.push_back(Frustum::from_degrees(pose.position, unit(rng) * 360.0, -15.0 + 30.0 * unit(rng), 115, 60, 0.0, 4.0));
+  for (std::size_t i = 0; i < path.size(); i += 2) {
+    poses.push_back(
+        Frustum::from_degrees(path[i].position, unit(rng) * 360.0, -15.0 + 30.0 * unit(rng), 115, 60, 0.0, 3.5));
   }
   int near_walls = 0;
-  while (near_walls < 8) {
+  while (near_walls < 6) {
     const Vec3d p{0.5 + 19.0 * unit(rng), 0.5 + 11.0 * unit(rng), 0.3 + 2.4 * unit(rng)};
     const double distance = scene.distance_to_nearest_surface(p);
     if (scene.is_inside_solid(p) || distance < 0.03 || distance > 0.25) continue;
     poses.push_back(Frustum::from_degrees(p, unit(rng) * 360.0, -15.0 + 30.0 * unit(rng), 115, 60,
-                                          near_walls % 2 ? 0.5 : 0.0, 4.0));
+                                          near_walls % 2 ? 0.5 : 0.0, 3.5));
     ++near_walls;
   }
   return poses;
@@ -345,6 +350,34 @@ std::vector<Frustum> office_poses() {
 TEST(InformationGain, SimulatedLidarExactEqualsBruteForce) {
   const OccupancyMap& map = office_map();
   for (const Frustum& f : office_poses()) expect_exact(map, f, describe(f));
+}
+
+TEST(InformationGain, FastStaysWithinItsDocumentedError) {
+  // docs/design.md ("Information gain") states what fast may get wrong:
+  // the voxels of nodes of up to 4 voxels per edge whose two corner voxels
+  // agree while their insides do not, which matters where a pose sees
+  // little: from the LiDAR's own positions the few unknown voxels in view
+  // lie under the floor, seen through holes between its scanned voxels, and
+  // fast misses most of them. Where the gain is a thousand voxels or more
+  // it measured at most 9.6% (2.7% on average) off exact on these poses;
+  // the bounds leave room for other compilers' rounding, not for a change
+  // of method. It never counts a voxel the frustum does not hold unknown.
+  const OccupancyMap& map = office_map();
+  double sum_relative = 0.0;
+  int large = 0;
+  for (const Frustum& f : office_poses()) {
+    const double exact = double(map.information_gain(f).unknown_voxels);
+    const double fast = double(map.information_gain(f, {.method = GainMethod::fast}).unknown_voxels);
+    const OccupancyMap empty(map.resolution());  // every voxel unknown, nothing in the way
+    EXPECT_LE(fast, double(empty.information_gain(f).unknown_voxels)) << describe(f);
+    if (exact < 1000.0) continue;
+    const double relative = std::fabs(fast - exact) / exact;
+    EXPECT_LT(relative, 0.15) << describe(f) << ": exact " << exact << ", fast " << fast;
+    sum_relative += relative;
+    ++large;
+  }
+  ASSERT_GE(large, 4);
+  EXPECT_LT(sum_relative / large, 0.06);
 }
 
 }  // namespace

@@ -20,10 +20,13 @@
 //          from a depth image of the obstacles: unknown nodes that surely
 //          see no obstacle are counted whole, nodes surely behind obstacles
 //          are skipped whole, and only the rest is decided ray by ray.
-//   fast:  the same, except that an undecided node of 2^fast_depth voxels
-//          per edge is decided by the one ray to its middle voxel and
-//          counted whole or not at all. Measured error on the benchmark
-//          poses: see docs/benchmarks.md ("Information gain").
+//   fast:  the same, except that a node of at most 2^fast_depth voxels per
+//          edge that is not surely visible or hidden is decided by the rays
+//          to its two opposite corner voxels when they agree (counted whole
+//          or skipped), and split when they do not. It errs only where both
+//          corners agree and the inside does not. Measured error against
+//          exact on the benchmark poses: docs/benchmarks.md ("Information
+//          gain").
 //
 // Cost: one query takes the map for reading for one pose; a batch takes it
 // pose by pose, so a writer never waits for a whole batch. Queries are const
@@ -37,13 +40,13 @@ namespace umbra {
 
 enum class GainMethod : unsigned char {
   exact,  ///< the count of the definition
-  fast,   ///< an approximation that decides undecided coarse nodes by one ray
+  fast,   ///< an approximation: small undecided nodes decided by their corner voxels
 };
 
 struct GainOptions {
   GainMethod method = GainMethod::exact;
-  /// fast only: edge, in voxels, of the nodes decided by one ray is
-  /// 2^fast_depth (0 makes fast exact). In [0, depth_levels].
+  /// fast only: nodes of up to 2^fast_depth voxels per edge are decided by
+  /// their corners (0 makes fast exact). In [0, depth_levels].
   int fast_depth = 2;
   /// Batch form only: poses answered in parallel by this many threads,
   /// including the caller; 0 means all hardware threads.
