@@ -246,6 +246,9 @@ struct GainRow {
   double mean_unknown = 0.0;
   double fast_mean_error = 0.0;  // relative to exact, over poses with a non-zero exact gain
   double fast_max_error = 0.0;
+  double fast_total_error = 0.0;  // sum of |fast - exact| over the sum of exact
+  std::uint64_t worst_exact = 0;  // the pose with the largest relative error
+  std::uint64_t worst_fast = 0;
 };
 
 /// Median over `repeat` runs of the time of each pose, in microseconds.
@@ -274,34 +277,53 @@ GainRow run_gain(const Dataset& data, std::size_t pose_count, std::size_t octoma
   row.poses = poses.size();
   std::vector<std::uint64_t> exact;
   std::vector<std::uint64_t> fast;
-  for (const umbra::GainMethod method : {umbra::GainMethod::exact, umbra::GainMethod::fast}) {
-    if (getenv("FAST_ONLY")) break;
-    std::vector<double> runs;
-    for (int r = 0; r < repeat; ++r) {
-      const double start = thread_seconds();
-      (void)data.map->information_gain(std::span<const umbra::Frustum>(poses), {.method = method});
-      runs.push_back(1e6 * (thread_seconds() - start) / double(poses.size()));
-    }
-    (method == umbra::GainMethod::exact ? row.exact_batch_us : row.fast_batch_us) = median(runs);
-  }
-  const std::vector<double> exact_us = getenv("FAST_ONLY") ? std::vector<double>(poses.size(), 1.0) : time_umbra(*data.map, poses, {.method = umbra::GainMethod::exact}, repeat, exact);
-  if (getenv("FAST_ONLY")) exact.assign(poses.size(), 1);
+  const std::vector<double> exact_us = time_umbra(*data.map, poses, {.method = umbra::GainMethod::exact}, repeat, exact);
   const std::vector<double> fast_us = run_fast ? time_umbra(*data.map, poses, {.method = umbra::GainMethod::fast}, repeat, fast)
                                               : std::vector<double>(poses.size(), 0.0);
   if (!run_fast) fast = exact;
+  // The same poses as one batch (one thread: the scratch memory is reused
+  // from pose to pose); the answers must not change.
+  for (const umbra::GainMethod method : {umbra::GainMethod::exact, umbra::GainMethod::fast}) {
+    if (method == umbra::GainMethod::fast && !run_fast) break;
+    std::vector<double> runs;
+    for (int r = 0; r < repeat; ++r) {
+      const double start = thread_seconds();
+      const std::vector<umbra::GainResult> batch =
+          data.map->information_gain(std::span<const umbra::Frustum>(poses), {.method = method});
+      runs.push_back(1e6 * (thread_seconds() - start) / double(poses.size()));
+      const std::vector<std::uint64_t>& single = method == umbra::GainMethod::exact ? exact : fast;
+      for (std::size_t i = 0; i < poses.size(); ++i) {
+        if (batch[i].unknown_voxels != single[i]) {
+          std::fprintf(stderr, "%s pose %zu: the batch answered %llu, the single call %llu\n", data.name.c_str(), i,
+                       static_cast<unsigned long long>(batch[i].unknown_voxels),
+                       static_cast<unsigned long long>(single[i]));
+        }
+      }
+    }
+    (method == umbra::GainMethod::exact ? row.exact_batch_us : row.fast_batch_us) = median(runs);
+  }
   double sum_error = 0.0;
+  double sum_exact = 0.0;
+  double sum_difference = 0.0;
   std::size_t with_gain = 0;
   for (std::size_t i = 0; i < poses.size(); ++i) {
     row.exact_us += exact_us[i] / double(poses.size());
     row.fast_us += fast_us[i] / double(poses.size());
     row.mean_unknown += double(exact[i]) / double(poses.size());
+    sum_exact += double(exact[i]);
+    sum_difference += std::fabs(double(fast[i]) - double(exact[i]));
     if (exact[i] > 0) {
       const double error = std::fabs(double(fast[i]) - double(exact[i])) / double(exact[i]);
       sum_error += error;
-      row.fast_max_error = std::max(row.fast_max_error, error);
+      if (error > row.fast_max_error) {
+        row.fast_max_error = error;
+        row.worst_exact = exact[i];
+        row.worst_fast = fast[i];
+      }
       ++with_gain;
     }
   }
+  row.fast_total_error = sum_exact > 0.0 ? sum_difference / sum_exact : 0.0;
   row.fast_mean_error = with_gain ? sum_error / double(with_gain) : 0.0;
   row.octomap_poses = std::min(octomap_pose_count, poses.size());
   for (std::size_t i = 0; i < row.octomap_poses; ++i) {
@@ -322,22 +344,30 @@ GainRow run_gain(const Dataset& data, std::size_t pose_count, std::size_t octoma
   return row;
 }
 
+std::string ratio(double numerator, double denominator) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1fx", numerator / denominator);
+  return text;
+}
+
 std::string gain_table(const std::vector<GainRow>& rows) {
   std::ostringstream out;
-  out << "| dataset | poses | mean gain (voxels) | umbra exact us/pose | umbra fast us/pose | fast error mean / max | "
-         "OctoMap-style poses | OctoMap-style us/pose | exact speed-up | fast speed-up | counts equal |\n"
+  out << "| dataset | poses | mean gain (voxels) | umbra exact us/pose | umbra fast us/pose | "
+         "fast error: mean / max per pose (worst: exact -> fast) / of the summed gains | OctoMap-style poses timed | "
+         "OctoMap-style us/pose | exact speed-up | fast speed-up | exact = OctoMap-style |\n"
       << "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const GainRow& r : rows) {
-    char line[512];
+    char line[768];
     const bool timed = r.octomap_poses > 0;
-    std::snprintf(line, sizeof line, "| %s | %zu | %.0f | %.0f | %.0f | %.2f%% / %.2f%% | %zu | %s | %s | %s | %s |\n",
+    const std::string same = r.octomap_mismatches == 0 ? "yes" : std::to_string(r.octomap_mismatches) + " poses differ";
+    std::snprintf(line, sizeof line,
+                  "| %s | %zu | %.0f | %.0f | %.0f | %.2f%% / %.1f%% (%llu -> %llu) / %.2f%% | %zu | %s | %s | %s | %s |\n",
                   r.dataset.c_str(), r.poses, r.mean_unknown, r.exact_us, r.fast_us, 100.0 * r.fast_mean_error,
-                  100.0 * r.fast_max_error, r.octomap_poses,
+                  100.0 * r.fast_max_error, static_cast<unsigned long long>(r.worst_exact),
+                  static_cast<unsigned long long>(r.worst_fast), 100.0 * r.fast_total_error, r.octomap_poses,
                   timed ? std::to_string(static_cast<long long>(r.octomap_us)).c_str() : "-",
-                  timed ? (std::to_string(r.octomap_us / r.exact_us_on_octomap_poses).substr(0, 6) + "x").c_str() : "-",
-                  timed ? (std::to_string(r.octomap_us / r.fast_us_on_octomap_poses).substr(0, 6) + "x").c_str() : "-",
-                  timed ? (r.octomap_mismatches == 0 ? "yes" : (std::to_string(r.octomap_mismatches) + " differ").c_str())
-                        : "-");
+                  timed ? ratio(r.octomap_us, r.exact_us_on_octomap_poses).c_str() : "-",
+                  timed ? ratio(r.octomap_us, r.fast_us_on_octomap_poses).c_str() : "-", timed ? same.c_str() : "-");
     out << line;
   }
   return out.str();
