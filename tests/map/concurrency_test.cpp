@@ -156,7 +156,10 @@ std::vector<Question> questions(unsigned seed) {
 
 void run_contract(const Setup& setup, std::size_t scan_count, int readers, int rounds) {
   const Scans scans = make_scans(scan_count, 7);
-  MapConfig config{.resolution = 0.1, .depth_levels = 12, .color = setup.color};
+  MapConfig config;
+  config.resolution = 0.1;
+  config.depth_levels = 12;
+  config.color = setup.color;
   InsertOptions options;
   options.integrator = setup.integrator;
   options.threads = setup.threads;
