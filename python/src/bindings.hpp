@@ -62,6 +62,7 @@ void bind_shapes(py::module_& m);
 void bind_predicates(py::module_& m);
 MapClass bind_map(py::module_& m);
 void bind_queries(py::module_& m, MapClass& map);
+void bind_gain(py::module_& m, MapClass& map);
 void bind_io(py::module_& m, MapClass& map);
 void bind_sim(py::module_& m);
 

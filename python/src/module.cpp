@@ -15,6 +15,7 @@ PYBIND11_MODULE(_umbra, m) {
   bind_predicates(m);
   MapClass map = bind_map(m);
   bind_queries(m, map);
+  bind_gain(m, map);
   bind_io(m, map);
   bind_sim(m);
 }

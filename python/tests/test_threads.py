@@ -37,6 +37,7 @@ def test_queries_from_threads_during_insertion():
         "states": (lambda m: m.states(points), True),
         "spheres": (lambda m: m.spheres_free(centers, 0.3), True),
         "rays": (lambda m: m.cast_rays(origins, directions, max_range=10.0).distance, True),
+        "gains": (lambda m: m.information_gains(origins[:4], [0, 90, 180, 270], 0, 100, 60, 0.0, 4.0), True),
         "count": (lambda m: m.count(pred.occupied() & pred.leaf()), False),
         "nodes": (lambda m: m.query(pred.leaf() & pred.intersects(umbra.Sphere((4, 6, 1.2), 1.5)))["log_odds"], False),
     }

@@ -12,6 +12,7 @@ import numpy as _numpy  # noqa: F401  (the module returns numpy arrays; fail ear
 from . import _umbra
 from ._umbra import (
     FREE,
+    GAIN_DTYPE,
     NODE_DTYPE,
     OCCUPIED,
     UNKNOWN,
@@ -21,6 +22,7 @@ from ._umbra import (
     DepthCamera,
     FormatError,
     Frustum,
+    GainResult,
     InsertStats,
     MapStatistics,
     Node,
@@ -53,6 +55,7 @@ FormatError.__doc__ = (
 
 __all__ = [
     "FREE",
+    "GAIN_DTYPE",
     "NODE_DTYPE",
     "OCCUPIED",
     "UNKNOWN",
@@ -62,6 +65,7 @@ __all__ = [
     "DepthCamera",
     "FormatError",
     "Frustum",
+    "GainResult",
     "InsertStats",
     "MapStatistics",
     "Node",

@@ -7,7 +7,7 @@ one (3,) row for all, (N,) values or one number, and answers (N,).
 """
 
 import os
-from typing import Iterator, Optional, Tuple, Union
+from typing import Iterator, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -23,6 +23,7 @@ UNKNOWN: int
 FREE: int
 OCCUPIED: int
 NODE_DTYPE: np.dtype
+GAIN_DTYPE: np.dtype
 
 class FormatError(ValueError):
     """A file that is not what it claims to be; the message names the file and the line or byte offset."""
@@ -273,6 +274,18 @@ class Frustum:
     def contains(self, points: ArrayLike) -> NDArray[np.bool_]:
         """Whether each point (..., 3) lies in the frustum: a bool array (...)."""
 
+class GainResult:
+    """The information gain of one sensor pose."""
+    @property
+    def unknown_voxels(self) -> int:
+        """Unknown finest voxels whose centre lies in the frustum and is visible from its origin."""
+    @property
+    def volume(self) -> float:
+        """Their volume, cubic metres."""
+    @property
+    def entropy_bits(self) -> float:
+        """Sum of the binary entropy of their occupancy, bits (unknown_voxels with the default thresholds)."""
+
 class Predicate:
     """Which nodes a query wants; made by the functions of umbra.pred and combined with & (and), | (or) and ~ (not)."""
     def __and__(self, other: Predicate) -> Predicate: ...
@@ -497,6 +510,30 @@ class OccupancyMap:
         self, origins: ArrayLike, directions: ArrayLike, *, ignore_unknown: bool = False, max_range: float = -1.0
     ) -> Tuple[NDArray[np.bool_], NDArray[np.float32]]:
         """OctoMap's OcTree::castRay rule for rule, for many rays (float32, as OctoMap): (hit (N,) bool, end (N, 3) float32), end being the centre of the voxel hit or where the ray stopped."""
+
+    # --- information gain
+    def information_gain(self, frustum: Frustum, *, method: str = "exact", fast_depth: int = 2) -> GainResult:
+        """The unknown finest voxels a sensor with this Frustum would see (centre in the frustum, no occupied voxel on the ray from its origin): a GainResult. method 'exact' counts them voxel by voxel; 'fast' decides nodes of up to 2^fast_depth voxels per edge by their corner voxels."""
+    @overload
+    def information_gains(
+        self, frustums: Sequence[Frustum], *, method: str = "exact", fast_depth: int = 2, threads: int = 0
+    ) -> NDArray[np.void]: ...
+    @overload
+    def information_gains(
+        self,
+        origins: ArrayLike,
+        yaw: ArrayLike,
+        pitch: ArrayLike,
+        hfov: ArrayLike,
+        vfov: ArrayLike,
+        min_range: ArrayLike,
+        max_range: ArrayLike,
+        *,
+        method: str = "exact",
+        fast_depth: int = 2,
+        threads: int = 0,
+    ) -> NDArray[np.void]:
+        """information_gain of many poses: a list of Frustums, or origins (N, 3), yaw and pitch (N,) in degrees and hfov, vfov (degrees), min_range, max_range, each (N,) or one number for all. Returns a structured array (N,) of umbra.GAIN_DTYPE (unknown_voxels, volume, entropy_bits). threads: 0 for all cores. A bad pose raises ValueError (IndexError for an origin outside the map) naming its index."""
 
 def load(path: PathLike, sensor_model: Optional[SensorModel] = None) -> OccupancyMap:
     """Loads a map from a .umb, .bt or .ot file (by extension). sensor_model applies to OctoMap files only (they store none)."""
