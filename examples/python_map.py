@@ -14,14 +14,11 @@ import sys
 import time
 from pathlib import Path
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
 
-matplotlib.use("Agg")  # files only, no display
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-import umbra  # noqa: E402
-from umbra import pred  # noqa: E402
+import umbra
+from umbra import pred
 
 
 def scans_from(data):
@@ -44,6 +41,7 @@ def main():
                         help="the shared data folder (default: ../shared/data beside the repository)")
     parser.add_argument("--res", type=float, default=0.1, help="voxel edge in metres")
     args = parser.parse_args()
+    plt.switch_backend("Agg")  # files only, no display
 
     name, scans = scans_from(args.data)
     m = umbra.OccupancyMap(args.res)

@@ -3,7 +3,7 @@
 //
 // Per-point functions loop in C++ over a numpy view with the GIL released,
 // calling the same public function a C++ user calls per point (so their
-// answers and costs are the library's; bench/python_binding_benchmark.py
+// answers and costs are the library's; bench/python_batch_benchmark.py
 // measures the difference). A point outside the map raises IndexError
 // naming its index and the coordinate.
 #include <sstream>

@@ -125,6 +125,62 @@ def test_insertion_equals_the_umbra_program(integrator, cli, tmp_path):
     leaves_equal(m, umbra.load(out))
 
 
+@pytest.mark.parametrize(
+    "options, flags",
+    [
+        ({"integrator": "fast", "clear_depth": 3, "fine_steps": 0, "threads": 2},
+         ["--integrator", "fast", "--clear-depth", 3, "--fine-steps", 0, "--threads", 2]),
+        ({"integrator": "fast", "clear_depth": 1, "fine_steps": 5, "threads": 1},
+         ["--integrator", "fast", "--clear-depth", 1, "--fine-steps", 5, "--threads", 1]),
+    ],
+)
+def test_insert_options_reach_the_library(options, flags, cli, tmp_path):
+    """clear_depth, fine_steps, threads and the bounding box give the map `umbra build` makes with the same
+    settings, and a different one than the defaults."""
+    (origin, points) = office_scans(count=1)[0]
+    xyz = tmp_path / "scan.xyz"
+    np.savetxt(xyz, points, fmt="%.9g")
+    out = tmp_path / "scan.umb"
+    cli("build", xyz, "-o", out, "--res", 0.1, "--bbox", "0,0,0,12,8,2.5", *flags,
+        "--origin", ",".join(repr(float(v)) for v in origin))
+
+    m = umbra.OccupancyMap(0.1)
+    m.bounding_box = umbra.Aabb((0, 0, 0), (12, 8, 2.5))
+    m.insert(points, origin, **options)
+    leaves_equal(m, umbra.load(out))
+    known = m.leaves()
+    known = known[known["state"] != umbra.UNKNOWN]
+    assert (known["center"] - known["size"][:, None] / 2 >= -1e-9).all()
+    assert (known["center"] + known["size"][:, None] / 2 <= np.array([12, 8, 2.5]) + 0.2).all()
+
+    default = umbra.OccupancyMap(0.1)
+    default.bounding_box = m.bounding_box
+    default.insert(points, origin, integrator="fast")
+    assert len(default.leaves()) != len(m.leaves()) or (default.leaves()["log_odds"] != m.leaves()["log_odds"]).any()
+
+
+def test_auto_prune_keeps_the_values():
+    """Eight equal voxels set one by one merge into their parent with auto-pruning, stay apart without it
+    (same values), and merge when it is switched on."""
+    (origin, points) = office_scans(count=1)[0]
+    pruned = umbra.OccupancyMap(0.1)
+    unpruned = umbra.OccupancyMap(0.1)
+    unpruned.auto_prune = False
+    corners = np.array([[x, y, z] for x in (0.05, 0.15) for y in (0.05, 0.15) for z in (0.05, 0.15)]) + 3.0
+    for m in (pruned, unpruned):
+        m.insert(points, origin)
+        for corner in corners:
+            m.set_log_odds(corner, 1.5)
+    assert unpruned.node_counts().leaf == pruned.node_counts().leaf + 8
+    assert pruned.nodes(corners[0])["depth"] == 1 and unpruned.nodes(corners[0])["depth"] == 0
+    probe = np.vstack([corners, office_points(np.random.default_rng(5), 5000)])
+    np.testing.assert_array_equal(unpruned.log_odds(probe), pruned.log_odds(probe))
+    unpruned.auto_prune = True
+    counts = [(c.inner, c.inner_leaf, c.leaf) for c in (unpruned.node_counts(), pruned.node_counts())]
+    assert counts[0] == counts[1]
+    leaves_equal(unpruned, pruned)
+
+
 def test_insert_stats_and_input_dtypes():
     (origin, points) = office_scans(count=1)[0]
     with_nan = np.vstack([points, [[np.nan, 0, 0], [1e9, 0, 0]]])
