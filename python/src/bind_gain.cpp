@@ -8,8 +8,8 @@
 // bad one is named by its index (ValueError for a bad field of view,
 // IndexError for an origin outside the map); then the GIL is released and
 // the library's batch runs on `threads` threads, taking the map for reading
-// pose by pose. A pose costs far more than building its Frustum (tens of
-// microseconds to milliseconds), so the conversion costs nothing measurable.
+// pose by pose. Building a Frustum per pose (a few numbers) costs nothing
+// next to counting what it sees.
 #include <string>
 #include <vector>
 
