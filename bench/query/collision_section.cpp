@@ -147,18 +147,21 @@ CollisionRow run_segment_checks(const Dataset& data, const CollisionSettings& se
   std::mt19937_64 rng(settings.seed + 1);
   const std::vector<umbra::Vec3d> starts = sample_free_points(*data.map, settings.checks, rng);
   const std::vector<umbra::Vec3d> candidates = sample_free_points(*data.map, settings.checks, rng);
-  // Each end: towards a free point, cut to at most max_length.
   std::vector<umbra::Segment> segments;
   for (std::size_t i = 0; i < starts.size(); ++i) {
     const umbra::Vec3d d = candidates[i] - starts[i];
     const double length = d.norm();
-    const double scale = length > settings.max_length ? settings.max_length / length : 1.0;
+    const double scale = settings.max_length > 0.0 && length > settings.max_length ? settings.max_length / length : 1.0;
     segments.push_back({starts[i], starts[i] + d * scale});
   }
   CollisionRow row;
   row.dataset = data.name;
   char what[64];
-  std::snprintf(what, sizeof what, "segment <= %.1f m, occupied or unknown blocks", settings.max_length);
+  if (settings.max_length > 0.0) {
+    std::snprintf(what, sizeof what, "segment <= %.1f m, occupied or unknown blocks", settings.max_length);
+  } else {
+    std::snprintf(what, sizeof what, "segment, occupied or unknown blocks");
+  }
   row.what = what;
   row.checks = segments.size();
   row.octomap_checks = settings.octomap_checks;

@@ -8,8 +8,8 @@
 // meets the ball, search() each, blocked by an occupied or unknown one (the
 // first ends the check). OctoMap, occupied only: begin_leafs_bbx over the
 // ball's box, blocked by an occupied leaf whose cube meets the ball.
-// Segments (RRT edges): both ends uniform in the free voxels, at most
-// `max_length` apart. umbra: is_free(span<const Segment>), unknown blocking.
+// Segments: both ends uniform in the free voxels (cut to `max_length` when
+// it is > 0, as RRT edges are). umbra: is_free(span<const Segment>), unknown blocking.
 // OctoMap: computeRayKeys(a, b) plus b's key, search() each.
 #pragma once
 
@@ -37,7 +37,7 @@ struct CollisionSettings {
   std::size_t checks = 1'000'000;
   std::size_t octomap_checks = 10'000;
   double radius = 0.25;      // spheres
-  double max_length = 2.0;   // segments
+  double max_length = 0.0;   // segments: > 0 cuts them to that length
   int repeat = 3;
   std::uint64_t seed = 1;
 };

@@ -21,14 +21,14 @@
 //   spheres   --checks sphere checks (r = --radius) at free points, unknown
 //             blocking and occupied only; OctoMap on the first
 //             --octomap-checks of each dataset
-//   segments  --checks segments between free points, <= --max-length long
+//   segments  --checks segments between free points (cut to --max-length if > 0)
 // One thread throughout; times are the thread's CPU time (the machines are
 // shared), for umbra the median of --repeat runs.
 //
 // Usage: umbra_query_benchmark [--data DIR] [--datasets 3dtk-20cm,3dtk-5cm,tum-2cm,geb079-8cm]
 //          [--sections gain,spheres,segments] [--poses 100] [--octomap-poses 3dtk-20cm=100,...]
 //          [--checks 1000000] [--octomap-checks 3dtk-20cm=100000,...] [--radius 0.25]
-//          [--max-length 2] [--repeat 3] [--seed 1] [--exact-only] [--markdown FILE]
+//          [--max-length 0] [--repeat 3] [--seed 1] [--exact-only] [--markdown FILE]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -102,7 +102,7 @@ int main(int argc, char** argv) {
       std::printf(
           "usage: umbra_query_benchmark [--data DIR] [--datasets LIST] [--sections gain,spheres,segments]\n"
           "         [--poses 100] [--octomap-poses NAME=N,...] [--checks 1000000] [--octomap-checks NAME=N,...]\n"
-          "         [--radius 0.25] [--max-length 2] [--repeat 3] [--seed 1] [--exact-only] [--markdown FILE]\n"
+          "         [--radius 0.25] [--max-length 0] [--repeat 3] [--seed 1] [--exact-only] [--markdown FILE]\n"
           "datasets:");
       for (const DatasetSpec& d : kDatasets) std::printf(" %s", d.name.c_str());
       std::printf("\n");

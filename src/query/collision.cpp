@@ -191,13 +191,15 @@ CollisionResult check_segment(const OccupancyMap& map, const Segment& segment, c
     CollisionResult result;
     NodeRef blocking{};
     std::uint64_t blocking_code = 0;
+    // Returns false to stop the walk at the first blocking voxel.
     auto visit = [&](std::uint64_t code) {
-      if (!result.free || !lookup.blocks(code, &blocking)) return;
+      if (!lookup.blocks(code, &blocking)) return true;
       result.free = false;
       blocking_code = code;
+      return false;
     };
     walk_ray(grid, from, *from_key, to, *to_key, visit);
-    visit(morton::encode(*to_key));
+    if (result.free) visit(morton::encode(*to_key));
     if (!result.free) result.blocking = detail::make_node(tree, grid, blocking, blocking_code);
     return result;
   });
