@@ -137,7 +137,11 @@ class RegionCheck {
     for (unsigned slot = 0; slot < 8; ++slot) {
       const Key key = n.child_key(slot);
       if (!bounds_.meets(key, n.depth - 1)) continue;
-      if (auto found = check(NodeContext::read(scope_, scope_.tree->child(n.ref, slot), key))) return found;
+      const NodeRef child = scope_.tree->child(n.ref, slot);
+      // Most children hold nothing blocking: two reads decide that, before
+      // the whole context (leaf test, indicators) is read.
+      if (!rule_.holds_blocking(scope_.tree->log_odds(child), scope_.tree->contains_unknown(child))) continue;
+      if (auto found = check(NodeContext::read(scope_, child, key))) return found;
     }
     return std::nullopt;
   }
