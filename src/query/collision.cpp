@@ -30,6 +30,7 @@ namespace {
 using detail::BlockingLookup;
 using detail::BlockingRule;
 using detail::NodeContext;
+using detail::child_key;
 using detail::Overlap;
 using detail::QueryScope;
 
@@ -94,15 +95,19 @@ class RegionCheck {
 
   CollisionResult run() {
     const OccupancyTree& tree = *scope_.tree;
-    NodeContext node = NodeContext::read(scope_, tree.root(), Key{});
-    // Straight down while a single child holds the whole bounding box.
-    while (!node.leaf && holds_blocking(node)) {
-      const unsigned slot = only_child_meeting_bounds(node);
+    // Straight down while a single child holds the whole bounding box,
+    // reading only what decides the step (the whole context once, below).
+    NodeRef ref = tree.root();
+    Key key{};
+    while (rule_.holds_blocking(tree.log_odds(ref), tree.contains_unknown(ref)) && ref.depth > scope_.depth &&
+           tree.has_children(ref) && !tree.all_children_same(ref)) {
+      const unsigned slot = only_child_meeting_bounds(key, ref.depth);
       if (slot == 8) break;
-      node = NodeContext::read(scope_, tree.child(node.ref, slot), node.child_key(slot));
+      key = child_key(key, ref.depth, slot);
+      ref = tree.child(ref, slot);
     }
     CollisionResult result;
-    if (const std::optional<NodeContext> blocking = check(node)) {
+    if (const std::optional<NodeContext> blocking = check(NodeContext::read(scope_, ref, key))) {
       result.free = false;
       result.blocking = blocking->to_node(scope_);
     }
@@ -115,12 +120,12 @@ class RegionCheck {
   }
 
   /// The child whose key range holds the whole bounding box, or 8 when it straddles.
-  [[nodiscard]] unsigned only_child_meeting_bounds(const NodeContext& n) const {
-    const std::uint32_t half = 1u << (n.depth - 1);
+  [[nodiscard]] unsigned only_child_meeting_bounds(Key key, int depth) const {
+    const std::uint32_t half = 1u << (depth - 1);
     unsigned slot = 0;
     for (int axis = 0; axis < 3; ++axis) {
-      const bool low = bounds_.min[axis] < n.key[axis] + half;
-      const bool high = bounds_.max[axis] >= n.key[axis] + half;
+      const bool low = bounds_.min[axis] < key[axis] + half;
+      const bool high = bounds_.max[axis] >= key[axis] + half;
       if (low && high) return 8;
       if (high) slot |= 1u << axis;
     }
