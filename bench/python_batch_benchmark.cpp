@@ -29,6 +29,7 @@
 
 #include <time.h>
 
+#include "common/argument_cursor.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/query/shapes.hpp"
@@ -79,7 +80,15 @@ int run(int argc, char** argv) {
     return 2;
   }
   int repeat = 5;
-  if (argc == 6 && std::string(argv[4]) == "--repeat") repeat = std::max(1, std::stoi(argv[5]));
+  umbra_bench::ArgumentCursor arguments{argc, argv, 3};
+  while (arguments.next()) {
+    if (arguments.flag() == "--repeat") {
+      repeat = std::max(1, std::stoi(arguments.value()));
+    } else {
+      std::fprintf(stderr, "unknown option %s\n", arguments.flag().c_str());
+      return 2;
+    }
+  }
   const umbra::OccupancyMap map = umbra::load_map(argv[1]);
   const std::vector<double> sphere_rows = read_rows(argv[2], 4);
   const std::vector<double> point_rows = read_rows(argv[3], 3);
