@@ -42,6 +42,10 @@ Vec3d Grid::min_corner(Key key, int depth) const {
 }
 
 Vec3d Grid::center(Key key, int depth) const {
+  // A voxel's centre is OctoMap's keyToCoord to the bit (the corner plus a
+  // half voxel can round differently, which decides ties such as a centre
+  // exactly max_range from a sensor).
+  if (depth == 0) return {axis_center(key.x), axis_center(key.y), axis_center(key.z)};
   const double half = 0.5 * node_size(depth);
   return min_corner(key, depth) + Vec3d{half, half, half};
 }
