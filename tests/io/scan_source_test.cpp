@@ -678,11 +678,7 @@ TEST(ScanSource, RealOctomapScanDat) {
   EXPECT_EQ(scan.points.back(), (Vec3f{0.130896f, 3.58f, 0.432014f}));
   EXPECT_FALSE(source->next(scan));
   EXPECT_EQ(source->progress(), 1.0);
-#if defined(__SANITIZE_ADDRESS__) || !defined(__OPTIMIZE__)
-  EXPECT_LT(seconds, 5.0);
-#else
-  EXPECT_LT(seconds, 1.0);
-#endif
+  // No limit on the time: the machines are shared (speed is for bench/).
 }
 
 }  // namespace
