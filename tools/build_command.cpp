@@ -117,6 +117,9 @@ BuildPlan plan_build(const BuildOptions& options) {
     plan.sources.association = options.association;
     if (!options.camera.empty()) {
       const std::vector<double> c = parse_numbers(options.camera, 5, "--camera");
+      if (!(c[0] > 0 && c[1] > 0 && c[4] > 0)) {
+        throw std::invalid_argument("--camera: fx, fy and depth_scale must be > 0, got '" + options.camera + "'");
+      }
       plan.sources.depth_camera = {c[0], c[1], c[2], c[3], c[4]};
     }
     for (const std::string& input : options.inputs) (void)scan_format_for(input, options.format);

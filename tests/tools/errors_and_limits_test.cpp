@@ -111,7 +111,7 @@ TEST(ErrorsAndLimits, BadUsageIsExitCodeTwoWithTheValueInTheMessage) {
       {build + "--origin 1,2", "--origin expects 3 numbers"},
       {build + "--origin 1,nan,2", "--origin expects 3 finite numbers"},
       {build + "--bbox 1,1,1,0,0,0", "bounding box: axis 0 must have finite min <= max"},
-      {build + "--camera 0,1,1,1,1", ""},  // the camera is checked when the TUM input is opened; xyz ignores it
+      {build + "--camera 0,1,1,1,1", "--camera: fx, fy and depth_scale must be > 0, got '0,1,1,1,1'"},
       {build + "--clear-depth 30", "--clear-depth"},
       {build + "--max-memory lots", "--max-memory expects a size such as 512M, 2G or 1.5GiB"},
       {build + "--max-memory 0", "got '0'"},
@@ -122,7 +122,6 @@ TEST(ErrorsAndLimits, BadUsageIsExitCodeTwoWithTheValueInTheMessage) {
       {"convert " + quoted(dir / "room.xyz") + " " + quoted(dir / "x.umb"), "unknown map file extension '.xyz'"},
   };
   for (const Case& c : cases) {
-    if (c.expected.empty()) continue;
     const CommandResult result = run(c.arguments);
     EXPECT_EQ(result.exit_code, 2) << c.arguments << "\n" << result.output;
     EXPECT_TRUE(contains(result.output, c.expected)) << c.arguments << "\n" << result.output;
@@ -502,6 +501,9 @@ TEST(ErrorsAndLimits, OutputThroughASymbolicLinkReplacesItsTarget) {
 // The reproducer: a process limit lets only a few of the 8 threads
 // start. The build finishes on those, says so, and saves the map.
 TEST(ErrorsAndLimits, AProcessLimitOnThreadsGivesAWarningNotAHang) {
+#if defined(__SANITIZE_THREAD__)
+  GTEST_SKIP() << "ThreadSanitizer starts threads of its own, which a process limit of a few tasks refuses";
+#endif
   if (::geteuid() != 0 || test::run_command("setpriv --version && prlimit --version").exit_code != 0) {
     GTEST_SKIP() << "needs root, setpriv and prlimit to run the program as nobody under a process limit";
   }
@@ -511,8 +513,9 @@ TEST(ErrorsAndLimits, AProcessLimitOnThreadsGivesAWarningNotAHang) {
   // nobody's tasks now, plus the program and two threads.
   const CommandResult count = test::run_command("ps -L -u 65534 --no-headers 2>/dev/null | wc -l");
   const int allowed = std::atoi(count.output.c_str()) + 3;
+  // (LeakSanitizer's exit check needs a thread of its own, which the limit refuses: off for this run.)
   const CommandResult limited = test::run_command(
-      "timeout 120 prlimit --nproc=" + std::to_string(allowed) + " setpriv --reuid=65534 --regid=65534 --clear-groups " +
+      "ASAN_OPTIONS=detect_leaks=0 timeout 120 prlimit --nproc=" + std::to_string(allowed) + " setpriv --reuid=65534 --regid=65534 --clear-groups " +
       cli() + " build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "map.umb") + " --threads 8");
   EXPECT_EQ(limited.exit_code, 0) << limited.output;  // timeout's 124 would mean a hang
   EXPECT_TRUE(contains(limited.output, "umbra: warning: only ")) << limited.output;
