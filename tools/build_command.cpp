@@ -28,6 +28,9 @@
 #include "umbra/io/file_saving.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/scan_source.hpp"
+#ifdef UMBRA_WITH_ROS
+#include "umbra_ros/rosbag_source.hpp"
+#endif
 
 namespace umbra::cli {
 namespace {
@@ -51,6 +54,8 @@ struct BuildOptions {
   std::string association;
   std::string camera;
   bool keep_going = false;
+  std::vector<std::string> topics;
+  std::string frame = "map";
 };
 
 struct ScanRow {
@@ -86,6 +91,31 @@ std::vector<double> parse_numbers(const std::string& text, std::size_t count, co
   return values;
 }
 
+/// The reader of one input; .bag files go to the ROS reader (ROS builds only: open_scan_source refuses them).
+std::unique_ptr<ScanSource> open_input(const std::string& input, const BuildOptions& options,
+                                       const ScanSourceOptions& source_options) {
+#ifdef UMBRA_WITH_ROS
+  if (scan_format_for(input, options.format) == "rosbag") {
+    return ros_io::open_rosbag(input, ros_io::RosbagOptions{options.topics, options.frame});
+  }
+#else
+  (void)options;
+#endif
+  return open_scan_source(input, source_options);
+}
+
+/// Warns about clouds a .bag reader skipped for want of a transform.
+void report_skipped(const ScanSource& source) {
+#ifdef UMBRA_WITH_ROS
+  if (const auto* bag = dynamic_cast<const ros_io::RosbagScanSource*>(&source); bag && bag->skipped_clouds() > 0) {
+    std::printf("warning: %zu clouds had no transform to the map frame and were skipped (first: %s)\n",
+                bag->skipped_clouds(), bag->first_skip_reason().c_str());
+  }
+#else
+  (void)source;
+#endif
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -115,6 +145,8 @@ BuildPlan plan_build(const BuildOptions& options) {
     plan.sources.poses = options.poses;
     plan.sources.calibration = options.calibration;
     plan.sources.association = options.association;
+    plan.sources.topics = options.topics;
+    plan.sources.frame = options.frame;
     if (!options.camera.empty()) {
       const std::vector<double> c = parse_numbers(options.camera, 5, "--camera");
       if (!(c[0] > 0 && c[1] > 0 && c[4] > 0)) {
@@ -207,7 +239,7 @@ std::vector<CheckedInput> preflight(const BuildOptions& options, const BuildPlan
     CheckedInput& entry = checked[input];
     std::vector<Vec3f> origins;
     try {
-      const std::unique_ptr<ScanSource> source = open_scan_source(options.inputs[input], plan.sources);
+      const std::unique_ptr<ScanSource> source = open_input(options.inputs[input], options, plan.sources);
       for (const std::string& warning : source->warnings()) std::fprintf(stderr, "umbra: warning: %s\n", warning.c_str());
       entry.scans = source->scan_count();
       origins = source->origins();
@@ -257,7 +289,7 @@ int run_build(const BuildOptions& options) {
     std::fflush(stdout);
     std::unique_ptr<ScanSource> source;
     try {
-      source = open_scan_source(options.inputs[file], plan.sources);
+      source = open_input(options.inputs[file], options, plan.sources);
     } catch (const std::exception&) {
       problems.report(where, current_error("opening it"), "that input");
       continue;
@@ -295,6 +327,7 @@ int run_build(const BuildOptions& options) {
       const double fraction = (static_cast<double>(file) + source->progress()) / static_cast<double>(options.inputs.size());
       bar.update(fraction, std::to_string(rows.size()) + " scans");
     }
+    report_skipped(*source);
   }
   bar.finish();
   const double build_seconds = seconds_since(start);
@@ -356,7 +389,8 @@ Command add_build_command(CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "build",
       "Build a map from point clouds: OctoMap ScanGraph (.graph), ASCII x y z [r g b] (.xyz .dat .txt, also .bz2), "
-      "PLY, PCD, KITTI velodyne (.bin or a folder, with --poses), TUM RGB-D (a sequence folder)");
+      "PLY, PCD, KITTI velodyne (.bin or a folder, with --poses), TUM RGB-D (a sequence folder), ROS bags (.bag, "
+      "PointCloud2 with TF; ROS builds only)");
   command->add_option("inputs", options->inputs, "point-cloud files or sequence folders, inserted in order")
       ->required()
       ->check(CLI::ExistingPath);
@@ -392,7 +426,7 @@ Command add_build_command(CLI::App& app) {
   command->add_option("--origin", options->origin, "sensor origin x,y,z for files without poses (.xyz, .ply, .pcd, lone .bin)")
       ->capture_default_str();
   command->add_option("--format", options->format, "input format for every input (default: by name)")
-      ->check(CLI::IsMember({"graph", "xyz", "ply", "pcd", "kitti", "tum"}));
+      ->check(CLI::IsMember({"graph", "xyz", "ply", "pcd", "kitti", "tum", "rosbag"}));
   command->add_option("--poses", options->poses, "kitti: poses file (12 numbers per line)");
   command->add_option("--calibration", options->calibration, "kitti: calib.txt with the velodyne-to-camera Tr");
   command->add_option("--association", options->association, "tum: association file (default: the folder's *assoc*.txt)");
@@ -401,6 +435,9 @@ Command add_build_command(CLI::App& app) {
                     "skip an input that cannot be read, or a scan that cannot be inserted, with a warning, and save the "
                     "rest (exit code 3)");
   add_memory_option(*command);
+  command->add_option("--topic", options->topics, "rosbag: a PointCloud2 topic to read (repeatable; default: all)");
+  command->add_option("--frame", options->frame, "rosbag: the map frame, clouds are moved into it with the bag's TF")
+      ->capture_default_str();
   return [options] { return run_build(*options); };
 }
 

@@ -59,6 +59,7 @@ InsertStats& InsertStats::operator+=(const InsertStats& other) {
   out_of_bounds += other.out_of_bounds;
   outside_box += other.outside_box;
   threads = std::max(threads, other.threads);
+  exclusive_seconds += other.exclusive_seconds;
   return *this;
 }
 
