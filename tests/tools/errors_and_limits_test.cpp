@@ -119,6 +119,13 @@ TEST(ErrorsAndLimits, BadUsageIsExitCodeTwoWithTheValueInTheMessage) {
       {"build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "no" / "out.umb"), "does not exist"},
       {"build " + quoted(dir / "missing.xyz") + " -o " + quoted(dir / "out.umb"), "missing.xyz"},
       {"info --max-memory -5 " + quoted(dir / "room.xyz"), "--max-memory"},
+      {"query " + quoted(dir / "room.xyz") + " line --input - --radius nan",
+       "the capsule radius in metres must be a number in [0, 1e+06], got 'nan'"},
+      {"query " + quoted(dir / "room.xyz") + " line --input - --radius inf", "got 'inf'"},
+      {"query " + quoted(dir / "room.xyz") + " line --input - --radius -1", "got '-1'"},
+      {"query " + quoted(dir / "room.xyz") + " sphere --input - --max-memory lots", "--max-memory"},
+      {"render " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "x.png") + " --max-memory 0", "--max-memory"},
+      {"view " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "x.html") + " --max-memory 1Q", "--max-memory"},
       {"convert " + quoted(dir / "room.xyz") + " " + quoted(dir / "x.umb"), "unknown map file extension '.xyz'"},
   };
   for (const Case& c : cases) {
@@ -350,6 +357,18 @@ TEST(ErrorsAndLimits, MaxMemoryRefusesWithTheFileTheNeedAndTheLimit) {
   EXPECT_EQ(run("convert " + quoted(dir / "room.umb") + " " + quoted(dir / "room.bt") + " --max-memory 16K").exit_code,
             1);
   EXPECT_FALSE(fs::exists(dir / "room.bt"));
+  // The commands that only load a map say the same.
+  for (const std::string& command : {"query " + quoted(dir / "room.umb") + " nodes --count",
+                                     "render " + quoted(dir / "room.umb") + " -o " + quoted(dir / "room.png"),
+                                     "view " + quoted(dir / "room.umb") + " -o " + quoted(dir / "room.html")}) {
+    const CommandResult refused = run(command + " --max-memory 16K");
+    if (contains(refused.output, "built without the browser viewer")) continue;  // `view` needs node and npm
+    EXPECT_EQ(refused.exit_code, 1) << command << "\n" << refused.output;
+    EXPECT_TRUE(contains(refused.output, (dir / "room.umb").string() + ": loading this map (")) << refused.output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "room.png"));
+  EXPECT_FALSE(fs::exists(dir / "room.html"));
+  EXPECT_EQ(run("query " + quoted(dir / "room.umb") + " nodes --count --max-memory 1G").exit_code, 0);
 
   write_xyz(dir / "room.xyz", room_points(100'000));
   const CommandResult build = run("build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "m.umb") +
