@@ -112,7 +112,8 @@ TEST(QueryLines, AnswersRefuseBadShapesWithTheLibrarysMessage) {
   EXPECT_FALSE(far.ok);
   EXPECT_NE(far.problem.find("outside the map"), std::string::npos) << far.problem;
   const std::vector<double> segment = {0, 0, 0, 0.5, 0, 0};
-  for (const double radius : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), -0.5}) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  for (const double radius : {kNaN, std::numeric_limits<double>::infinity(), -0.5}) {
     const QueryAnswer capsule = answer_query_line(map, LineQuery::line, segment, {}, radius);
     EXPECT_FALSE(capsule.ok) << radius;
     EXPECT_FALSE(capsule.problem.empty()) << radius;
