@@ -11,11 +11,12 @@
 // Crashes (the rule): any exception other than the std::invalid_argument /
 // std::out_of_range the answering turns into a per-line problem, a failed
 // UMBRA_ASSERT, a sanitizer report. Properties of what is accepted: a good
-// line holds exactly the kind's count of finite numbers and a bad one none;
-// line numbers rise; a region free at a coarser depth is free at depth 0
-// (coarse answers are conservative); a raycast hit at depth 0 is the centre
-// of an occupied voxel. The map (8 depth levels at 0.1 m, so +-12.8 m: easy
-// to leave) holds free, occupied and unknown space: one scan of a half shell.
+// line holds exactly the kind's count of finite numbers and a bad one says
+// why; line numbers rise; a NaN or infinite capsule radius is refused; a
+// region free at a coarser depth is free at depth 0 (coarse answers are
+// conservative); a raycast hit at depth 0 is the centre of an occupied
+// voxel. The map (8 depth levels at 0.1 m, so +-12.8 m: easy to leave)
+// holds free, occupied and unknown space: one scan of a half shell.
 // Cost per input: one pass over the text, and at most two library queries
 // per good line.
 #include <array>
@@ -90,6 +91,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
     const QueryAnswer answer = answer_query_line(map, kind, line.values, collision, radius);
     require(answer.ok != !answer.problem.empty(), "an answer or a problem, never both");
+    if (kind == LineQuery::line && !(std::isfinite(radius) && radius >= 0.0)) {
+      require(!answer.ok, "a NaN or infinite capsule radius is refused");
+    }
     if (!answer.ok) continue;
     if (kind == LineQuery::raycast) {
       if (answer.yes && collision.depth == 0) {
