@@ -1,6 +1,7 @@
 // The input lines of `umbra query` (query_lines.hpp): a hand-written word
 // splitter over std::from_chars (no locale, no allocation but the values),
-// and the dispatch of a checked line to the library's is_free / cast_ray.
+// and the dispatch of a checked line to the library's is_free / cast_ray /
+// information_gain.
 #include "query_lines.hpp"
 
 #include <charconv>
@@ -12,7 +13,8 @@
 namespace umbra::cli {
 
 std::optional<LineQuery> line_query_named(std::string_view name) {
-  for (const LineQuery kind : {LineQuery::sphere, LineQuery::box, LineQuery::line, LineQuery::raycast}) {
+  for (const LineQuery kind :
+       {LineQuery::sphere, LineQuery::box, LineQuery::line, LineQuery::raycast, LineQuery::gain}) {
     if (name == to_string(kind)) return kind;
   }
   return std::nullopt;
@@ -24,6 +26,7 @@ const char* to_string(LineQuery kind) {
     case LineQuery::box: return "box";
     case LineQuery::line: return "line";
     case LineQuery::raycast: return "raycast";
+    case LineQuery::gain: return "gain";
   }
   return "?";
 }
@@ -34,6 +37,7 @@ std::size_t numbers_of(LineQuery kind) {
     case LineQuery::box: return 6;
     case LineQuery::line: return 6;
     case LineQuery::raycast: return 7;
+    case LineQuery::gain: return 5;
   }
   return 0;
 }
@@ -44,6 +48,7 @@ const char* layout_of(LineQuery kind) {
     case LineQuery::box: return "minx miny minz maxx maxy maxz";
     case LineQuery::line: return "x1 y1 z1 x2 y2 z2";
     case LineQuery::raycast: return "x y z dx dy dz max_range";
+    case LineQuery::gain: return "x y z yaw_deg pitch_deg";
   }
   return "?";
 }
@@ -128,11 +133,12 @@ QueryLines read_query_lines(std::istream& in, LineQuery kind) {
 }
 
 QueryAnswer answer_query_line(const OccupancyMap& map, LineQuery kind, std::span<const double> v,
-                              const CollisionOptions& collision, double radius) {
+                              const LineQuerySettings& settings) {
   if (v.size() != numbers_of(kind)) {
     throw std::logic_error(std::string("answer_query_line: ") + to_string(kind) + " needs " +
                            std::to_string(numbers_of(kind)) + " values, got " + std::to_string(v.size()));
   }
+  const CollisionOptions& collision = settings.collision;
   QueryAnswer a;
   try {
     switch (kind) {
@@ -143,8 +149,8 @@ QueryAnswer answer_query_line(const OccupancyMap& map, LineQuery kind, std::span
         a.yes = !map.is_free(Aabb{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}}, collision).free;
         break;
       case LineQuery::line:
-        if (radius != 0.0) {  // a NaN or negative radius goes to the library, which refuses it
-          a.yes = !map.is_free(Capsule{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}, radius}, collision).free;
+        if (settings.radius != 0.0) {  // a NaN or negative radius goes to the library, which refuses it
+          a.yes = !map.is_free(Capsule{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}, settings.radius}, collision).free;
         } else {
           a.yes = !map.is_free(Segment{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}}, collision).free;
         }
@@ -153,6 +159,14 @@ QueryAnswer answer_query_line(const OccupancyMap& map, LineQuery kind, std::span
         const RayHit hit = map.cast_ray({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], false, collision.depth});
         a.yes = hit.hit;
         a.point = hit.node.center;
+        break;
+      }
+      case LineQuery::gain: {
+        const Frustum view = Frustum::from_degrees({v[0], v[1], v[2]}, v[3], v[4], settings.hfov, settings.vfov,
+                                                   settings.min_range, settings.max_range);
+        GainOptions gain_options;
+        gain_options.method = settings.method;
+        a.gain = map.information_gain(view, gain_options);
         break;
       }
     }

@@ -1,4 +1,4 @@
-// The input lines of `umbra query` (sphere, box, line, raycast): what a line
+// The input lines of `umbra query` (sphere, box, line, raycast, gain): what a line
 // must hold, reading and checking every line of an input, and answering one
 // checked line against a map. Kept apart from the command (query_command.cpp)
 // so that the libFuzzer target fuzz/fuzz_query_lines.cpp feeds lines through
@@ -16,13 +16,14 @@
 #include <vector>
 
 #include "umbra/map/occupancy_map.hpp"
+#include "umbra/query/information_gain.hpp"
 
 namespace umbra::cli {
 
 /// The kinds of query that read lines, with their layout.
-enum class LineQuery { sphere, box, line, raycast };
+enum class LineQuery { sphere, box, line, raycast, gain };
 
-/// "sphere", "box", "line" or "raycast"; nullopt for anything else.
+/// "sphere", "box", "line", "raycast" or "gain"; nullopt for anything else.
 std::optional<LineQuery> line_query_named(std::string_view name);
 const char* to_string(LineQuery kind);
 /// How many numbers a line of this kind holds, and their names ("x y z r").
@@ -57,21 +58,35 @@ struct QueryLines {
 /// fails to read (not for bad lines: those go to `bad`).
 QueryLines read_query_lines(std::istream& in, LineQuery kind);
 
-/// One answer: collides / hit, the centre of the voxel hit (raycast), or the
-/// reason there is no answer (the library's std::invalid_argument or
-/// std::out_of_range message: a negative radius, a shape outside the map...).
+/// One answer: collides / hit, the centre of the voxel hit (raycast), the
+/// gain, or the reason there is no answer (the library's
+/// std::invalid_argument or std::out_of_range message: a negative radius, a
+/// shape outside the map...).
 struct QueryAnswer {
   bool ok = false;
   bool yes = false;
   Vec3d point;
+  GainResult gain{};
   std::string problem;
 };
 
+/// What the command line sets for every line.
+struct LineQuerySettings {
+  CollisionOptions collision;  ///< sphere, box, line, raycast (its depth)
+  /// line: other than 0 turns the segment into a capsule (so a negative or
+  /// NaN radius is refused like any bad capsule).
+  double radius = 0.0;
+  double hfov = 115.0;  ///< gain: the field of view in degrees and the ranges in metres
+  double vfov = 60.0;
+  double min_range = 0.0;
+  double max_range = 6.5;
+  GainMethod method = GainMethod::exact;
+};
+
 /// Answers one line's values (numbers_of(kind) of them, as parse_query_line
-/// gives them). A `radius` other than 0 turns a line query into a capsule
-/// (so a negative or NaN one is refused like any bad capsule). Raycasts pass
-/// through unknown space and stop at the first occupied voxel.
+/// gives them). Raycasts pass through unknown space and stop at the first
+/// occupied voxel.
 QueryAnswer answer_query_line(const OccupancyMap& map, LineQuery kind, std::span<const double> values,
-                              const CollisionOptions& collision, double radius);
+                              const LineQuerySettings& settings);
 
 }  // namespace umbra::cli

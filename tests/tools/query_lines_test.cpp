@@ -28,7 +28,7 @@ std::string problem_of(std::string_view text, LineQuery kind) {
 }
 
 TEST(QueryLines, KindsAndLayouts) {
-  for (const char* name : {"sphere", "box", "line", "raycast"}) {
+  for (const char* name : {"sphere", "box", "line", "raycast", "gain"}) {
     const auto kind = line_query_named(name);
     ASSERT_TRUE(kind) << name;
     EXPECT_STREQ(to_string(*kind), name);
@@ -40,6 +40,7 @@ TEST(QueryLines, KindsAndLayouts) {
   EXPECT_EQ(numbers_of(LineQuery::box), 6u);
   EXPECT_EQ(numbers_of(LineQuery::line), 6u);
   EXPECT_EQ(numbers_of(LineQuery::raycast), 7u);
+  EXPECT_EQ(numbers_of(LineQuery::gain), 5u);
 }
 
 TEST(QueryLines, GoodLinesGiveTheirValues) {
@@ -108,20 +109,22 @@ TEST(QueryLines, AnswersRefuseBadShapesWithTheLibrarysMessage) {
   config.depth_levels = 4;  // +-0.8 m
   const OccupancyMap map(config);
   const std::vector<double> outside = {5, 0, 0, 0.1};
-  const QueryAnswer far = answer_query_line(map, LineQuery::sphere, outside, {}, 0.0);
+  const QueryAnswer far = answer_query_line(map, LineQuery::sphere, outside, {});
   EXPECT_FALSE(far.ok);
   EXPECT_NE(far.problem.find("outside the map"), std::string::npos) << far.problem;
   const std::vector<double> segment = {0, 0, 0, 0.5, 0, 0};
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   for (const double radius : {kNaN, std::numeric_limits<double>::infinity(), -0.5}) {
-    const QueryAnswer capsule = answer_query_line(map, LineQuery::line, segment, {}, radius);
+    LineQuerySettings settings;
+    settings.radius = radius;
+    const QueryAnswer capsule = answer_query_line(map, LineQuery::line, segment, settings);
     EXPECT_FALSE(capsule.ok) << radius;
     EXPECT_FALSE(capsule.problem.empty()) << radius;
   }
-  const QueryAnswer unknown = answer_query_line(map, LineQuery::line, segment, {}, 0.0);
+  const QueryAnswer unknown = answer_query_line(map, LineQuery::line, segment, {});
   EXPECT_TRUE(unknown.ok);
   EXPECT_TRUE(unknown.yes);  // an empty map is unknown, which blocks
-  EXPECT_THROW((void)answer_query_line(map, LineQuery::box, outside, {}, 0.0), std::logic_error);
+  EXPECT_THROW((void)answer_query_line(map, LineQuery::box, outside, {}), std::logic_error);
 }
 
 }  // namespace
