@@ -3,10 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+
+#include "sim/gaussian_source.hpp"
 
 namespace umbra::sim {
 
@@ -23,35 +24,6 @@ std::string text(double value) {
   out << "LidarModel::" << field << " must be " << requirement << ", got " << value;
   throw std::invalid_argument(out.str());
 }
-
-/// Standard normal numbers from std::mt19937. The engine's output is fully
-/// specified by the standard, so every platform draws the same bits; the
-/// Box-Muller transform below then uses only log, sqrt, cos and sin, whose
-/// last bit may differ between maths libraries (far below any test tolerance).
-class GaussianSource {
- public:
-  explicit GaussianSource(std::uint32_t seed) : engine_(seed) {}
-
-  double next() {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    // u1 in (0, 1] so that log(u1) is finite; u2 in [0, 1). 32 random bits each.
-    const double u1 = (double(engine_()) + 1.0) / 4294967296.0;
-    const double u2 = double(engine_()) / 4294967296.0;
-    const double radius = std::sqrt(-2.0 * std::log(u1));
-    const double angle = 2.0 * std::numbers::pi * u2;
-    spare_ = radius * std::sin(angle);
-    has_spare_ = true;
-    return radius * std::cos(angle);
-  }
-
- private:
-  std::mt19937 engine_;
-  double spare_ = 0.0;
-  bool has_spare_ = false;
-};
 
 }  // namespace
 
@@ -109,7 +81,7 @@ void simulate_scan(const Scene& scene, const SensorPose& pose, const LidarModel&
   const double first_elevation =
       model.rings > 1 ? model.fov_down_deg : 0.5 * (model.fov_down_deg + model.fov_up_deg);
   const double azimuth_step = 2.0 * std::numbers::pi / model.azimuth_steps;
-  GaussianSource noise(model.seed);
+  detail::GaussianSource noise(model.seed);
   const bool noisy = model.range_noise_stddev > 0.0;
 
   for (int ring = 0; ring < model.rings; ++ring) {

@@ -1,0 +1,99 @@
+// A simulated depth camera (pinhole model, in the style of an RGB-D or
+// stereo camera), for tests, benchmarks and exploration studies.
+//
+// The camera has `width` x `height` pixels spread over a horizontal field of
+// view `hfov_deg` and a vertical one `vfov_deg` (pinhole: fx = width / 2 /
+// tan(hfov / 2), fy = height / 2 / tan(vfov / 2), principal point in the
+// middle). Pixel (u, v) (u to the right, v down, sampled at the pixel's
+// centre) looks along d = f - ((u + 0.5 - width / 2) / fx) l - ((v + 0.5 -
+// height / 2) / fy) up, normalised, where the pose gives forward f = (cos p
+// cos y, cos p sin y, sin p), left l = (-sin y, cos y, 0) and up = f x l (the
+// frame DESIGN.md uses for the information gain, so a pixel's ray lies in the
+// frustum of the same hfov, vfov and range). The ray is cast into a Scene; a
+// surface at Euclidean range r in [min_range, max_range] gives the point at
+// r + n along the ray, n Gaussian noise with standard deviation
+// noise_stddev + noise_per_square_metre * r^2 (depth cameras get worse with
+// the square of the range), the noisy range clamped to [0, max_range].
+// Noise comes from our own Box-Muller transform over std::mt19937 (see
+// lidar.hpp), so a seed gives the same image with every compiler.
+//
+// demo_camera_path() is a trajectory through make_demo_scene() whose views
+// overlap from frame to frame as a hand-held or robot-mounted camera's do:
+// later frames look through the noisy surfaces of earlier ones.
+//
+// Cost model: width * height ray casts, each brute force over the scene's
+// primitives: about 10 ms for 640 x 240 pixels on the demo scene.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "umbra/core/vec3.hpp"
+#include "umbra/sim/scene.hpp"
+
+namespace umbra::sim {
+
+/// Where a camera is and where it looks: yaw counter-clockwise from +x about
+/// +z, pitch up from the horizontal (radians); no roll.
+struct CameraPose {
+  Vec3d position;
+  double yaw = 0.0;
+  double pitch = 0.0;
+};
+
+struct DepthCameraModel {
+  int width = 640;                       ///< pixels, >= 1
+  int height = 240;                      ///< pixels, >= 1
+  double hfov_deg = 115.0;               ///< horizontal field of view, in (0, 180)
+  double vfov_deg = 60.0;                ///< vertical field of view, in (0, 180)
+  double min_range = 0.1;                ///< metres, >= 0: nearer surfaces give no point
+  double max_range = 6.5;                ///< metres, > min_range: farther surfaces give no point
+  double noise_stddev = 0.0;             ///< metres, Gaussian noise along the ray at range 0
+  double noise_per_square_metre = 0.0;   ///< 1/m: added standard deviation per squared metre of range
+  std::uint32_t seed = 1;                ///< seed of the noise generator
+  /// If set, a pixel that sees no surface within max_range gives a point at
+  /// no_return_range along its ray (exact): insert it with
+  /// InsertOptions::max_range below no_return_range and the integrator clears
+  /// free space along it without a hit.
+  bool emit_no_return = false;
+  double no_return_range = 100.0;        ///< metres, > max_range (checked only with emit_no_return)
+
+  /// Throws std::invalid_argument naming the first bad field.
+  void validate() const;
+  [[nodiscard]] std::size_t pixel_count() const;
+  /// Unit direction of the ray through the centre of pixel (u, v) from `pose`.
+  [[nodiscard]] Vec3d pixel_direction(const CameraPose& pose, int u, int v) const;
+};
+
+/// World-frame points of one depth image from `pose`: one per pixel that sees
+/// a surface in [min_range, max_range] (plus one per pixel without one if
+/// emit_no_return), row by row from the top, each row left to right. The
+/// noise generator is seeded afresh from model.seed on every call, so one
+/// call depends only on its arguments. Throws std::invalid_argument for a
+/// bad model or a non-finite pose.
+std::vector<Vec3f> simulate_depth_image(const Scene& scene, const CameraPose& pose, const DepthCameraModel& model);
+
+/// The same, into `points` (cleared first; its capacity is reused).
+void simulate_depth_image(const Scene& scene, const CameraPose& pose, const DepthCameraModel& model,
+                          std::vector<Vec3f>& points);
+
+/// One depth image of a sequence: the camera's position and the points.
+struct DepthFrame {
+  Vec3f origin;
+  std::vector<Vec3f> points;
+};
+
+/// One image per pose; image i draws its noise from seed model.seed + i, so
+/// frames have independent noise and the sequence depends only on the seed.
+std::vector<DepthFrame> simulate_depth_sequence(const Scene& scene, std::span<const CameraPose> poses,
+                                                const DepthCameraModel& model);
+
+/// Sixteen poses through make_demo_scene() at 1.3 m height, looking slightly
+/// down: ten 0.4 to 0.5 m apart along the west half of the corridor, panning
+/// from side to side, then six from the door of the middle north room into
+/// it. Every pose is in free space, at least 0.3 m from any surface.
+std::vector<CameraPose> demo_camera_path();
+
+}  // namespace umbra::sim
