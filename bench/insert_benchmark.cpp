@@ -21,7 +21,7 @@
 // Memory: OctoMap's memoryUsage() and umbra's memory_bytes() for the
 // finished map, and the peak RSS growth of the child while inserting.
 //
-// Usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum]
+// Usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum,sim-camera]
 //          [--res 0.05,0.02] [--methods LIST] [--threads 1,2] [--repeat 3]
 //          [--max-range 30] [--tum-max-range 5] [--color] [--markdown FILE]
 #include <malloc.h>
@@ -42,15 +42,15 @@
 
 #include <octomap/OcTree.h>
 
-#include "umbra/io/scan_source.hpp"
+#include "bench_data.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace {
 
-struct Dataset {
-  std::string name;
-  double max_range = 30.0;
-  std::vector<umbra::Scan> scans;
+using umbra::bench::median;
+using umbra::bench::split_list;
+
+struct Dataset : umbra::bench::Dataset {
   std::vector<octomap::Pointcloud> clouds;  // the same points for OctoMap
 };
 
@@ -189,34 +189,16 @@ Measurement measure_in_child(const Dataset& data, const Method& method, double r
   return m;
 }
 
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-Dataset load(const std::string& name, const std::string& path, double max_range) {
+Dataset load(const std::string& name, const umbra::bench::DatasetOptions& options) {
   Dataset data;
-  data.name = name;
-  data.max_range = max_range;
-  const auto source = umbra::open_scan_source(path);
-  umbra::Scan scan;
-  while (source->next(scan)) {
+  static_cast<umbra::bench::Dataset&>(data) = umbra::bench::load_dataset(name, options);
+  for (const umbra::Scan& scan : data.scans) {
     octomap::Pointcloud cloud;
     cloud.reserve(scan.points.size());
     for (const umbra::Vec3f& p : scan.points) cloud.push_back(p.x, p.y, p.z);
     data.clouds.push_back(std::move(cloud));
-    data.scans.push_back(scan);
   }
   return data;
-}
-
-std::vector<std::string> split(const std::string& text) {
-  std::vector<std::string> parts;
-  std::stringstream in(text);
-  std::string part;
-  while (std::getline(in, part, ',')) parts.push_back(part);
-  return parts;
 }
 
 std::string mib(std::uint64_t bytes) {
@@ -233,15 +215,13 @@ struct Result {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string data_dir = "../shared/data";
+  umbra::bench::DatasetOptions data_options;
   std::string resolutions = "0.05,0.02";
   std::string datasets = "scan.dat,3dtk";
   std::string method_names = "octomap-plain,umbra-simple,octomap-discrete,umbra-discrete";
   std::string thread_counts = "1";
   std::string markdown_path;
   int repeat = 3;
-  double max_range = 30.0;
-  double tum_max_range = 5.0;
   bool color = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -252,19 +232,19 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (arg == "--data") data_dir = value();
+    if (arg == "--data") data_options.data_dir = value();
     else if (arg == "--res") resolutions = value();
     else if (arg == "--datasets") datasets = value();
     else if (arg == "--methods") method_names = value();
     else if (arg == "--threads") thread_counts = value();
     else if (arg == "--repeat") repeat = std::stoi(value());
-    else if (arg == "--max-range") max_range = std::stod(value());
-    else if (arg == "--tum-max-range") tum_max_range = std::stod(value());
+    else if (arg == "--max-range") data_options.max_range = std::stod(value());
+    else if (arg == "--tum-max-range") data_options.tum_max_range = std::stod(value());
     else if (arg == "--color") color = true;
     else if (arg == "--markdown") markdown_path = value();
     else if (arg == "--help" || arg == "-h") {
       std::printf(
-          "usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum] [--res 0.05,0.02]\n"
+          "usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum,sim-camera] [--res 0.05,0.02]\n"
           "         [--methods LIST] [--threads 1,2] [--repeat 3] [--max-range 30] [--tum-max-range 5]\n"
           "         [--color] [--markdown FILE]\n"
           "methods:");
@@ -277,7 +257,7 @@ int main(int argc, char** argv) {
     }
   }
   std::vector<Method> methods;
-  for (const std::string& name : split(method_names)) {
+  for (const std::string& name : split_list(method_names)) {
     const auto it = std::find_if(kAllMethods.begin(), kAllMethods.end(), [&](const Method& m) { return m.name == name; });
     if (it == kAllMethods.end()) {
       std::fprintf(stderr, "unknown method %s\n", name.c_str());
@@ -287,14 +267,9 @@ int main(int argc, char** argv) {
   }
 
   std::vector<Dataset> loaded;
-  for (const std::string& name : split(datasets)) {
-    const bool tum = name == "tum";
-    const std::string path = name == "scan.dat" ? data_dir + "/octomap/scan.dat.bz2"
-                             : name == "3dtk"   ? data_dir + "/3dtk/3dtk_registered.graph"
-                             : tum              ? data_dir + "/tum_fr2_pioneer_slam2"
-                                                : name;
+  for (const std::string& name : split_list(datasets)) {
     try {
-      loaded.push_back(load(name, path, tum ? tum_max_range : max_range));
+      loaded.push_back(load(name, data_options));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "cannot load %s: %s\n", name.c_str(), e.what());
       return 1;
@@ -310,10 +285,10 @@ int main(int argc, char** argv) {
            "map vs OctoMap | peak RSS growth (MiB) |\n"
         << "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Dataset& data : loaded) {
-    for (const std::string& res_text : split(resolutions)) {
+    for (const std::string& res_text : split_list(resolutions)) {
       const double resolution = std::stod(res_text);
       std::map<std::string, Result> octomap_results;
-      for (const std::string& threads_text : split(thread_counts)) {
+      for (const std::string& threads_text : split_list(thread_counts)) {
         const unsigned threads = static_cast<unsigned>(std::stoul(threads_text));
         std::map<std::string, std::vector<std::vector<double>>> times;  // method -> scan -> repeats
         std::map<std::string, Measurement> last;
