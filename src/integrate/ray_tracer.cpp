@@ -10,11 +10,14 @@
 
 namespace umbra {
 
-void RayTracer::start(int depth_levels) { batch_.reset(depth_levels); }
+void RayTracer::start(int depth_levels) {
+  batch_.reset(depth_levels);
+  std::fill(decisions_.begin(), decisions_.end(), NodeDecision{~std::uint64_t{0}, false});
+}
 
 std::size_t RayTracer::memory_bytes() const {
-  return batch_.memory_bytes() + runs_.capacity() * sizeof(BrickRun) +
-         (crossings_.capacity() + own_.capacity()) * sizeof(NodeCrossing);
+  return batch_.memory_bytes() + runs_.capacity() * sizeof(BrickRun) + crossings_.capacity() * sizeof(NodeCrossing) +
+         decisions_.capacity() * sizeof(NodeDecision) + tail_.capacity() * sizeof(std::uint64_t);
 }
 
 std::optional<PreparedRay> prepare_ray(const ScanContext& scan, Vec3f point, InsertStats* stats) {
@@ -66,7 +69,8 @@ std::optional<PreparedRay> prepare_ray(const ScanContext& scan, Vec3f point, Ins
   return ray;
 }
 
-void RayTracer::add_segment_misses(const ScanContext& scan, Vec3f from, Key from_key, Vec3f to, Key to_key) {
+template <typename Walk>
+void RayTracer::add_walk_misses(const ScanContext& scan, Key from_key, Key to_key, Walk&& walk) {
   // A walk takes at most one step per key along the way, plus at most one
   // overshoot per axis where rounding makes it miss the end voxel.
   std::size_t steps = 4;
@@ -88,13 +92,18 @@ void RayTracer::add_segment_misses(const ScanContext& scan, Vec3f from, Key from
   };
   if (scan.box_keys) {
     const KeyBox box = *scan.box_keys;
-    walk_ray(*scan.grid, from, from_key, to, to_key, [&](std::uint64_t code) {
+    walk([&](std::uint64_t code) {
       if (box.contains(morton::decode(code))) collect(code);
     });
   } else {
-    walk_ray(*scan.grid, from, from_key, to, to_key, collect);
+    walk(collect);
   }
   for (std::size_t i = 1; i <= last; ++i) batch_.add_misses_in_brick(runs[i].code, runs[i].voxels);
+}
+
+void RayTracer::add_segment_misses(const ScanContext& scan, Vec3f from, Key from_key, Vec3f to, Key to_key) {
+  add_walk_misses(scan, from_key, to_key,
+                  [&](auto&& visit) { walk_ray(*scan.grid, from, from_key, to, to_key, visit); });
 }
 
 void RayTracer::add_end(const ScanContext& scan, const PreparedRay& ray) {
@@ -151,6 +160,10 @@ void RayTracer::trace(const ScanContext& scan, std::span<const Vec3f> ends, Inse
 
 bool RayTracer::clear_node_whole(const ScanContext& scan, std::uint64_t code, OccupancyTree::Cursor& cursor) {
   const int depth = scan.clear_depth;
+  NodeDecision& decision = decisions_[(code >> (3 * depth)) & (kDecisions - 1)];
+  if (decision.code == code) return decision.cleared;
+  decision.code = code;
+  decision.cleared = false;
   if (cursor.max_log_odds(code, depth) > scan.tree->thresholds().occupied) return false;  // a known obstacle
   if (scan.box_keys) {
     const Key first = morton::decode(code);
@@ -159,7 +172,8 @@ bool RayTracer::clear_node_whole(const ScanContext& scan, std::uint64_t code, Oc
       return false;
     }
   }
-  return batch_.add_miss_node_unless_hit(code, depth);  // refuses nodes that hold or touch a hit
+  decision.cleared = batch_.add_miss_node_unless_hit(code, depth);  // refuses nodes that hold or touch a hit
+  return decision.cleared;
 }
 
 namespace {
@@ -247,36 +261,27 @@ void RayTracer::trace_group(const ScanContext& scan, std::span<const PreparedRay
 void RayTracer::trace_rest(const ScanContext& scan, const PreparedRay& ray, Vec3f from, Key from_key,
                            OccupancyTree::Cursor& cursor) {
   const Grid& grid = *scan.grid;
-  const std::size_t fine = static_cast<std::size_t>(scan.fine_steps);
-  own_.clear();
-  walk_nodes(grid, scan.clear_depth, Vec3d(from), from_key, Vec3d(ray.end), ray.end_key,
-             [this](const NodeCrossing& c) { own_.push_back(c); });
-  const std::size_t coarse = own_.size() > fine ? own_.size() - fine : 0;
-  const Vec3d begin(from);
-  const Vec3d direction = Vec3d(ray.end) - begin;
-  const double length = direction.norm();
-  const Vec3d unit = length > 0.0 ? direction / length : direction;
-  // Segment ends are nudged a hundredth of a voxel past a node's exit, so
-  // that the voxel walk covers every voxel of the node along the ray.
-  const double nudge = 0.01 * grid.resolution();
-  for (std::size_t i = 0; i < coarse; ++i) {
-    const NodeCrossing& c = own_[i];
-    if (clear_node_whole(scan, c.code, cursor)) continue;
-    const Vec3f segment_from = static_cast<Vec3f>(begin + unit * c.t_in);
-    const Vec3f segment_to = static_cast<Vec3f>(begin + unit * std::min(c.t_out + nudge, length));
-    const std::optional<Key> from_key_in = grid.key_checked(segment_from);
-    const std::optional<Key> to_key = grid.key_checked(segment_to);
-    if (from_key_in && to_key) add_segment_misses(scan, segment_from, *from_key_in, segment_to, *to_key);
+  const int depth = scan.clear_depth;
+  // The end node and the `fine_steps` nodes before it are traced voxel by
+  // voxel whatever they hold: found walking back from the end.
+  const std::size_t tail = static_cast<std::size_t>(scan.fine_steps) + 1;
+  tail_.clear();
+  tail_.push_back(morton::node_begin(morton::encode(ray.end_key), depth));
+  bool whole_ray_in_tail = false;
+  if (tail > 1) {
+    walk_nodes(grid, depth, Vec3d(ray.end), ray.end_key, Vec3d(from), from_key, [&](const NodeCrossing& c) {
+      if (tail_.size() < tail + 1) tail_.push_back(c.code);
+    });
+    // walk_nodes gives the end node too, and stops before the node of `from`.
+    whole_ray_in_tail = tail_.size() < tail + 1;
   }
-  // The last `fine` nodes and the end node, voxel by voxel.
-  if (coarse == 0) {
-    add_segment_misses(scan, from, from_key, ray.end, ray.end_key);
-  } else {
-    const Vec3f tail = static_cast<Vec3f>(begin + unit * own_[coarse - 1].t_out);
-    if (const std::optional<Key> tail_key = grid.key_checked(tail)) {
-      add_segment_misses(scan, tail, *tail_key, ray.end, ray.end_key);
-    }
-  }
+  const auto skip = [&](std::uint64_t node) {
+    if (whole_ray_in_tail || std::find(tail_.begin(), tail_.end(), node) != tail_.end()) return false;
+    return clear_node_whole(scan, node, cursor);
+  };
+  add_walk_misses(scan, from_key, ray.end_key, [&](auto&& visit) {
+    walk_ray_skipping(grid, depth, from, from_key, ray.end, ray.end_key, skip, visit);
+  });
 }
 
 }  // namespace umbra

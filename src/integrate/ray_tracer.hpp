@@ -97,6 +97,10 @@ class RayTracer {
  private:
   /// Misses for the voxels from `from` up to, not including, the voxel of `to`.
   void add_segment_misses(const ScanContext& scan, Vec3f from, Key from_key, Vec3f to, Key to_key);
+  /// Misses for the voxels walk(visit) visits, a walk from the voxel `from_key`
+  /// to the voxel `to_key`, collected a brick at a time.
+  template <typename Walk>
+  void add_walk_misses(const ScanContext& scan, Key from_key, Key to_key, Walk&& walk);
   void add_end(const ScanContext& scan, const PreparedRay& ray);
   /// Fast integrator: clears the depth-clear_depth node `code` whole if
   /// nothing forbids it (a known obstacle, a hit of this scan in or next to
@@ -115,10 +119,20 @@ class RayTracer {
     std::uint64_t voxels;
   };
 
+  /// What clear_node_whole decided for a node in this scan (it cannot
+  /// change during a scan), direct-mapped by the low 4 bits of the node's
+  /// coordinates: rays of one group cross the same nodes.
+  struct NodeDecision {
+    std::uint64_t code;
+    bool cleared;
+  };
+  static constexpr std::size_t kDecisions = 4096;
+
   UpdateBatch batch_;
+  std::vector<NodeDecision> decisions_ = std::vector<NodeDecision>(kDecisions);
   std::vector<BrickRun> runs_;            // one ray's runs; capacity kept between rays
   std::vector<NodeCrossing> crossings_;  // fast: the guide ray's coarse nodes
-  std::vector<NodeCrossing> own_;        // fast: one ray's coarse nodes
+  std::vector<std::uint64_t> tail_;      // fast: the nodes one ray traces voxel by voxel whatever
 };
 
 }  // namespace umbra
