@@ -97,10 +97,10 @@ class RayTracer {
  private:
   /// Misses for the voxels from `from` up to, not including, the voxel of `to`.
   void add_segment_misses(const ScanContext& scan, Vec3f from, Key from_key, Vec3f to, Key to_key);
-  /// Misses for the voxels walk(visit) visits, a walk from the voxel `from_key`
-  /// to the voxel `to_key`, collected a brick at a time.
+  /// Misses for the voxels of the runs walk(run) hands to run(brick, voxels)
+  /// (only those in the box, if there is one).
   template <typename Walk>
-  void add_walk_misses(const ScanContext& scan, Key from_key, Key to_key, Walk&& walk);
+  void add_walk_misses(const ScanContext& scan, Walk&& walk);
   void add_end(const ScanContext& scan, const PreparedRay& ray);
   /// Fast integrator: clears the depth-clear_depth node `code` whole if
   /// nothing forbids it (a known obstacle, a hit of this scan in or next to
@@ -111,13 +111,6 @@ class RayTracer {
   /// fine_steps nodes and the end node.
   void trace_rest(const ScanContext& scan, const PreparedRay& ray, Vec3f from, Key from_key,
                   OccupancyTree::Cursor& cursor);
-
-  /// A run of a ray's voxels inside one brick (see UpdateBatch): bit i of
-  /// `voxels` is voxel (code & ~63) + i.
-  struct BrickRun {
-    std::uint64_t code;
-    std::uint64_t voxels;
-  };
 
   /// What clear_node_whole decided for a node in this scan (it cannot
   /// change during a scan), direct-mapped by the low 4 bits of the node's
@@ -130,7 +123,6 @@ class RayTracer {
 
   UpdateBatch batch_;
   std::vector<NodeDecision> decisions_ = std::vector<NodeDecision>(kDecisions);
-  std::vector<BrickRun> runs_;            // one ray's runs; capacity kept between rays
   std::vector<NodeCrossing> crossings_;  // fast: the guide ray's coarse nodes
   std::vector<std::uint64_t> tail_;      // fast: the nodes one ray traces voxel by voxel whatever
 };

@@ -3,6 +3,7 @@
 // voxel borders and rays that touch the map's edge; walk_ray_skipping
 // against walk_ray when it skips nothing and against a brute-force
 // segment/cube test when it skips nodes.
+#include <bit>
 #include <cstdlib>
 #include <functional>
 #include <random>
@@ -100,12 +101,42 @@ TEST(RayWalker, OutsideEndsVisitNothing) {
   EXPECT_FALSE(inside);
 }
 
-std::vector<std::uint64_t> walk_skipping(const Grid& grid, int depth, Vec3f from, Vec3f to,
-                                         const std::function<bool(std::uint64_t)>& skip) {
-  std::vector<std::uint64_t> codes;
+using Runs = std::vector<std::pair<std::uint64_t, std::uint64_t>>;  // brick, voxels
+
+Runs walk_skipping(const Grid& grid, int depth, Vec3f from, Vec3f to, const std::function<bool(std::uint64_t)>& skip) {
+  Runs runs;
   walk_ray_skipping(grid, depth, from, grid.key(Vec3d(from)), to, grid.key(Vec3d(to)), skip,
-                    [&](std::uint64_t code) { codes.push_back(code); });
+                    [&](std::uint64_t brick, std::uint64_t voxels) { runs.emplace_back(brick, voxels); });
+  return runs;
+}
+
+/// The runs of a walk as codes, brick by brick.
+std::vector<std::uint64_t> codes_of(const Runs& runs) {
+  std::vector<std::uint64_t> codes;
+  for (const auto& [brick, voxels] : runs) {
+    for (std::uint64_t v = voxels; v != 0; v &= v - 1) codes.push_back(brick + static_cast<std::uint64_t>(std::countr_zero(v)));
+  }
   return codes;
+}
+
+TEST(RayWalker, RunsAreTheWalksVoxelsBrickByBrick) {
+  const Grid grid(0.1, 6);
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<float> coordinate(-3.19f, 3.19f);
+  for (int i = 0; i < 3000; ++i) {
+    const Vec3f from{coordinate(rng), coordinate(rng), coordinate(rng)};
+    const Vec3f to{coordinate(rng), coordinate(rng), coordinate(rng)};
+    Runs expected;  // walk_ray's codes grouped into stretches within one brick
+    walk_ray(grid, from, to, [&](std::uint64_t code) {
+      const std::uint64_t brick = code & ~std::uint64_t{63};
+      if (expected.empty() || expected.back().first != brick) expected.emplace_back(brick, 0);
+      expected.back().second |= std::uint64_t{1} << (code & 63);
+    });
+    Runs runs;
+    walk_ray_runs(grid, from, grid.key(Vec3d(from)), to, grid.key(Vec3d(to)),
+                  [&](std::uint64_t brick, std::uint64_t voxels) { runs.emplace_back(brick, voxels); });
+    ASSERT_EQ(runs, expected) << "ray " << i;
+  }
 }
 
 TEST(RayWalkerSkipping, SkippingNothingIsWalkRay) {
@@ -115,8 +146,9 @@ TEST(RayWalkerSkipping, SkippingNothingIsWalkRay) {
   for (int i = 0; i < 3000; ++i) {
     const Vec3f from{coordinate(rng), coordinate(rng), coordinate(rng)};
     const Vec3f to{coordinate(rng), coordinate(rng), coordinate(rng)};
-    std::vector<std::uint64_t> expected;
-    walk_ray(grid, from, to, [&](std::uint64_t code) { expected.push_back(code); });
+    Runs expected;
+    walk_ray_runs(grid, from, grid.key(Vec3d(from)), to, grid.key(Vec3d(to)),
+                  [&](std::uint64_t brick, std::uint64_t voxels) { expected.emplace_back(brick, voxels); });
     std::size_t asked = 0;
     const auto actual = walk_skipping(grid, 2, from, to, [&](std::uint64_t) {
       ++asked;
@@ -124,7 +156,7 @@ TEST(RayWalkerSkipping, SkippingNothingIsWalkRay) {
     });
     ASSERT_EQ(actual, expected) << "ray " << i;
     std::set<std::uint64_t> nodes;
-    for (const std::uint64_t code : expected) nodes.insert(code >> 6);
+    for (const std::uint64_t code : codes_of(expected)) nodes.insert(code >> 6);
     EXPECT_EQ(asked, nodes.size()) << "asked once per node entered, ray " << i;
   }
 }
@@ -149,10 +181,10 @@ TEST(RayWalkerSkipping, JumpsOverSkippedNodesAndWalksTheOthersVoxelByVoxel) {
     const Vec3f to{coordinate(rng), coordinate(rng), coordinate(rng)};
     // A fixed pseudo-random half of the nodes is skipped.
     auto skipped = [](std::uint64_t node_code) { return ((node_code >> 6) * 0x9E3779B97F4A7C15ULL) >> 63 != 0; };
-    const auto visited = walk_skipping(grid, depth, from, to, [&](std::uint64_t node) {
+    const auto visited = codes_of(walk_skipping(grid, depth, from, to, [&](std::uint64_t node) {
       jumps += skipped(node);
       return skipped(node);
-    });
+    }));
     visited_total += visited.size();
     const std::set<std::uint64_t> seen(visited.begin(), visited.end());
     ASSERT_EQ(seen.size(), visited.size()) << "a voxel visited twice, ray " << i;
