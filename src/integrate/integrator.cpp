@@ -245,25 +245,32 @@ InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f
       tracers_[worker]->trace(scan, ends.subspan(begin, end - begin), worker_stats[worker]);
     });
   } else {
-    std::vector<PreparedRay> rays;
-    rays.reserve(ends.size());
-    bool moved = false;  // truncation or clipping changed some end
-    for (const Vec3f& end : ends) {
-      if (const std::optional<PreparedRay> ray = prepare_ray(scan, end, &stats)) {
-        rays.push_back(*ray);
-        stats.hits += ray->hit;
-        moved |= !ray->hit;
+    // The rays, prepared in parallel.
+    std::vector<std::vector<PreparedRay>> ray_parts(threads);
+    std::vector<InsertStats> prepare_stats(threads);
+    split(ends.size(), threads, [&](std::size_t begin, std::size_t end, unsigned, std::size_t chunk) {
+      std::vector<PreparedRay>& part = ray_parts[chunk];
+      part.reserve(end - begin);
+      for (std::size_t i = begin; i < end; ++i) {
+        if (const std::optional<PreparedRay> ray = prepare_ray(scan, ends[i], &prepare_stats[chunk])) {
+          part.push_back(*ray);
+          prepare_stats[chunk].hits += ray->hit;
+        }
       }
+    });
+    std::vector<PreparedRay> rays = std::move(ray_parts[0]);
+    for (unsigned c = 1; c < threads; ++c) rays.insert(rays.end(), ray_parts[c].begin(), ray_parts[c].end());
+    bool moved = false;  // truncation or clipping changed some end
+    for (unsigned c = 0; c < threads; ++c) {
+      stats += prepare_stats[c];
+      moved |= prepare_stats[c].hits != prepare_stats[c].rays;
     }
-    const int depth_bits = 3 * grid.depth_levels();
-    if (moved) radix_sort(rays, depth_bits, [](const PreparedRay& r) { return morton::encode(r.end_key); });
-    // Groups of rays whose ends share a coarse node, each traced by one coarse ray.
+    if (moved) radix_sort(rays, 3 * grid.depth_levels(), [](const PreparedRay& r) { return r.end_code; });
+    // Groups of rays whose ends share a coarse node, each led by one guide ray.
     const int shift = 3 * scan.clear_depth;
     std::vector<std::size_t> group_begin;
     for (std::size_t i = 0; i < rays.size(); ++i) {
-      if (i == 0 || morton::encode(rays[i].end_key) >> shift != morton::encode(rays[i - 1].end_key) >> shift) {
-        group_begin.push_back(i);
-      }
+      if (i == 0 || rays[i].end_code >> shift != rays[i - 1].end_code >> shift) group_begin.push_back(i);
     }
     group_begin.push_back(rays.size());
     // Every tracer must know all hits of the scan to decide which coarse

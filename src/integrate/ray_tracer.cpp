@@ -29,7 +29,7 @@ std::optional<PreparedRay> prepare_ray(const ScanContext& scan, Vec3f point, Ins
     return std::nullopt;
   }
   const Grid& grid = *scan.grid;
-  PreparedRay ray{scan.origin, scan.origin_key, point, {}, true, false};
+  PreparedRay ray{scan.origin, scan.origin_key, point, {}, 0, true, false};
   const Vec3f offset = point - scan.origin;
   const double range = octomap_norm(offset);
   if (scan.max_range > 0.0 && range > scan.max_range) {
@@ -65,6 +65,7 @@ std::optional<PreparedRay> prepare_ray(const ScanContext& scan, Vec3f point, Ins
       ray.miss_end = true;
     }
   }
+  ray.end_code = morton::encode(ray.end_key);
   count(&InsertStats::rays);
   return ray;
 }
@@ -103,8 +104,8 @@ void RayTracer::add_segment_misses(const ScanContext& scan, Vec3f from, Key from
 
 void RayTracer::add_end(const ScanContext& scan, const PreparedRay& ray) {
   if (scan.box_keys && !scan.box_keys->contains(ray.end_key)) return;
-  if (ray.miss_end) batch_.add_miss(morton::encode(ray.end_key));
-  if (ray.hit && !scan.hits_first) batch_.add_hit(morton::encode(ray.end_key));
+  if (ray.miss_end) batch_.add_miss(ray.end_code);
+  if (ray.hit && !scan.hits_first) batch_.add_hit(ray.end_code);
 }
 
 void RayTracer::add_hits(const ScanContext& scan, std::span<const PreparedRay> rays) {
@@ -112,7 +113,7 @@ void RayTracer::add_hits(const ScanContext& scan, std::span<const PreparedRay> r
   const int depth = scan.clear_depth;
   for (const PreparedRay& ray : rays) {
     if (!ray.hit || (scan.box_keys && !scan.box_keys->contains(ray.end_key))) continue;
-    const std::uint64_t code = morton::encode(ray.end_key);
+    const std::uint64_t code = ray.end_code;
     batch_.add_hit(code);
     coarse.push_back(code >> (3 * depth));
   }
@@ -261,7 +262,7 @@ void RayTracer::trace_rest(const ScanContext& scan, const PreparedRay& ray, Vec3
   // voxel whatever they hold: found walking back from the end.
   const std::size_t tail = static_cast<std::size_t>(scan.fine_steps) + 1;
   tail_.clear();
-  tail_.push_back(morton::node_begin(morton::encode(ray.end_key), depth));
+  tail_.push_back(morton::node_begin(ray.end_code, depth));
   bool whole_ray_in_tail = false;
   if (tail > 1) {
     walk_nodes(grid, depth, Vec3d(ray.end), ray.end_key, Vec3d(from), from_key, [&](const NodeCrossing& c) {

@@ -71,6 +71,7 @@ struct PreparedRay {
   Key begin_key;
   Vec3f end;
   Key end_key;
+  std::uint64_t end_code;  ///< Morton code of end_key
   bool hit;       ///< the end voxel gets a hit
   bool miss_end;  ///< the end voxel gets a miss (the ray was clipped there)
 };
