@@ -11,7 +11,19 @@ UMBRA_APT_PACKAGES=(
   liboctomap-dev                                # differential tests and benchmarks only
   clang                                         # fuzz targets (optional label)
   bzip2 python3                                 # test helpers
+  chromium                                      # the `umbra view` page tested in a headless browser
+  # ROS 1 (ros/: umbra_server, `umbra build` of .bag files, their tests; optional, found by CMake):
+  ros-core-dev libroscpp-dev libsensor-msgs-dev libtf2-ros-dev librosbag-dev
+  libstd-srvs-dev libvisualization-msgs-dev libtf2-msgs-dev
+  python3-gencpp python3-genmsg python3-empy     # message headers (ros/generate_messages.py)
+  ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-visualization-msgs ros-tf2-msgs ros-actionlib-msgs ros-std-srvs
 )
+
+# Commands installed only when missing, as COMMAND:PACKAGE: Node.js and npm
+# bundle three.js into the page of `umbra view` at build time. A machine may
+# have them from elsewhere (NodeSource's nodejs, which provides npm and
+# conflicts with Debian's npm package).
+UMBRA_APT_COMMANDS=(node:nodejs npm:npm)
 
 umbra_root() { cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd; }
 
@@ -21,6 +33,12 @@ umbra_install_packages() {
   for package in "${UMBRA_APT_PACKAGES[@]}"; do
     if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then
       missing+=("$package")
+    fi
+  done
+  local entry
+  for entry in "${UMBRA_APT_COMMANDS[@]}"; do
+    if ! command -v "${entry%%:*}" >/dev/null 2>&1; then
+      missing+=("${entry#*:}")
     fi
   done
   if ((${#missing[@]} == 0)); then

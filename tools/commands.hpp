@@ -14,5 +14,8 @@ Command add_demo_command(CLI::App& app);
 Command add_build_command(CLI::App& app);
 Command add_info_command(CLI::App& app);
 Command add_convert_command(CLI::App& app);
+Command add_query_command(CLI::App& app);
+Command add_render_command(CLI::App& app);
+Command add_view_command(CLI::App& app);
 
 }  // namespace umbra::cli

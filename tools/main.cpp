@@ -1,4 +1,4 @@
-// umbra: build, inspect, convert and demonstrate occupancy maps from the command line.
+// umbra: build, inspect, convert, draw, view and demonstrate occupancy maps from the command line.
 //
 // Exit codes: 0 success, 1 bad input or failure (the message says what and
 // where), 2 bad usage.
@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
   commands.push_back(umbra::cli::add_build_command(app));
   commands.push_back(umbra::cli::add_info_command(app));
   commands.push_back(umbra::cli::add_convert_command(app));
+  commands.push_back(umbra::cli::add_query_command(app));
+  commands.push_back(umbra::cli::add_render_command(app));
+  commands.push_back(umbra::cli::add_view_command(app));
 
   try {
     app.parse(argc, argv);

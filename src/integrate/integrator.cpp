@@ -53,6 +53,7 @@ InsertStats& InsertStats::operator+=(const InsertStats& other) {
   non_finite += other.non_finite;
   out_of_bounds += other.out_of_bounds;
   outside_box += other.outside_box;
+  exclusive_seconds += other.exclusive_seconds;
   return *this;
 }
 

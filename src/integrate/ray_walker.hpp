@@ -17,7 +17,9 @@
 // moves the index with small masks; only one step in four on an axis leaves
 // the brick and steps the brick's 64-bit code. Callers receive either every
 // voxel's code in order (walk_ray with a visitor) or runs: a brick and the
-// mask of the voxels visited in it (walk_ray_runs).
+// mask of the voxels visited in it (walk_ray_runs). A visitor that returns
+// bool stops the walk by returning false (a visibility check ends at the
+// first occupied voxel); one that returns nothing sees the whole walk.
 //
 // Cost: a few double additions and compares per voxel, about 20
 // instructions (the TUM frames at 2 cm, callgrind).
@@ -28,6 +30,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <type_traits>
 
 #include "umbra/core/grid.hpp"
 #include "umbra/core/morton.hpp"
@@ -191,7 +194,7 @@ bool skip_nodes(const Grid& grid, int depth, RayState& ray, Skip& skip) {
 }
 
 /// The walk's inner loop. From the current voxel (not visited yet) it visits
-/// voxels through sink.voxel(brick, index) and, whenever the walk leaves a
+/// voxels through sink.voxel(brick, index) (false: stop the walk there) and, whenever the walk leaves a
 /// brick and at its end, sink.leave(brick). With kSkipping, at every
 /// depth-`depth` node the walk enters (the first one too) skip(node's first
 /// code) may make it jump over the node. kGuarded: track keys and stop at
@@ -237,7 +240,7 @@ void step_ray(const Grid& grid, int depth, RayState& ray, Sink& sink, Skip& skip
     std::int64_t key[3] = {ray.key[0], ray.key[1], ray.key[2]};
     const std::uint64_t node = (brick | index) >> shift;
     bool left_node = false;
-    sink.voxel(brick, index);
+    if (!sink.voxel(brick, index)) return;
     // One step on axis kAxis; false when the walk is over (the map's edge, the
     // end voxel, the length) or, with kSkipping, enters a new node.
     auto advance = [&]<int kAxis>() -> bool {
@@ -283,7 +286,7 @@ void step_ray(const Grid& grid, int depth, RayState& ray, Sink& sink, Skip& skip
         going = t_max[1] < t_max[2] ? advance.template operator()<1>() : advance.template operator()<2>();
       }
       if (!going) break;
-      sink.voxel(brick, index);
+      if (!sink.voxel(brick, index)) return;
     }
     if (!left_node) {
       sink.leave(brick);
@@ -299,11 +302,19 @@ void step_ray(const Grid& grid, int depth, RayState& ray, Sink& sink, Skip& skip
   }
 }
 
-/// A sink that hands every voxel's code to visit(code), in walk order.
+/// A sink that hands every voxel's code to visit(code), in walk order; a
+/// visitor returning bool stops the walk with false.
 template <typename Visit>
 struct VoxelSink {
   Visit& visit;
-  void voxel(std::uint64_t brick, unsigned index) { visit(brick | index); }
+  bool voxel(std::uint64_t brick, unsigned index) {
+    if constexpr (std::is_same_v<decltype(visit(brick | index)), bool>) {
+      return visit(brick | index);
+    } else {
+      visit(brick | index);
+      return true;
+    }
+  }
   void leave(std::uint64_t) {}
 };
 
@@ -313,7 +324,10 @@ template <typename Run>
 struct RunSink {
   Run& run;
   std::uint64_t mask = 0;
-  void voxel(std::uint64_t, unsigned index) { mask |= std::uint64_t{1} << index; }
+  bool voxel(std::uint64_t, unsigned index) {
+    mask |= std::uint64_t{1} << index;
+    return true;
+  }
   void leave(std::uint64_t brick) {
     if (mask != 0) run(brick, mask);
     mask = 0;
@@ -337,7 +351,8 @@ void walk(const Grid& grid, int depth, Vec3f origin, Key origin_key, Vec3f end, 
 }  // namespace detail
 
 /// Calls visit(code) for each voxel from the voxel of `origin` up to, not
-/// including, the voxel of `end`; `origin_key` and `end_key` are their keys
+/// including, the voxel of `end` (or until visit returns false, if it returns
+/// bool); `origin_key` and `end_key` are their keys
 /// (grid.key_checked of each, computed once by callers that trace many rays).
 template <typename Visit>
 void walk_ray(const Grid& grid, Vec3f origin, Key origin_key, Vec3f end, Key end_key, Visit&& visit) {

@@ -1,5 +1,6 @@
 #include "umbra/map/occupancy_map.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <mutex>
 #include <stdexcept>
@@ -202,11 +203,12 @@ InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f
   std::lock_guard writer(state.writer);
   // Tracing only reads the tree: readers go on meanwhile. Only the apply
   // phase keeps them out.
-  const InsertStats stats = state.integrator.trace(state.tree, grid_, origin, points, colors, options,
-                                                   state.bounding_box);
+  InsertStats stats = state.integrator.trace(state.tree, grid_, origin, points, colors, options, state.bounding_box);
   {
+    const auto start = std::chrono::steady_clock::now();
     detail::ClosedGate closed(state.gate);
     state.integrator.apply(state.tree, state.sensor);
+    stats.exclusive_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   state.integrator_bytes.store(state.integrator.memory_bytes(), std::memory_order_relaxed);
   return stats;

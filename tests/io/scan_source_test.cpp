@@ -15,7 +15,6 @@
 #include <algorithm>
 #include <atomic>
 #include <bit>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -665,12 +664,9 @@ TEST(ScanSource, ExplicitFormatAndOptions) {
 
 TEST(ScanSource, RealOctomapScanDat) {
   UMBRA_REQUIRE_SHARED_DATA(path, "octomap/scan.dat.bz2");
-  const auto start = std::chrono::steady_clock::now();
   auto source = open_scan_source(path);
   Scan scan;
   ASSERT_TRUE(source->next(scan));
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cout << "[ info     ] scan.dat.bz2: " << scan.points.size() << " points in " << seconds << " s\n";
   EXPECT_EQ(scan.points.size(), 88206u);
   EXPECT_EQ(scan.origin, (Vec3f{0, 0, 0}));
   EXPECT_TRUE(scan.colors.empty());
@@ -678,11 +674,7 @@ TEST(ScanSource, RealOctomapScanDat) {
   EXPECT_EQ(scan.points.back(), (Vec3f{0.130896f, 3.58f, 0.432014f}));
   EXPECT_FALSE(source->next(scan));
   EXPECT_EQ(source->progress(), 1.0);
-#if defined(__SANITIZE_ADDRESS__) || !defined(__OPTIMIZE__)
-  EXPECT_LT(seconds, 5.0);
-#else
-  EXPECT_LT(seconds, 1.0);
-#endif
+  // (Its reading speed is measured by the benchmarks, never timed in a test.)
 }
 
 }  // namespace

@@ -198,6 +198,52 @@ TEST(Cli, BuildWithTheFastIntegratorThreadsBoxAndColour) {
 }
 
 /// The README's quick start is exactly two commands; the first runs the demo.
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// The fenced block that follows `marker` in the README (its first fence line excluded).
+std::string readme_block_after(const std::string& readme, const std::string& marker) {
+  const auto at = readme.find(marker);
+  if (at == std::string::npos) return {};
+  const auto open = readme.find("```", at);
+  const auto body = readme.find('\n', open) + 1;
+  const auto close = readme.find("```", body);
+  return readme.substr(body, close - body);
+}
+
+TEST(Readme, QuotedExamplesAreTheExampleFiles) {
+  const std::string readme = read_text(test::source_dir() / "README.md");
+  for (const std::string example : {"query_map.cpp", "readers_while_inserting.cpp"}) {
+    const std::string quoted_text = readme_block_after(readme, "whole of `examples/" + example + "`");
+    ASSERT_FALSE(quoted_text.empty()) << "README does not quote examples/" << example;
+    EXPECT_EQ(quoted_text, read_text(test::source_dir() / "examples" / example))
+        << "README's quote of examples/" << example << " differs from the file (the file is built and run)";
+  }
+}
+
+TEST(Readme, QueryCommandsRunAsWritten) {
+  const std::string readme = read_text(test::source_dir() / "README.md");
+  const std::string block = readme_block_after(readme, "The same from the command line");
+  ASSERT_NE(block.find("umbra query"), std::string::npos);
+  // The commands name build/tools/umbra: run them where build/ is this build.
+  const auto dir = test::scratch_dir();
+  std::filesystem::create_directory_symlink(UMBRA_BUILD_DIR, dir / "build");
+  std::istringstream lines(block);
+  int commands = 0;
+  for (std::string line; std::getline(lines, line);) {
+    const std::string command = line.substr(0, line.find("   #"));
+    if (command.empty()) continue;
+    const CommandResult r = run("cd " + quoted(dir) + " && " + command);
+    EXPECT_EQ(r.exit_code, 0) << command << "\n" << r.output;
+    ++commands;
+  }
+  EXPECT_GE(commands, 5);
+}
+
 TEST(Readme, QuickStartDemoCommandWorks) {
   std::ifstream readme(test::source_dir() / "README.md");
   ASSERT_TRUE(readme) << "README.md is missing";

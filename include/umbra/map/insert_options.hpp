@@ -50,6 +50,9 @@ struct InsertStats {
   std::size_t non_finite = 0;      ///< NaN / infinite points, skipped
   std::size_t out_of_bounds = 0;   ///< points (or truncated ends) outside the map, skipped
   std::size_t outside_box = 0;     ///< rays that miss the bounding box entirely, skipped
+  /// Seconds the scan kept queries out: its apply phase (tracing, most of
+  /// the insertion, lets them run). A query waits at most this long.
+  double exclusive_seconds = 0.0;
 
   InsertStats& operator+=(const InsertStats& other);
 };

@@ -36,9 +36,11 @@
 
 #include <concepts>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/color.hpp"
@@ -47,6 +49,11 @@
 #include "umbra/core/log_odds.hpp"
 #include "umbra/core/vec3.hpp"
 #include "umbra/map/insert_options.hpp"
+#include "umbra/query/collision.hpp"
+#include "umbra/query/information_gain.hpp"
+#include "umbra/query/predicate.hpp"
+#include "umbra/query/query_range.hpp"
+#include "umbra/query/shapes.hpp"
 #include "umbra/core/node.hpp"
 
 namespace umbra {
@@ -171,6 +178,69 @@ class OccupancyMap {
   /// node once, at its depth). Holds the map for reading meanwhile: `visit`
   /// must not change the map.
   void for_each_leaf(FunctionRef<void(const Node&)> visit) const;
+
+  // --- queries (include/umbra/query/) ---------------------------------------
+  /// The nodes `predicate` holds for, visiting the tree down to `depth`
+  /// (depth-`depth` nodes count as leaves), parents before children, in
+  /// Morton order. Only subtrees that can match are visited. See
+  /// predicate.hpp and query_range.hpp; throws std::out_of_range for a bad depth.
+  [[nodiscard]] QueryRange query(const Predicate& predicate, int depth = 0) const;
+  /// The same, nearest to `point` first (distance to the node's cube, 0
+  /// inside), up to `max_distance` metres.
+  [[nodiscard]] NearestRange query_nearest(Vec3d point, const Predicate& predicate, int depth = 0,
+                                           double max_distance = std::numeric_limits<double>::infinity()) const;
+  /// How many nodes query(predicate, depth) yields.
+  [[nodiscard]] std::size_t count(const Predicate& predicate, int depth = 0) const;
+
+  // --- collision checks, line checks, ray casts (query/collision.hpp) -------
+  /// Whether no voxel of the region blocks (occupied, or unknown unless
+  /// options.unknown_is_free), and if one does, a blocking node. A voxel is
+  /// in the region when its cube meets it (shapes.hpp); a Segment is the
+  /// voxels of its ray walk, the first blocking one reported; a Capsule is a
+  /// segment with a radius. Throws std::out_of_range when the region reaches
+  /// outside the map, std::invalid_argument for a bad shape or depth.
+  [[nodiscard]] CollisionResult is_free(const Aabb& box, const CollisionOptions& options = {}) const;
+  [[nodiscard]] CollisionResult is_free(const Sphere& sphere, const CollisionOptions& options = {}) const;
+  [[nodiscard]] CollisionResult is_free(const OrientedBox& box, const CollisionOptions& options = {}) const;
+  [[nodiscard]] CollisionResult is_free(const Capsule& capsule, const CollisionOptions& options = {}) const;
+  [[nodiscard]] CollisionResult is_free(const Segment& segment, const CollisionOptions& options = {}) const;
+  /// Many checks at once: free[i] = 1 when shapes[i] is free, else 0 (the
+  /// sizes must match). The map is held for reading a chunk at a time.
+  void is_free(std::span<const Aabb> boxes, std::span<std::uint8_t> free, const CollisionOptions& options = {}) const;
+  void is_free(std::span<const Sphere> spheres, std::span<std::uint8_t> free,
+               const CollisionOptions& options = {}) const;
+  void is_free(std::span<const OrientedBox> boxes, std::span<std::uint8_t> free,
+               const CollisionOptions& options = {}) const;
+  void is_free(std::span<const Capsule> capsules, std::span<std::uint8_t> free,
+               const CollisionOptions& options = {}) const;
+  void is_free(std::span<const Segment> segments, std::span<std::uint8_t> free,
+               const CollisionOptions& options = {}) const;
+  /// The first voxel (or depth-`options.depth` node) along the ray from
+  /// `origin` in `direction` that is occupied (or unknown, when asked),
+  /// within options.max_range; the voxels are those OctoMap's castRay steps
+  /// through. Throws std::out_of_range for an origin outside the map,
+  /// std::invalid_argument for a zero or non-finite direction.
+  [[nodiscard]] RayHit cast_ray(Vec3d origin, Vec3d direction, const RayCastOptions& options = {}) const;
+  /// OctoMap's OcTree::castRay(origin, direction, end, ignoreUnknown,
+  /// maxRange), rule for rule, for code that migrates: true when an occupied
+  /// voxel is hit (`end` = its centre, the origin's own voxel included);
+  /// false at an unknown voxel unless `ignore_unknown`, beyond `max_range`
+  /// (> 0: distance to voxel centres) or at the map's edge (`end` = the last
+  /// voxel's centre). Unknown means the state unknown (OctoMap: no node
+  /// stored). Bad arguments throw as for cast_ray.
+  bool cast_ray_octomap(Vec3f origin, Vec3f direction, Vec3f& end, bool ignore_unknown = false,
+                        double max_range = -1.0) const;
+  // --- information gain (query/information_gain.hpp) ------------------------
+  /// The unknown finest voxels a sensor with this field of view would see:
+  /// centre in the frustum, no occupied voxel on the ray from its origin.
+  /// Throws std::invalid_argument for a bad frustum or options,
+  /// std::out_of_range when the frustum's origin lies outside the map.
+  [[nodiscard]] GainResult information_gain(const Frustum& frustum, const GainOptions& options = {}) const;
+  /// The same for many poses: result[i] is the gain of frustums[i]. Poses
+  /// run on options.threads threads; the map is held for reading one pose
+  /// at a time. Every frustum is checked before any is answered.
+  [[nodiscard]] std::vector<GainResult> information_gain(std::span<const Frustum> frustums,
+                                                         const GainOptions& options = {}) const;
 
   // --- pruning ------------------------------------------------------------
   /// On by default: eight equal children are merged into their parent. With

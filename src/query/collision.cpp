@@ -1,0 +1,263 @@
+// Collision checks of regions and segments (OccupancyMap::is_free).
+//
+// A region (box, sphere, oriented box, capsule) is checked by one descent
+// that only follows nodes holding something blocking (BlockingRule) and
+// meeting the shape: first straight down to the smallest node containing
+// the shape's bounding box (no geometry needed there), then recursively
+// through the children whose key range meets that bounding box. A node
+// wholly inside the shape that holds a blocking voxel ends the check at
+// once (any blocking voxel below it is in the shape). Free space costs
+// nothing per voxel: a free or unobserved-but-allowed subtree is dismissed
+// by its value and indicator, whatever its size.
+//
+// A segment is its ray walk (shapes.hpp) looked up with BlockingLookup, in
+// walk order, so the blocking node reported is the first along it.
+#include <algorithm>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+#include "integrate/ray_walker.hpp"
+#include "map/map_access.hpp"
+#include "query/blocking_lookup.hpp"
+#include "query/geometry.hpp"
+#include "query/query_walk.hpp"
+#include "umbra/map/occupancy_map.hpp"
+
+namespace umbra {
+namespace {
+
+using detail::BlockingLookup;
+using detail::BlockingRule;
+using detail::NodeContext;
+using detail::Overlap;
+using detail::QueryScope;
+
+/// Finest keys [min, max] per axis of a region's bounding box.
+struct KeyBounds {
+  Key min;
+  Key max;
+  [[nodiscard]] bool meets(Key node_key, int depth) const {
+    const std::uint32_t last = (1u << depth) - 1;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (node_key[axis] > max[axis] || node_key[axis] + last < min[axis]) return false;
+    }
+    return true;
+  }
+};
+
+Aabb bounds_of(const Aabb& box) { return box; }
+Aabb bounds_of(const Sphere& s) {
+  const Vec3d r{s.radius, s.radius, s.radius};
+  return {s.center - r, s.center + r};
+}
+Aabb bounds_of(const Capsule& c) {
+  const Vec3d r{c.radius, c.radius, c.radius};
+  return {Vec3d{std::min(c.a.x, c.b.x), std::min(c.a.y, c.b.y), std::min(c.a.z, c.b.z)} - r,
+          Vec3d{std::max(c.a.x, c.b.x), std::max(c.a.y, c.b.y), std::max(c.a.z, c.b.z)} + r};
+}
+Aabb bounds_of(const OrientedBox& b) {
+  Vec3d extent;
+  for (int axis = 0; axis < 3; ++axis) {
+    extent[axis] = 0.0;
+    for (int i = 0; i < 3; ++i) extent[axis] += b.half_extents[i] * std::fabs(b.axes[i][axis]);
+  }
+  return {b.center - extent, b.center + extent};
+}
+
+/// The voxels a region's bounding box covers; throws std::out_of_range
+/// naming the region when part of it lies outside the map.
+KeyBounds key_bounds(const Grid& grid, const Aabb& box, const char* what) {
+  const std::optional<Key> low = grid.key_checked(box.min);
+  const std::optional<Key> high = grid.key_checked(box.max);
+  if (!low || !high) {
+    throw std::out_of_range(std::string(what) + " reaches outside the map, which spans [" +
+                            std::to_string(-grid.half_extent()) + ", " + std::to_string(grid.half_extent()) +
+                            ") on every axis: its bounding box is (" + std::to_string(box.min.x) + ", " +
+                            std::to_string(box.min.y) + ", " + std::to_string(box.min.z) + ") - (" +
+                            std::to_string(box.max.x) + ", " + std::to_string(box.max.y) + ", " +
+                            std::to_string(box.max.z) + ")");
+  }
+  return {*low, *high};
+}
+
+const char* name_of(const Aabb&) { return "the box"; }
+const char* name_of(const Sphere&) { return "the sphere"; }
+const char* name_of(const Capsule&) { return "the capsule"; }
+const char* name_of(const OrientedBox&) { return "the oriented box"; }
+
+template <typename Shape>
+class RegionCheck {
+ public:
+  RegionCheck(const QueryScope& scope, const BlockingRule& rule, const Shape& shape, const KeyBounds& bounds)
+      : scope_(scope), rule_(rule), shape_(shape), bounds_(bounds) {}
+
+  CollisionResult run() {
+    const OccupancyTree& tree = *scope_.tree;
+    NodeContext node = NodeContext::read(scope_, tree.root(), Key{});
+    // Straight down while a single child holds the whole bounding box.
+    while (!node.leaf && holds_blocking(node)) {
+      const unsigned slot = only_child_meeting_bounds(node);
+      if (slot == 8) break;
+      node = NodeContext::read(scope_, tree.child(node.ref, slot), node.child_key(slot));
+    }
+    CollisionResult result;
+    if (const std::optional<NodeContext> blocking = check(node)) {
+      result.free = false;
+      result.blocking = blocking->to_node(scope_);
+    }
+    return result;
+  }
+
+ private:
+  [[nodiscard]] bool holds_blocking(const NodeContext& n) const {
+    return rule_.holds_blocking(n.value, n.contains_unknown);
+  }
+
+  /// The child whose key range holds the whole bounding box, or 8 when it straddles.
+  [[nodiscard]] unsigned only_child_meeting_bounds(const NodeContext& n) const {
+    const std::uint32_t half = 1u << (n.depth - 1);
+    unsigned slot = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const bool low = bounds_.min[axis] < n.key[axis] + half;
+      const bool high = bounds_.max[axis] >= n.key[axis] + half;
+      if (low && high) return 8;
+      if (high) slot |= 1u << axis;
+    }
+    return slot;
+  }
+
+  /// A blocking node meeting the shape in the subtree of `n`, if any.
+  std::optional<NodeContext> check(const NodeContext& n) const {
+    if (!holds_blocking(n)) return std::nullopt;
+    const Overlap overlap = detail::overlap(shape_, n.cube(*scope_.grid));
+    if (overlap == Overlap::outside) return std::nullopt;
+    if (n.leaf) return n;
+    if (overlap == Overlap::inside) return any_blocking_leaf(n);
+    for (unsigned slot = 0; slot < 8; ++slot) {
+      const Key key = n.child_key(slot);
+      if (!bounds_.meets(key, n.depth - 1)) continue;
+      if (auto found = check(NodeContext::read(scope_, scope_.tree->child(n.ref, slot), key))) return found;
+    }
+    return std::nullopt;
+  }
+
+  /// A leaf below `n` (which holds something blocking) that blocks.
+  [[nodiscard]] NodeContext any_blocking_leaf(NodeContext n) const {
+    while (!n.leaf) {
+      for (unsigned slot = 0; slot < 8; ++slot) {
+        const NodeContext child = NodeContext::read(scope_, scope_.tree->child(n.ref, slot), n.child_key(slot));
+        if (holds_blocking(child)) {
+          n = child;
+          break;
+        }
+      }
+    }
+    return n;
+  }
+
+  QueryScope scope_;
+  BlockingRule rule_;
+  const Shape& shape_;
+  KeyBounds bounds_;
+};
+
+BlockingRule rule_of(const OccupancyTree& tree, const CollisionOptions& options) {
+  return {tree.thresholds(), !options.unknown_is_free};
+}
+
+template <typename Shape>
+CollisionResult check_region(const OccupancyMap& map, const Shape& shape, const CollisionOptions& options) {
+  shape.validate();
+  const KeyBounds bounds = key_bounds(map.grid(), bounds_of(shape), name_of(shape));
+  return detail::MapAccess::read(map, [&](const OccupancyTree& tree) {
+    const QueryScope scope = detail::scope_of(map, options.depth);
+    return RegionCheck<Shape>(scope, rule_of(tree, options), shape, bounds).run();
+  });
+}
+
+CollisionResult check_segment(const OccupancyMap& map, const Segment& segment, const CollisionOptions& options) {
+  segment.validate();
+  const Grid& grid = map.grid();
+  // The walk works on float points, as OctoMap's computeRayKeys.
+  const Vec3f from(segment.from);
+  const Vec3f to(segment.to);
+  const std::optional<Key> from_key = grid.key_checked(from);
+  const std::optional<Key> to_key = grid.key_checked(to);
+  if (!from_key || !to_key) (void)grid.key(Vec3d(!from_key ? from : to));  // throws std::out_of_range naming it
+  return detail::MapAccess::read(map, [&](const OccupancyTree& tree) {
+    const QueryScope scope = detail::scope_of(map, options.depth);
+    BlockingLookup lookup(scope, rule_of(tree, options));
+    CollisionResult result;
+    NodeRef blocking{};
+    std::uint64_t blocking_code = 0;
+    auto visit = [&](std::uint64_t code) {
+      if (!result.free || !lookup.blocks(code, &blocking)) return;
+      result.free = false;
+      blocking_code = code;
+    };
+    walk_ray(grid, from, *from_key, to, *to_key, visit);
+    visit(morton::encode(*to_key));
+    if (!result.free) result.blocking = detail::make_node(tree, grid, blocking, blocking_code);
+    return result;
+  });
+}
+
+/// Many checks, holding the map for reading a chunk at a time (a writer
+/// waits for one chunk, not for the whole batch).
+template <typename Shape, typename Check>
+void check_many(const OccupancyMap& map, std::span<const Shape> shapes, std::span<std::uint8_t> free,
+                const Check& check) {
+  if (free.size() != shapes.size()) {
+    throw std::invalid_argument("is_free: " + std::to_string(shapes.size()) + " shapes but room for " +
+                                std::to_string(free.size()) + " answers");
+  }
+  constexpr std::size_t kChunk = 256;
+  for (std::size_t begin = 0; begin < shapes.size(); begin += kChunk) {
+    const std::size_t end = std::min(shapes.size(), begin + kChunk);
+    detail::MapAccess::read(map, [&](const OccupancyTree&) {
+      for (std::size_t i = begin; i < end; ++i) free[i] = check(shapes[i]).free ? 1 : 0;
+    });
+  }
+}
+
+}  // namespace
+
+CollisionResult OccupancyMap::is_free(const Aabb& box, const CollisionOptions& options) const {
+  return check_region(*this, box, options);
+}
+CollisionResult OccupancyMap::is_free(const Sphere& sphere, const CollisionOptions& options) const {
+  return check_region(*this, sphere, options);
+}
+CollisionResult OccupancyMap::is_free(const OrientedBox& box, const CollisionOptions& options) const {
+  return check_region(*this, box, options);
+}
+CollisionResult OccupancyMap::is_free(const Capsule& capsule, const CollisionOptions& options) const {
+  return check_region(*this, capsule, options);
+}
+CollisionResult OccupancyMap::is_free(const Segment& segment, const CollisionOptions& options) const {
+  return check_segment(*this, segment, options);
+}
+
+void OccupancyMap::is_free(std::span<const Aabb> boxes, std::span<std::uint8_t> free,
+                           const CollisionOptions& options) const {
+  check_many(*this, boxes, free, [&](const Aabb& b) { return check_region(*this, b, options); });
+}
+void OccupancyMap::is_free(std::span<const Sphere> spheres, std::span<std::uint8_t> free,
+                           const CollisionOptions& options) const {
+  check_many(*this, spheres, free, [&](const Sphere& s) { return check_region(*this, s, options); });
+}
+void OccupancyMap::is_free(std::span<const OrientedBox> boxes, std::span<std::uint8_t> free,
+                           const CollisionOptions& options) const {
+  check_many(*this, boxes, free, [&](const OrientedBox& b) { return check_region(*this, b, options); });
+}
+void OccupancyMap::is_free(std::span<const Capsule> capsules, std::span<std::uint8_t> free,
+                           const CollisionOptions& options) const {
+  check_many(*this, capsules, free, [&](const Capsule& c) { return check_region(*this, c, options); });
+}
+void OccupancyMap::is_free(std::span<const Segment> segments, std::span<std::uint8_t> free,
+                           const CollisionOptions& options) const {
+  check_many(*this, segments, free, [&](const Segment& s) { return check_segment(*this, s, options); });
+}
+
+}  // namespace umbra

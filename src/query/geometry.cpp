@@ -1,0 +1,180 @@
+#include "query/geometry.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace umbra::detail {
+namespace {
+
+Vec3d cross(Vec3d a, Vec3d b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+
+}  // namespace
+
+double point_segment_distance_squared(Vec3d p, Vec3d a, Vec3d b) {
+  const Vec3d d = b - a;
+  const double length2 = d.dot(d);
+  double t = length2 > 0.0 ? (p - a).dot(d) / length2 : 0.0;
+  t = std::clamp(t, 0.0, 1.0);
+  const Vec3d closest = a + d * t;
+  const Vec3d e = p - closest;
+  return e.dot(e);
+}
+
+double segment_box_distance_squared(Vec3d a, Vec3d b, const Aabb& box) {
+  // f(t) = squared distance from a + t (b - a) to the box is convex and
+  // quadratic between the t where the point crosses a face plane: minimise
+  // the quadratic on each such piece of [0, 1].
+  const Vec3d d = b - a;
+  std::array<double, 8> cuts{};
+  int n = 0;
+  cuts[n++] = 0.0;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (d[axis] == 0.0) continue;
+    for (const double plane : {box.min[axis], box.max[axis]}) {
+      const double t = (plane - a[axis]) / d[axis];
+      if (t > 0.0 && t < 1.0) cuts[n++] = t;
+    }
+  }
+  cuts[n++] = 1.0;
+  std::sort(cuts.begin(), cuts.begin() + n);
+  double best = std::numeric_limits<double>::infinity();
+  for (int i = 0; i + 1 < n; ++i) {
+    const double t0 = cuts[i];
+    const double t1 = cuts[i + 1];
+    // On this piece each axis is below, inside or above the box throughout:
+    // its distance is c + k t (or 0). Minimise sum (c + k t)^2.
+    const double mid = 0.5 * (t0 + t1);
+    double sum_ck = 0.0;
+    double sum_kk = 0.0;
+    std::array<double, 3> c{};
+    std::array<double, 3> k{};
+    for (int axis = 0; axis < 3; ++axis) {
+      const double p = a[axis] + mid * d[axis];
+      if (p < box.min[axis]) {
+        c[axis] = box.min[axis] - a[axis];
+        k[axis] = -d[axis];
+      } else if (p > box.max[axis]) {
+        c[axis] = a[axis] - box.max[axis];
+        k[axis] = d[axis];
+      }
+      sum_ck += c[axis] * k[axis];
+      sum_kk += k[axis] * k[axis];
+    }
+    double t = sum_kk > 0.0 ? std::clamp(-sum_ck / sum_kk, t0, t1) : t0;
+    double value = 0.0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double e = c[axis] + k[axis] * t;
+      value += e * e;
+    }
+    best = std::min(best, value);
+  }
+  // The ends themselves (pieces of zero length when a cut is at 0 or 1).
+  for (const Vec3d p : {a, b}) best = std::min(best, distance_squared(p, box));
+  return best;
+}
+
+Overlap overlap(const OrientedBox& box, const Aabb& cube) {
+  const Vec3d half{0.5 * (cube.max.x - cube.min.x), 0.5 * (cube.max.y - cube.min.y), 0.5 * (cube.max.z - cube.min.z)};
+  const Vec3d centre = cube.min + half;
+  const Vec3d between = box.center - centre;
+  // Separating axis test: the cube's 3 axes, the box's 3, and their 9 cross products.
+  auto separated = [&](Vec3d axis) {
+    const double cube_radius = half.x * std::fabs(axis.x) + half.y * std::fabs(axis.y) + half.z * std::fabs(axis.z);
+    double box_radius = 0.0;
+    for (int i = 0; i < 3; ++i) box_radius += box.half_extents[i] * std::fabs(box.axes[i].dot(axis));
+    return std::fabs(between.dot(axis)) > cube_radius + box_radius;
+  };
+  const std::array<Vec3d, 3> world{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  for (const Vec3d& axis : world) {
+    if (separated(axis)) return Overlap::outside;
+  }
+  for (const Vec3d& axis : box.axes) {
+    if (separated(axis)) return Overlap::outside;
+  }
+  for (const Vec3d& w : world) {
+    for (const Vec3d& b : box.axes) {
+      const Vec3d axis = cross(w, b);
+      // Parallel edges give no axis; the face axes above cover that case.
+      if (axis.dot(axis) > 1e-12 && separated(axis)) return Overlap::outside;
+    }
+  }
+  for (const Vec3d& c : corners(cube)) {
+    const Vec3d d = c - box.center;
+    for (int i = 0; i < 3; ++i) {
+      if (std::fabs(d.dot(box.axes[i])) > box.half_extents[i]) return Overlap::partly;
+    }
+  }
+  return Overlap::inside;
+}
+
+FrustumGeometry::FrustumGeometry(const Frustum& f_in)
+    : frustum(f_in), f(f_in.forward()), l(f_in.left()), u(f_in.up()) {
+  cos_half_h = std::cos(frustum.hfov / 2);
+  sin_half_h = std::sin(frustum.hfov / 2);
+  cos_half_v = std::cos(frustum.vfov / 2);
+  sin_half_v = std::sin(frustum.vfov / 2);
+  // |atan2(d.l, d.f)| <= h/2 with d.f > 0  <=>  d.(f sin - l cos) >= 0 and d.(f sin + l cos) >= 0.
+  side = {f * sin_half_h - l * cos_half_h, f * sin_half_h + l * cos_half_h, f * sin_half_v - u * cos_half_v,
+          f * sin_half_v + u * cos_half_v};
+}
+
+bool FrustumGeometry::contains(Vec3d point) const {
+  const Vec3d d = point - frustum.origin;
+  const double along = d.dot(f);
+  if (!(along > 0.0)) return false;
+  if (std::fabs(std::atan2(d.dot(l), along)) > frustum.hfov / 2) return false;
+  if (std::fabs(std::atan2(d.dot(u), along)) > frustum.vfov / 2) return false;
+  const double distance = d.norm();
+  return distance >= frustum.min_range && distance <= frustum.max_range;
+}
+
+bool FrustumGeometry::contains_quickly(Vec3d point) const {
+  const Vec3d d = point - frustum.origin;
+  const double distance2 = d.dot(d);
+  // The margins of overlap() for a single point.
+  const double margin = 1e-9 * (std::sqrt(distance2) + 1.0);
+  const double range_margin = 1e-9 * (frustum.max_range + 1.0);
+  bool sure = true;
+  for (const Vec3d& normal : side) {
+    const double s = normal.dot(d);
+    if (s < -margin) return false;
+    if (s <= margin) sure = false;
+  }
+  const double low = frustum.min_range + range_margin;
+  const double high = frustum.max_range - range_margin;
+  if (sure && distance2 >= low * low && distance2 <= high * high) return true;
+  return contains(point);
+}
+
+Overlap FrustumGeometry::overlap(const Aabb& box) const {
+  const Vec3d o = frustum.origin;
+  const double nearest2 = distance_squared(o, box);
+  const double farthest2 = farthest_distance_squared(o, box);
+  // The plane tests and the per-point atan2 test may round differently by a
+  // few ulps: decide only with a margin, leave the rest to contains().
+  const double farthest = std::sqrt(farthest2);
+  const double scale = farthest + 1.0;
+  const double margin = 1e-9 * scale;
+  const double range_margin = 1e-9 * (frustum.max_range + 1.0);
+  const double beyond = frustum.max_range + range_margin;
+  if (nearest2 > beyond * beyond) return Overlap::outside;
+  if (farthest < frustum.min_range - range_margin) return Overlap::outside;
+  const double within = frustum.min_range + range_margin;
+  bool all_inside = farthest <= frustum.max_range - range_margin && nearest2 >= within * within;
+  // Each side plane's value over the box: its value at the centre plus or
+  // minus the half extents projected on the normal (the extremes over the
+  // eight corners, in four multiplications instead of eight dot products).
+  const Vec3d half = (box.max - box.min) * 0.5;
+  const Vec3d centre = box.min + half - o;
+  for (const Vec3d& normal : side) {
+    const double middle = normal.dot(centre);
+    const double reach = std::fabs(normal.x) * half.x + std::fabs(normal.y) * half.y + std::fabs(normal.z) * half.z;
+    const double lowest = middle - reach;
+    const double highest = middle + reach;
+    if (highest < -margin) return Overlap::outside;
+    if (lowest <= margin) all_inside = false;
+  }
+  return all_inside ? Overlap::inside : Overlap::partly;
+}
+
+}  // namespace umbra::detail

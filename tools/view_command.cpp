@@ -1,0 +1,137 @@
+// `umbra view MAP -o map.html [--budget N] [--serve [--port P]]`: one HTML
+// file that shows a map in 3D in any browser, offline.
+//
+// The page is the template and script of tools/viewer/ (three.js, pinned in
+// tools/viewer/package-lock.json, bundled at build time into a generated
+// header, so nothing is fetched when the page opens), followed by the map's
+// numbers and node layers (viewer_data.hpp). A build without node and npm
+// has no page to write: the command then says so. Cost: the layers (see
+// viewer_data.hpp), then one write of the page (about 3-6 bytes per node).
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "commands.hpp"
+#include "io/atomic_file.hpp"
+#include "local_http_server.hpp"
+#include "report.hpp"
+#include "umbra/io/map_formats.hpp"
+#include "viewer_data.hpp"
+
+#if defined(UMBRA_HAVE_VIEWER)
+#include "umbra_viewer_assets.hpp"
+#endif
+
+namespace umbra::cli {
+namespace {
+
+struct ViewOptions {
+  std::string map_path;
+  std::string output;
+  std::size_t budget = kDefaultViewerBudget;
+  bool serve = false;
+  int port = 8000;
+};
+
+#if defined(UMBRA_HAVE_VIEWER)
+
+std::string page_for(const OccupancyMap& map, const ViewerData& data, const std::string& title) {
+  std::string page(viewer_assets::kPageBeforeData);
+  page += "<script type=\"application/json\" id=\"umbra-map\">" + viewer_json(map, data, title) + "</script>\n";
+  std::size_t id = 0;
+  for (const ViewerLayer& layer : data.layers) {
+    if (!layer.embedded) continue;
+    page += "<script type=\"application/octet-stream\" id=\"layer-" + std::to_string(id++) + "\">";
+    page += base64(layer.deflated);
+    page += "</script>\n";
+  }
+  page += "<script>";
+  page += viewer_assets::kScript;
+  page += "</script>";
+  page += viewer_assets::kPageAfterData;
+  return page;
+}
+
+void print_summary(const OccupancyMap& map, const ViewerData& data) {
+  if (!data.stats.has_known_space) {
+    std::printf("the map is empty: the page shows its numbers only\n");
+    return;
+  }
+  const int last = data.layers.back().depth;
+  std::printf("depths %d to %d (nodes of %g to %g m); %zu occupied nodes at depth %d", data.finest_depth, last,
+              map.grid().node_size(data.finest_depth), map.grid().node_size(last), data.layers.front().count,
+              data.finest_depth);
+  if (data.finest_depth > 0) {
+    std::printf(" (depth 0 has %zu, more than the budget of %zu)", data.finest_depth_zero_count, data.budget);
+  }
+  std::printf("\n");
+  for (const ViewerLayer& layer : data.layers) {
+    if (!layer.embedded) {
+      std::printf("  left out: %zu %s nodes at depth %d (more than the budget of %zu)\n", layer.count,
+                  to_string(layer.state), layer.depth, data.budget);
+    }
+  }
+}
+
+int write_and_serve(const ViewOptions& options) {
+  const OccupancyMap map = load_any_map(options.map_path);
+  const ViewerData data = collect_viewer_data(map, options.budget);
+  const std::string page = page_for(map, data, std::filesystem::path(options.map_path).filename().string());
+  print_summary(map, data);
+  if (!options.output.empty()) {
+    const auto* bytes = reinterpret_cast<const std::uint8_t*>(page.data());
+    detail::write_file_atomically(options.output, {std::span<const std::uint8_t>(bytes, page.size())}, "page");
+    std::printf("wrote %s (%s, three.js %s)\n", options.output.c_str(), human_bytes(page.size()).c_str(),
+                std::string(viewer_assets::kThreeVersion).c_str());
+  }
+  std::fflush(stdout);
+  if (options.serve) serve_page(page, options.port, stdout);
+  return 0;
+}
+
+#else
+
+int write_and_serve(const ViewOptions&) {
+  std::fprintf(stderr,
+               "umbra view: this umbra was built without the browser viewer: node and npm were missing when it was "
+               "configured, `npm ci` failed, or UMBRA_BUILD_VIEWER was OFF (the configure messages say which). "
+               "Install them (Debian: apt-get install nodejs npm), then configure and build again.\n");
+  return 1;
+}
+
+#endif
+
+int run_view(const ViewOptions& options) {
+  if (options.output.empty() && !options.serve) {
+    std::fprintf(stderr, "umbra view: error: say where the page goes: -o FILE.html, --serve, or both\n");
+    return 2;
+  }
+  return write_and_serve(options);
+}
+
+}  // namespace
+
+Command add_view_command(CLI::App& app) {
+  auto options = std::make_shared<ViewOptions>();
+  CLI::App* command = app.add_subcommand(
+      "view", "Write one HTML file that shows a map in 3D in a browser (offline: three.js is inside the file)");
+  command->add_option("map", options->map_path, "map file (.umb, or OctoMap's .bt / .ot)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  command->add_option("-o,--output", options->output, "HTML file to write (replaced atomically)");
+  command
+      ->add_option("--budget", options->budget,
+                   "most nodes drawn at once: the finest depth shown is the finest whose occupied nodes fit; free "
+                   "and unknown layers above it are left out")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 31));
+  command->add_flag("--serve", options->serve, "also serve the page on http://127.0.0.1:PORT/ until Ctrl-C");
+  command->add_option("--port", options->port, "port for --serve (0: any free port)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 65535));
+  return [options] { return run_view(*options); };
+}
+
+}  // namespace umbra::cli

@@ -1,0 +1,392 @@
+// The script of the page `umbra view` writes: draws the map's node layers
+// (tools/viewer_data.hpp gives their format) as instanced boxes with three.js.
+//
+// The page carries one JSON block (#umbra-map: the map's numbers, the depths
+// shown and which layers are embedded) and one base64 element per embedded
+// layer (#layer-N, zlib-compressed). Only the layers of the depth on show are
+// decoded and on the GPU; changing the depth drops them. Each layer is one
+// draw call of a unit cube instanced n times, with a corner, an edge length
+// per axis and (occupied layers of coloured maps) a colour per instance: 28
+// bytes of GPU memory per node.
+//
+// For tests and scripts the page keeps window.umbraStats up to date (ready,
+// depth, drawn instances and their volume per state, errors) and offers
+// window.umbraViewer.show(depth) and .setVisible(state, on), which return
+// promises that settle once the picture is drawn.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+const STATES = ['occupied', 'free', 'unknown'];
+// Free and unknown space are drawn see-through, a little shrunk, so that
+// their boxes stay apart and the obstacles show through them.
+const LOOK = {
+  occupied: { colour: [0.843, 0.188, 0.165], opacity: 1.0, shrink: 1.0 },
+  free: { colour: [0.353, 0.824, 0.478], opacity: 0.16, shrink: 0.9 },
+  unknown: { colour: [0.604, 0.478, 0.847], opacity: 0.12, shrink: 0.9 },
+};
+
+const vertexShader = /* glsl */ `
+  attribute vec3 cornerAt;
+  attribute vec3 edge;
+  attribute vec3 rgb;
+  uniform float colourMode;  // 0 height, 1 the map's colours, 2 flat
+  uniform vec3 flatColour;
+  uniform float zLow;
+  uniform float zHigh;
+  uniform float shrink;
+  varying vec3 shaded;
+
+  // umbra's height ramp (include/umbra/io/topdown_image.hpp): blue, cyan,
+  // green, yellow, red.
+  vec3 ramp(float t) {
+    float s = clamp(t, 0.0, 1.0) * 4.0;
+    vec3 c0 = vec3(48.0, 64.0, 200.0) / 255.0;
+    vec3 c1 = vec3(0.0, 170.0, 210.0) / 255.0;
+    vec3 c2 = vec3(60.0, 180.0, 75.0) / 255.0;
+    vec3 c3 = vec3(240.0, 200.0, 40.0) / 255.0;
+    vec3 c4 = vec3(215.0, 48.0, 39.0) / 255.0;
+    if (s < 1.0) return mix(c0, c1, s);
+    if (s < 2.0) return mix(c1, c2, s - 1.0);
+    if (s < 3.0) return mix(c2, c3, s - 2.0);
+    return mix(c3, c4, s - 3.0);
+  }
+
+  void main() {
+    vec3 centre = cornerAt + 0.5 * edge;
+    vec3 world = centre + (position - 0.5) * edge * shrink;
+    vec3 base = flatColour;
+    if (colourMode < 0.5) {
+      base = ramp(zHigh > zLow ? (centre.z - zLow) / (zHigh - zLow) : 0.0);
+    } else if (colourMode < 1.5) {
+      base = rgb;
+    }
+    // Boxes are never turned: the cube's normals are world normals.
+    float light = 0.45 + 0.45 * max(dot(normal, normalize(vec3(0.35, 0.55, 1.0))), 0.0)
+                + 0.2 * max(dot(normal, normalize(vec3(-0.6, -0.3, 0.2))), 0.0);
+    shaded = base * light;
+    gl_Position = projectionMatrix * modelViewMatrix * vec4(world, 1.0);
+  }
+`;
+
+const fragmentShader = /* glsl */ `
+  uniform float opacity;
+  varying vec3 shaded;
+  void main() { gl_FragColor = vec4(shaded, opacity); }
+`;
+
+const data = JSON.parse(document.getElementById('umbra-map').textContent);
+const resolution = data.stats.resolution;
+const stats = {
+  ready: false,
+  depth: null,
+  finestDepth: data.finestDepth,
+  budget: data.budget,
+  drawn: { occupied: 0, free: 0, unknown: 0 },
+  volume: { occupied: 0, free: 0, unknown: 0 },
+  instances: 0,
+  frames: 0,
+  errors: [],
+};
+window.umbraStats = stats;
+
+const element = (id) => document.getElementById(id);
+
+function reportError(message) {
+  stats.errors.push(String(message));
+  const line = document.createElement('div');
+  line.className = 'error';
+  line.textContent = 'error: ' + message;
+  element('status').appendChild(line);
+}
+window.addEventListener('error', (event) => reportError(event.message));
+window.addEventListener('unhandledrejection', (event) => reportError(event.reason));
+
+// --- the numbers in the corner ------------------------------------------------
+
+function fixed(value, digits = 2) {
+  return Number(value).toFixed(digits);
+}
+
+function showNumbers() {
+  const s = data.stats;
+  element('title').textContent = data.title;
+  document.title = 'umbra view: ' + data.title;
+  const rows = [
+    ['resolution', `${s.resolution} m, ${s.depth_levels} depth levels`],
+    ['nodes', `${s.nodes.toLocaleString('en')} (inner ${s.inner_nodes.toLocaleString('en')}, inner leaf ${s.inner_leaf_nodes.toLocaleString('en')}, leaf ${s.leaf_nodes.toLocaleString('en')})`],
+    ['memory', `${data.memory} (${s.memory_bytes.toLocaleString('en')} bytes)`],
+    ['occupied', `${s.occupied_voxels.toLocaleString('en')} voxels, ${fixed(s.occupied_volume_m3, 3)} m³`],
+    ['free', `${s.free_voxels.toLocaleString('en')} voxels, ${fixed(s.free_volume_m3, 3)} m³`],
+  ];
+  if (s.known_min) {
+    rows.push(['known space', `(${s.known_min.map((v) => fixed(v)).join(', ')}) to (${s.known_max.map((v) => fixed(v)).join(', ')}) m`]);
+  }
+  const table = element('numbers');
+  for (const [name, value] of rows) {
+    const row = table.insertRow();
+    row.insertCell().textContent = name;
+    row.insertCell().textContent = value;
+  }
+}
+
+// --- layers -------------------------------------------------------------------
+
+const layersAt = new Map();  // depth -> {occupied, free, unknown} entries of data.layers
+for (const layer of data.layers) {
+  if (!layersAt.has(layer.depth)) layersAt.set(layer.depth, {});
+  layersAt.get(layer.depth)[layer.state] = layer;
+}
+const depths = [...layersAt.keys()].sort((a, b) => a - b);
+
+async function inflate(id) {
+  const base64 = element(id).textContent.trim();
+  const response = await fetch('data:application/octet-stream;base64,' + base64);
+  const stream = response.body.pipeThrough(new DecompressionStream('deflate'));
+  return new Response(stream).arrayBuffer();
+}
+
+const unitCube = new THREE.BoxGeometry(1, 1, 1).translate(0.5, 0.5, 0.5);
+
+/// A layer's instances: corners, edges and colours in metres from the known
+/// space's lowest corner, their total volume and height range.
+async function decodeLayer(layer) {
+  const n = layer.count;
+  const buffer = await inflate(layer.id);
+  const Ints = data.keyBytes === 2 ? Uint16Array : Uint32Array;
+  const withColours = layer.state === 'occupied' && data.hasColor;
+  const expected = n * (6 * data.keyBytes + (withColours ? 3 : 0));
+  if (buffer.byteLength !== expected) {
+    throw new Error(`layer ${layer.id} holds ${buffer.byteLength} bytes, expected ${expected}`);
+  }
+  const ints = new Ints(buffer, 0, 6 * n);
+  const corners = new Float32Array(3 * n);
+  const edges = new Float32Array(3 * n);
+  let volume = 0;
+  let zLow = Infinity;
+  let zHigh = -Infinity;
+  for (let i = 0; i < n; ++i) {
+    for (let axis = 0; axis < 3; ++axis) {
+      corners[3 * i + axis] = ints[axis * n + i] * resolution;
+      edges[3 * i + axis] = ints[(axis + 3) * n + i] * resolution;
+    }
+    volume += ints[3 * n + i] * ints[4 * n + i] * ints[5 * n + i];
+    const z = (ints[2 * n + i] + 0.5 * ints[5 * n + i]) * resolution;
+    zLow = Math.min(zLow, z);
+    zHigh = Math.max(zHigh, z);
+  }
+  const colours = new Uint8Array(3 * n);
+  if (withColours) {
+    const bytes = new Uint8Array(buffer, 6 * n * data.keyBytes, 3 * n);
+    for (let i = 0; i < n; ++i) {
+      for (let channel = 0; channel < 3; ++channel) colours[3 * i + channel] = bytes[channel * n + i];
+    }
+  }
+  return { count: n, corners, edges, colours, volume: volume * resolution ** 3, zLow, zHigh };
+}
+
+function meshOf(state, decoded) {
+  const geometry = new THREE.InstancedBufferGeometry();
+  geometry.index = unitCube.index;
+  geometry.setAttribute('position', unitCube.getAttribute('position'));
+  geometry.setAttribute('normal', unitCube.getAttribute('normal'));
+  geometry.setAttribute('cornerAt', new THREE.InstancedBufferAttribute(decoded.corners, 3));
+  geometry.setAttribute('edge', new THREE.InstancedBufferAttribute(decoded.edges, 3));
+  geometry.setAttribute('rgb', new THREE.InstancedBufferAttribute(decoded.colours, 3, true));
+  geometry.instanceCount = decoded.count;
+  const look = LOOK[state];
+  const material = new THREE.ShaderMaterial({
+    vertexShader,
+    fragmentShader,
+    uniforms: {
+      colourMode: { value: 2 },
+      flatColour: { value: new THREE.Vector3(...look.colour) },
+      zLow: { value: decoded.zLow },
+      zHigh: { value: decoded.zHigh },
+      shrink: { value: look.shrink },
+      opacity: { value: look.opacity },
+    },
+    transparent: look.opacity < 1,
+    depthWrite: look.opacity === 1,
+  });
+  const mesh = new THREE.Mesh(geometry, material);
+  mesh.frustumCulled = false;  // the unit cube's bounds are not the instances'
+  mesh.renderOrder = look.opacity < 1 ? 1 : 0;
+  return mesh;
+}
+
+// --- the scene ------------------------------------------------------------------
+
+const canvas = element('view');
+let renderer;
+const scene = new THREE.Scene();
+const size = new THREE.Vector3(...(data.size || [1, 1, 1])).multiplyScalar(resolution);
+const centre = size.clone().multiplyScalar(0.5);
+const camera = new THREE.PerspectiveCamera(45, 1, 1, 2);
+let controls;
+
+function render() {
+  if (!renderer) return;
+  renderer.render(scene, camera);
+  stats.frames += 1;
+}
+
+function fitToWindow() {
+  const width = window.innerWidth;
+  const height = window.innerHeight;
+  renderer.setSize(width, height, false);
+  camera.aspect = width / Math.max(1, height);
+  camera.updateProjectionMatrix();
+  render();
+}
+
+function setUpScene() {
+  renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+  renderer.setPixelRatio(window.devicePixelRatio || 1);
+  renderer.setClearColor(0x15161c);
+  const radius = Math.max(size.length() / 2, resolution);
+  // A little inside the distance at which the bounding sphere fits: maps are
+  // flat, and the sphere around them is mostly empty.
+  const distance = (radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2))) * 0.8;
+  camera.up.set(0, 0, 1);
+  camera.near = distance / 1000;
+  camera.far = distance * 10;
+  camera.position.copy(centre).add(new THREE.Vector3(-1, -1.3, 0.9).normalize().multiplyScalar(distance));
+  controls = new OrbitControls(camera, canvas);
+  controls.target.copy(centre);
+  controls.update();
+  controls.addEventListener('change', render);
+  window.addEventListener('resize', fitToWindow);
+  fitToWindow();
+}
+
+// --- what is on show ---------------------------------------------------------------
+
+const visible = { occupied: true, free: false, unknown: false };
+let colourMode = 0;  // 0 height, 1 the map's colours
+let current = { depth: null, meshes: {}, decoded: {} };
+let request = 0;  // the latest show() wins when several overlap
+
+function layerOf(depth, state) {
+  return (layersAt.get(depth) || {})[state];
+}
+
+function applyColourMode() {
+  for (const [state, mesh] of Object.entries(current.meshes)) {
+    mesh.material.uniforms.colourMode.value = state === 'occupied' ? colourMode : 2;
+  }
+}
+
+async function show(depth) {
+  const mine = ++request;
+  if (current.depth !== depth) {
+    for (const mesh of Object.values(current.meshes)) {
+      scene.remove(mesh);
+      mesh.geometry.dispose();
+      mesh.material.dispose();
+    }
+    current = { depth, meshes: {}, decoded: {} };
+  }
+  for (const state of STATES) {
+    const layer = layerOf(depth, state);
+    if (!visible[state] || !layer || !layer.id || current.meshes[state]) continue;
+    const decoded = await decodeLayer(layer);
+    if (mine !== request || current.depth !== depth) return;  // a newer request took over
+    current.decoded[state] = decoded;
+    current.meshes[state] = meshOf(state, decoded);
+    scene.add(current.meshes[state]);
+  }
+  if (mine !== request) return;
+  stats.instances = 0;
+  for (const state of STATES) {
+    const mesh = current.meshes[state];
+    if (mesh) mesh.visible = visible[state];
+    const on = Boolean(mesh && visible[state]);
+    stats.drawn[state] = on ? current.decoded[state].count : 0;
+    stats.volume[state] = on ? current.decoded[state].volume : 0;
+    stats.instances += stats.drawn[state];
+  }
+  applyColourMode();
+  stats.depth = depth;
+  describe(depth);
+  render();
+  stats.ready = true;
+}
+
+function describe(depth) {
+  const nodeSize = resolution * 2 ** depth;
+  element('depth-label').textContent = `${depth} (${+nodeSize.toPrecision(4)} m nodes)`;
+  for (const state of ['free', 'unknown']) {
+    const layer = layerOf(depth, state);
+    const box = element('show-' + state);
+    const note = element(state + '-note');
+    box.disabled = !layer || !layer.id;
+    note.textContent = layer && !layer.id ? `(${layer.count.toLocaleString('en')} nodes: over the budget)` : '';
+  }
+  const status = element('status');
+  status.textContent = '';
+  const drawn = STATES.filter((s) => stats.drawn[s] > 0).map((s) => `${stats.drawn[s].toLocaleString('en')} ${s}`);
+  const line = document.createElement('div');
+  line.id = 'drawn';
+  line.textContent = drawn.length ? `drawing ${drawn.join(', ')} nodes (${stats.instances.toLocaleString('en')} boxes)` : 'nothing to draw at this depth';
+  status.appendChild(line);
+  if (data.finestDepth > 0) {
+    const note = document.createElement('div');
+    note.className = 'note';
+    note.textContent = `depth 0 holds ${data.depthZeroOccupied.toLocaleString('en')} occupied nodes, more than the budget of ` +
+      `${data.budget.toLocaleString('en')} (umbra view --budget): the finest depth drawn is ${data.finestDepth}`;
+    status.appendChild(note);
+  }
+  for (const message of stats.errors) {
+    const line = document.createElement('div');
+    line.className = 'error';
+    line.textContent = 'error: ' + message;
+    status.appendChild(line);
+  }
+}
+
+function setVisible(state, on) {
+  visible[state] = on;
+  element('show-' + state).checked = on;
+  return show(current.depth);
+}
+
+function wireControls() {
+  const slider = element('depth');
+  slider.min = depths[0];
+  slider.max = depths[depths.length - 1];
+  slider.value = depths[0];
+  slider.addEventListener('input', () => show(Number(slider.value)));
+  for (const state of STATES) {
+    element('show-' + state).addEventListener('change', (event) => setVisible(state, event.target.checked));
+  }
+  const colours = element('color-mode');
+  colours.disabled = !data.hasColor;
+  colours.addEventListener('change', () => {
+    colourMode = colours.value === 'rgb' ? 1 : 0;
+    applyColourMode();
+    render();
+  });
+}
+
+window.umbraViewer = {
+  depths,
+  show: (depth) => {
+    element('depth').value = depth;
+    return show(depth);
+  },
+  setVisible,
+};
+
+showNumbers();
+try {
+  setUpScene();
+} catch (error) {
+  reportError('cannot draw: WebGL is not available in this browser (' + error.message + ')');
+}
+if (depths.length === 0) {
+  element('status').textContent = 'the map has no known space: nothing to draw';
+  stats.ready = true;
+} else if (renderer) {
+  wireControls();
+  show(depths[0]).catch((error) => reportError(error.message));
+}
