@@ -6,10 +6,12 @@
 // integrator's, voxel by voxel (recall and precision of the occupied voxels,
 // free voxels left unknown, free voxels behind surfaces), on LiDAR scans and
 // depth-camera frames, simulated and real.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <set>
+#include <span>
 
 #include <gtest/gtest.h>
 
@@ -306,9 +308,14 @@ std::vector<Scan> lidar_building_scans() {
   return scans;
 }
 
-std::vector<Scan> depth_camera_building_frames() {
+/// The first `count` frames of the simulated depth camera's sequence (the
+/// tests keep a few: consecutive frames overlap, so later frames still look
+/// through the surfaces of earlier ones).
+std::vector<Scan> depth_camera_building_frames(std::size_t count) {
   std::vector<Scan> scans;
-  for (sim::DepthFrame& frame : sim::demo_depth_sequence()) {
+  const std::vector<sim::CameraPose> path = sim::demo_camera_path();
+  const std::span<const sim::CameraPose> poses(path.data(), std::min(count, path.size()));
+  for (sim::DepthFrame& frame : sim::simulate_depth_sequence(sim::make_demo_scene(), poses, sim::noisy_depth_camera())) {
     Scan scan;
     scan.origin = frame.origin;
     scan.points = std::move(frame.points);
@@ -322,7 +329,7 @@ TEST(FastIntegrator, AgreesWithTheSimpleIntegratorOnALidarInTheProceduralBuildin
 }
 
 TEST(FastIntegrator, AgreesWithTheSimpleIntegratorOnADepthCameraInTheProceduralBuildingAt2cm) {
-  check_fast_integrator("procedural building, depth camera", depth_camera_building_frames(), 0.02, 6.5, 2);
+  check_fast_integrator("procedural building, depth camera", depth_camera_building_frames(8), 0.02, 6.5, 2);
 }
 
 using test::read_all;
@@ -349,7 +356,10 @@ TEST(FastIntegrator, AgreesWithTheSimpleIntegratorOnTumFramesAt4cm) {
 
 TEST(FastIntegrator, AgreesWithTheSimpleIntegratorOnTumFramesAt2cm) {
   UMBRA_REQUIRE_SHARED_DATA(path, "tum_fr2_pioneer_slam2");
-  check_fast_integrator("tum", read_all(path), 0.02, 5.0, 2);
+  // Five of the ten frames keep the test short; the benchmark's table has all ten.
+  std::vector<Scan> frames = read_all(path);
+  frames.resize(std::min<std::size_t>(frames.size(), 5));
+  check_fast_integrator("tum", frames, 0.02, 5.0, 2);
 }
 
 }  // namespace
