@@ -18,6 +18,11 @@
 // simple with octomap-plain, the others with octomap-discrete. OctoMap runs
 // single-threaded whatever --threads says.
 //
+// Time is wall-clock time per scan. The CPU columns add the child's CPU time
+// per scan (all its threads): on a machine shared with other jobs a process
+// waits for a core some of the time, which counts in the wall-clock figure but
+// not in the CPU one, so with one thread the CPU ratio is the steadier one.
+//
 // Memory: OctoMap's memoryUsage() and umbra's memory_bytes() for the
 // finished map, and the peak RSS growth of the child while inserting.
 //
@@ -33,6 +38,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -77,10 +83,18 @@ struct Measurement {
   static constexpr int kMaxScans = 64;
   int scans = 0;
   double scan_seconds[kMaxScans] = {};
+  double scan_cpu_seconds[kMaxScans] = {};  // CPU time of the process (all threads)
   std::uint64_t map_bytes = 0;        // memoryUsage() / memory_bytes()
   std::uint64_t peak_rss_growth = 0;  // bytes, peak RSS minus RSS before inserting
   bool ok = false;
 };
+
+/// CPU time this process has used so far (all its threads), in seconds.
+double process_cpu_seconds() {
+  timespec t{};
+  ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 std::uint64_t current_rss_bytes() {
   std::ifstream statm("/proc/self/statm");
@@ -123,9 +137,11 @@ Measurement measure_in_this_process(const Dataset& data, const Method& method, d
     for (int i = 0; i < m.scans; ++i) {
       const umbra::Vec3f o = data.scans[i].origin;
       const auto start = Clock::now();
+      const double cpu_start = process_cpu_seconds();
       tree.insertPointCloud(data.clouds[i], octomap::point3d(o.x, o.y, o.z), data.max_range, false,
                             method.discretize);
       m.scan_seconds[i] = std::chrono::duration<double>(Clock::now() - start).count();
+      m.scan_cpu_seconds[i] = process_cpu_seconds() - cpu_start;
     }
     m.map_bytes = tree.memoryUsage();
   } else {
@@ -141,12 +157,14 @@ Measurement measure_in_this_process(const Dataset& data, const Method& method, d
     for (int i = 0; i < m.scans; ++i) {
       const umbra::Scan& scan = data.scans[i];
       const auto start = Clock::now();
+      const double cpu_start = process_cpu_seconds();
       if (color && !scan.colors.empty()) {
         map.insert_point_cloud(scan.origin, scan.points, scan.colors, options);
       } else {
         map.insert_point_cloud(scan.origin, scan.points, options);
       }
       m.scan_seconds[i] = std::chrono::duration<double>(Clock::now() - start).count();
+      m.scan_cpu_seconds[i] = process_cpu_seconds() - cpu_start;
     }
     m.map_bytes = map.memory_bytes();
   }
@@ -209,6 +227,7 @@ std::string mib(std::uint64_t bytes) {
 
 struct Result {
   double ms_per_scan = 0.0;
+  double cpu_ms_per_scan = 0.0;
   Measurement last;
 };
 
@@ -282,8 +301,8 @@ int main(int argc, char** argv) {
 
   std::ostringstream table;
   table << "| dataset | res (m) | threads | method | ms/scan | scans/s | speed-up vs OctoMap | map (MiB) | "
-           "map vs OctoMap | peak RSS growth (MiB) |\n"
-        << "|---|---|---|---|---|---|---|---|---|---|\n";
+           "map vs OctoMap | peak RSS growth (MiB) | CPU ms/scan | CPU speed-up |\n"
+        << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Dataset& data : loaded) {
     for (const std::string& res_text : split_list(resolutions)) {
       const double resolution = std::stod(res_text);
@@ -291,6 +310,7 @@ int main(int argc, char** argv) {
       for (const std::string& threads_text : split_list(thread_counts)) {
         const unsigned threads = static_cast<unsigned>(std::stoul(threads_text));
         std::map<std::string, std::vector<std::vector<double>>> times;  // method -> scan -> repeats
+        std::map<std::string, std::vector<std::vector<double>>> cpu_times;
         std::map<std::string, Measurement> last;
         for (int r = 0; r < repeat; ++r) {
           for (const Method& method : methods) {
@@ -298,9 +318,12 @@ int main(int argc, char** argv) {
             const Measurement m = measure_in_child(data, method, resolution, threads, color);
             auto& per_scan = times[method.name];
             per_scan.resize(static_cast<std::size_t>(m.scans));
+            auto& cpu_per_scan = cpu_times[method.name];
+            cpu_per_scan.resize(static_cast<std::size_t>(m.scans));
             double total = 0;
             for (int s = 0; s < m.scans; ++s) {
               per_scan[static_cast<std::size_t>(s)].push_back(m.scan_seconds[s]);
+              cpu_per_scan[static_cast<std::size_t>(s)].push_back(m.scan_cpu_seconds[s]);
               total += m.scan_seconds[s];
             }
             last[method.name] = m;
@@ -313,7 +336,10 @@ int main(int argc, char** argv) {
         for (const auto& [name, per_scan] : times) {
           double sum = 0;
           for (const auto& repeats : per_scan) sum += median(repeats);
-          results[name] = {1e3 * sum / static_cast<double>(per_scan.size()), last[name]};
+          double cpu_sum = 0;
+          for (const auto& repeats : cpu_times[name]) cpu_sum += median(repeats);
+          const auto scans = static_cast<double>(per_scan.size());
+          results[name] = {1e3 * sum / scans, 1e3 * cpu_sum / scans, last[name]};
         }
         for (const Method& method : methods) {
           if (method.octomap) octomap_results[method.name] = results[method.name];
@@ -322,21 +348,24 @@ int main(int argc, char** argv) {
           const Result& mine = results[method.name];
           std::string speedup = "-";
           std::string memory_ratio = "-";
+          std::string cpu_speedup = "-";
           if (!method.octomap && results.count(method.counterpart)) {
             const Result& theirs = results[method.counterpart];
             char text[64];
             std::snprintf(text, sizeof text, "%.1fx", theirs.ms_per_scan / mine.ms_per_scan);
             speedup = text;
+            std::snprintf(text, sizeof text, "%.1fx", theirs.cpu_ms_per_scan / mine.cpu_ms_per_scan);
+            cpu_speedup = text;
             std::snprintf(text, sizeof text, "%.1f%%",
                           100.0 * static_cast<double>(mine.last.map_bytes) / static_cast<double>(theirs.last.map_bytes));
             memory_ratio = text;
           }
           char row[512];
-          std::snprintf(row, sizeof row, "| %s | %.3g | %s | %s | %.1f | %.2f | %s | %s | %s | %s |\n",
+          std::snprintf(row, sizeof row, "| %s | %.3g | %s | %s | %.1f | %.2f | %s | %s | %s | %s | %.1f | %s |\n",
                         data.name.c_str(), resolution, method.octomap ? "1" : threads_text.c_str(),
                         method.name.c_str(), mine.ms_per_scan, 1e3 / mine.ms_per_scan, speedup.c_str(),
                         mib(mine.last.map_bytes).c_str(), memory_ratio.c_str(),
-                        mib(mine.last.peak_rss_growth).c_str());
+                        mib(mine.last.peak_rss_growth).c_str(), mine.cpu_ms_per_scan, cpu_speedup.c_str());
           table << row;
           std::fputs(row, stderr);
         }
