@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "bench_data.hpp"
+#include "common/argument_cursor.hpp"
 #include "map_agreement.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
@@ -78,15 +79,9 @@ int main(int argc, char** argv) {
   std::string method_names = "discrete,fast-n2,fast-n0";
   std::string markdown_path;
   int clear_depth = -1;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "%s needs a value\n", arg.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
+  for (umbra_bench::ArgumentCursor args{argc, argv}; args.next();) {
+    const std::string arg = args.flag();
+    auto value = [&] { return args.value(); };
     if (arg == "--data") data_options.data_dir = value();
     else if (arg == "--datasets") datasets = value();
     else if (arg == "--res") resolutions = value();
