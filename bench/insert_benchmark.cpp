@@ -18,10 +18,15 @@
 // simple with octomap-plain, the others with octomap-discrete. OctoMap runs
 // single-threaded whatever --threads says.
 //
+// Time is wall-clock time per scan. The CPU columns add the child's CPU time
+// per scan (all its threads): on a machine shared with other jobs a process
+// waits for a core some of the time, which counts in the wall-clock figure but
+// not in the CPU one, so with one thread the CPU ratio is the steadier one.
+//
 // Memory: OctoMap's memoryUsage() and umbra's memory_bytes() for the
 // finished map, and the peak RSS growth of the child while inserting.
 //
-// Usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum]
+// Usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum,sim-camera]
 //          [--res 0.05,0.02] [--methods LIST] [--threads 1,2] [--repeat 3]
 //          [--max-range 30] [--tum-max-range 5] [--color] [--markdown FILE]
 #include <malloc.h>
@@ -33,6 +38,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -42,16 +48,16 @@
 
 #include <octomap/OcTree.h>
 
+#include "bench_data.hpp"
 #include "common/argument_cursor.hpp"
-#include "umbra/io/scan_source.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace {
 
-struct Dataset {
-  std::string name;
-  double max_range = 30.0;
-  std::vector<umbra::Scan> scans;
+using umbra::bench::median;
+using umbra::bench::split_list;
+
+struct Dataset : umbra::bench::Dataset {
   std::vector<octomap::Pointcloud> clouds;  // the same points for OctoMap
 };
 
@@ -78,10 +84,18 @@ struct Measurement {
   static constexpr int kMaxScans = 64;
   int scans = 0;
   double scan_seconds[kMaxScans] = {};
+  double scan_cpu_seconds[kMaxScans] = {};  // CPU time of the process (all threads)
   std::uint64_t map_bytes = 0;        // memoryUsage() / memory_bytes()
   std::uint64_t peak_rss_growth = 0;  // bytes, peak RSS minus RSS before inserting
   bool ok = false;
 };
+
+/// CPU time this process has used so far (all its threads), in seconds.
+double process_cpu_seconds() {
+  timespec t{};
+  ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 std::uint64_t current_rss_bytes() {
   std::ifstream statm("/proc/self/statm");
@@ -124,9 +138,11 @@ Measurement measure_in_this_process(const Dataset& data, const Method& method, d
     for (int i = 0; i < m.scans; ++i) {
       const umbra::Vec3f o = data.scans[i].origin;
       const auto start = Clock::now();
+      const double cpu_start = process_cpu_seconds();
       tree.insertPointCloud(data.clouds[i], octomap::point3d(o.x, o.y, o.z), data.max_range, false,
                             method.discretize);
       m.scan_seconds[i] = std::chrono::duration<double>(Clock::now() - start).count();
+      m.scan_cpu_seconds[i] = process_cpu_seconds() - cpu_start;
     }
     m.map_bytes = tree.memoryUsage();
   } else {
@@ -142,12 +158,14 @@ Measurement measure_in_this_process(const Dataset& data, const Method& method, d
     for (int i = 0; i < m.scans; ++i) {
       const umbra::Scan& scan = data.scans[i];
       const auto start = Clock::now();
+      const double cpu_start = process_cpu_seconds();
       if (color && !scan.colors.empty()) {
         map.insert_point_cloud(scan.origin, scan.points, scan.colors, options);
       } else {
         map.insert_point_cloud(scan.origin, scan.points, options);
       }
       m.scan_seconds[i] = std::chrono::duration<double>(Clock::now() - start).count();
+      m.scan_cpu_seconds[i] = process_cpu_seconds() - cpu_start;
     }
     m.map_bytes = map.memory_bytes();
   }
@@ -190,34 +208,16 @@ Measurement measure_in_child(const Dataset& data, const Method& method, double r
   return m;
 }
 
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-Dataset load(const std::string& name, const std::string& path, double max_range) {
+Dataset load(const std::string& name, const umbra::bench::DatasetOptions& options) {
   Dataset data;
-  data.name = name;
-  data.max_range = max_range;
-  const auto source = umbra::open_scan_source(path);
-  umbra::Scan scan;
-  while (source->next(scan)) {
+  static_cast<umbra::bench::Dataset&>(data) = umbra::bench::load_dataset(name, options);
+  for (const umbra::Scan& scan : data.scans) {
     octomap::Pointcloud cloud;
     cloud.reserve(scan.points.size());
     for (const umbra::Vec3f& p : scan.points) cloud.push_back(p.x, p.y, p.z);
     data.clouds.push_back(std::move(cloud));
-    data.scans.push_back(scan);
   }
   return data;
-}
-
-std::vector<std::string> split(const std::string& text) {
-  std::vector<std::string> parts;
-  std::stringstream in(text);
-  std::string part;
-  while (std::getline(in, part, ',')) parts.push_back(part);
-  return parts;
 }
 
 std::string mib(std::uint64_t bytes) {
@@ -228,38 +228,37 @@ std::string mib(std::uint64_t bytes) {
 
 struct Result {
   double ms_per_scan = 0.0;
+  double cpu_ms_per_scan = 0.0;
   Measurement last;
 };
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string data_dir = "../shared/data";
+  umbra::bench::DatasetOptions data_options;
   std::string resolutions = "0.05,0.02";
   std::string datasets = "scan.dat,3dtk";
   std::string method_names = "octomap-plain,umbra-simple,octomap-discrete,umbra-discrete";
   std::string thread_counts = "1";
   std::string markdown_path;
   int repeat = 3;
-  double max_range = 30.0;
-  double tum_max_range = 5.0;
   bool color = false;
   for (umbra_bench::ArgumentCursor args{argc, argv}; args.next();) {
     const std::string arg = args.flag();
     auto value = [&] { return args.value(); };
-    if (arg == "--data") data_dir = value();
+    if (arg == "--data") data_options.data_dir = value();
     else if (arg == "--res") resolutions = value();
     else if (arg == "--datasets") datasets = value();
     else if (arg == "--methods") method_names = value();
     else if (arg == "--threads") thread_counts = value();
     else if (arg == "--repeat") repeat = std::stoi(value());
-    else if (arg == "--max-range") max_range = std::stod(value());
-    else if (arg == "--tum-max-range") tum_max_range = std::stod(value());
+    else if (arg == "--max-range") data_options.max_range = std::stod(value());
+    else if (arg == "--tum-max-range") data_options.tum_max_range = std::stod(value());
     else if (arg == "--color") color = true;
     else if (arg == "--markdown") markdown_path = value();
     else if (arg == "--help" || arg == "-h") {
       std::printf(
-          "usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum] [--res 0.05,0.02]\n"
+          "usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum,sim-camera] [--res 0.05,0.02]\n"
           "         [--methods LIST] [--threads 1,2] [--repeat 3] [--max-range 30] [--tum-max-range 5]\n"
           "         [--color] [--markdown FILE]\n"
           "methods:");
@@ -272,7 +271,7 @@ int main(int argc, char** argv) {
     }
   }
   std::vector<Method> methods;
-  for (const std::string& name : split(method_names)) {
+  for (const std::string& name : split_list(method_names)) {
     const auto it = std::find_if(kAllMethods.begin(), kAllMethods.end(), [&](const Method& m) { return m.name == name; });
     if (it == kAllMethods.end()) {
       std::fprintf(stderr, "unknown method %s\n", name.c_str());
@@ -282,14 +281,9 @@ int main(int argc, char** argv) {
   }
 
   std::vector<Dataset> loaded;
-  for (const std::string& name : split(datasets)) {
-    const bool tum = name == "tum";
-    const std::string path = name == "scan.dat" ? data_dir + "/octomap/scan.dat.bz2"
-                             : name == "3dtk"   ? data_dir + "/3dtk/3dtk_registered.graph"
-                             : tum              ? data_dir + "/tum_fr2_pioneer_slam2"
-                                                : name;
+  for (const std::string& name : split_list(datasets)) {
     try {
-      loaded.push_back(load(name, path, tum ? tum_max_range : max_range));
+      loaded.push_back(load(name, data_options));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "cannot load %s: %s\n", name.c_str(), e.what());
       return 1;
@@ -302,15 +296,16 @@ int main(int argc, char** argv) {
 
   std::ostringstream table;
   table << "| dataset | res (m) | threads | method | ms/scan | scans/s | speed-up vs OctoMap | map (MiB) | "
-           "map vs OctoMap | peak RSS growth (MiB) |\n"
-        << "|---|---|---|---|---|---|---|---|---|---|\n";
+           "map vs OctoMap | peak RSS growth (MiB) | CPU ms/scan | CPU speed-up |\n"
+        << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Dataset& data : loaded) {
-    for (const std::string& res_text : split(resolutions)) {
+    for (const std::string& res_text : split_list(resolutions)) {
       const double resolution = std::stod(res_text);
       std::map<std::string, Result> octomap_results;
-      for (const std::string& threads_text : split(thread_counts)) {
+      for (const std::string& threads_text : split_list(thread_counts)) {
         const unsigned threads = static_cast<unsigned>(std::stoul(threads_text));
         std::map<std::string, std::vector<std::vector<double>>> times;  // method -> scan -> repeats
+        std::map<std::string, std::vector<std::vector<double>>> cpu_times;
         std::map<std::string, Measurement> last;
         for (int r = 0; r < repeat; ++r) {
           for (const Method& method : methods) {
@@ -318,9 +313,12 @@ int main(int argc, char** argv) {
             const Measurement m = measure_in_child(data, method, resolution, threads, color);
             auto& per_scan = times[method.name];
             per_scan.resize(static_cast<std::size_t>(m.scans));
+            auto& cpu_per_scan = cpu_times[method.name];
+            cpu_per_scan.resize(static_cast<std::size_t>(m.scans));
             double total = 0;
             for (int s = 0; s < m.scans; ++s) {
               per_scan[static_cast<std::size_t>(s)].push_back(m.scan_seconds[s]);
+              cpu_per_scan[static_cast<std::size_t>(s)].push_back(m.scan_cpu_seconds[s]);
               total += m.scan_seconds[s];
             }
             last[method.name] = m;
@@ -333,7 +331,10 @@ int main(int argc, char** argv) {
         for (const auto& [name, per_scan] : times) {
           double sum = 0;
           for (const auto& repeats : per_scan) sum += median(repeats);
-          results[name] = {1e3 * sum / static_cast<double>(per_scan.size()), last[name]};
+          double cpu_sum = 0;
+          for (const auto& repeats : cpu_times[name]) cpu_sum += median(repeats);
+          const auto scans = static_cast<double>(per_scan.size());
+          results[name] = {1e3 * sum / scans, 1e3 * cpu_sum / scans, last[name]};
         }
         for (const Method& method : methods) {
           if (method.octomap) octomap_results[method.name] = results[method.name];
@@ -342,21 +343,24 @@ int main(int argc, char** argv) {
           const Result& mine = results[method.name];
           std::string speedup = "-";
           std::string memory_ratio = "-";
+          std::string cpu_speedup = "-";
           if (!method.octomap && results.count(method.counterpart)) {
             const Result& theirs = results[method.counterpart];
             char text[64];
             std::snprintf(text, sizeof text, "%.1fx", theirs.ms_per_scan / mine.ms_per_scan);
             speedup = text;
+            std::snprintf(text, sizeof text, "%.1fx", theirs.cpu_ms_per_scan / mine.cpu_ms_per_scan);
+            cpu_speedup = text;
             std::snprintf(text, sizeof text, "%.1f%%",
                           100.0 * static_cast<double>(mine.last.map_bytes) / static_cast<double>(theirs.last.map_bytes));
             memory_ratio = text;
           }
           char row[512];
-          std::snprintf(row, sizeof row, "| %s | %.3g | %s | %s | %.1f | %.2f | %s | %s | %s | %s |\n",
+          std::snprintf(row, sizeof row, "| %s | %.3g | %s | %s | %.1f | %.2f | %s | %s | %s | %s | %.1f | %s |\n",
                         data.name.c_str(), resolution, method.octomap ? "1" : threads_text.c_str(),
                         method.name.c_str(), mine.ms_per_scan, 1e3 / mine.ms_per_scan, speedup.c_str(),
                         mib(mine.last.map_bytes).c_str(), memory_ratio.c_str(),
-                        mib(mine.last.peak_rss_growth).c_str());
+                        mib(mine.last.peak_rss_growth).c_str(), mine.cpu_ms_per_scan, cpu_speedup.c_str());
           table << row;
           std::fputs(row, stderr);
         }

@@ -12,13 +12,15 @@
 // truncated at max_range. NaN / infinite points are skipped and counted; so
 // are points outside the map (OctoMap drops their rays too).
 //
-// The fast integrator (the UFOMap paper's "fast discrete"): end points as for
-// discrete; free space is cleared a depth-`clear_depth` node at a time, and
-// only the last `fine_steps` coarse nodes before the end point (and the end
-// node) are traced voxel by voxel; `fine_steps = 0` clears coarse nodes only.
-// A coarse node the map says holds an obstacle, or that holds a hit of this
-// scan, is never cleared whole: the ray is traced through it voxel by voxel.
-// Hits are always at the finest depth.
+// The fast integrator (the UFOMap paper's "fast discrete", with one ray per
+// end voxel to the first point that fell in it): free space is cleared a
+// depth-`clear_depth` node at a time where nothing forbids it, and voxel by
+// voxel along each ray elsewhere: in nodes the map says hold an obstacle, in
+// nodes that hold or touch a hit of this scan, and over the last
+// `fine_steps` nodes before the end node and the end node itself. So every
+// ray updates the voxels it really crosses near surfaces, as the simple
+// integrator on those points does (with enough fine steps it is exactly
+// that). Hits are always at the finest depth.
 //
 // Bounding box (OccupancyMap::set_bounding_box): rays are clipped to it
 // (begin and end move towards each other; a clipped end gives no hit), and

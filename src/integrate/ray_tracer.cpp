@@ -1,6 +1,7 @@
 #include "integrate/ray_tracer.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/radix_sort.hpp"
 
@@ -11,12 +12,12 @@ namespace umbra {
 
 void RayTracer::start(int depth_levels) {
   batch_.reset(depth_levels);
-  previous_cleared_.clear();
+  std::fill(decisions_.begin(), decisions_.end(), NodeDecision{~std::uint64_t{0}, false});
 }
 
 std::size_t RayTracer::memory_bytes() const {
-  return batch_.memory_bytes() + runs_.capacity() * sizeof(BrickRun) + crossings_.capacity() * sizeof(NodeCrossing) +
-         (cleared_.capacity() + previous_cleared_.capacity()) * sizeof(std::uint64_t);
+  return batch_.memory_bytes() + crossings_.capacity() * sizeof(NodeCrossing) +
+         decisions_.capacity() * sizeof(NodeDecision) + tail_.capacity() * sizeof(std::uint64_t);
 }
 
 std::optional<PreparedRay> prepare_ray(const ScanContext& scan, Vec3f point, InsertStats* stats) {
@@ -28,7 +29,7 @@ std::optional<PreparedRay> prepare_ray(const ScanContext& scan, Vec3f point, Ins
     return std::nullopt;
   }
   const Grid& grid = *scan.grid;
-  PreparedRay ray{scan.origin, scan.origin_key, point, {}, true, false};
+  PreparedRay ray{scan.origin, scan.origin_key, point, {}, 0, true, false};
   const Vec3f offset = point - scan.origin;
   const double range = octomap_norm(offset);
   if (scan.max_range > 0.0 && range > scan.max_range) {
@@ -64,45 +65,47 @@ std::optional<PreparedRay> prepare_ray(const ScanContext& scan, Vec3f point, Ins
       ray.miss_end = true;
     }
   }
+  ray.end_code = morton::encode(ray.end_key);
   count(&InsertStats::rays);
   return ray;
 }
 
-void RayTracer::add_segment_misses(const ScanContext& scan, Vec3f from, Key from_key, Vec3f to, Key to_key) {
-  // A walk takes at most one step per key along the way, plus at most one
-  // overshoot per axis where rounding makes it miss the end voxel.
-  std::size_t steps = 4;
-  for (int axis = 0; axis < 3; ++axis) {
-    steps += from_key[axis] > to_key[axis] ? from_key[axis] - to_key[axis] : to_key[axis] - from_key[axis];
-  }
-  if (runs_.size() < steps + 1) runs_.resize(steps + 1);
-  // Append to the current run or start a new one, without a branch on which:
-  // whether the brick changes is hard to predict (measured 17% faster than
-  // handing over each run as soon as the walk leaves its brick).
-  BrickRun* runs = runs_.data();
-  runs[0] = {~std::uint64_t{0}, 0};  // no code lies in this brick
-  std::size_t last = 0;
-  auto collect = [&](std::uint64_t code) {
-    const bool same_brick = ((code ^ runs[last].code) >> 6) == 0;
-    last += same_brick ? 0 : 1;
-    const std::uint64_t earlier = same_brick ? runs[last].voxels : 0;
-    runs[last] = {code, earlier | (std::uint64_t{1} << (code & 63))};
-  };
+namespace {
+
+/// The voxels of the brick (4x4x4 voxels from `brick`) inside the box, as a
+/// brick mask (bit i: the voxel brick + i).
+std::uint64_t voxels_in_box(const KeyBox& box, std::uint64_t brick) {
+  const Key low = morton::decode(brick);
+  const Key high{low.x + 3, low.y + 3, low.z + 3};
+  if (box.contains(low) && box.contains(high)) return ~std::uint64_t{0};
+  std::uint64_t mask = 0;
+  for (unsigned i = 0; i < 64; ++i) mask |= std::uint64_t{box.contains(morton::decode(brick + i))} << i;
+  return mask;
+}
+
+}  // namespace
+
+template <typename Walk>
+void RayTracer::add_walk_misses(const ScanContext& scan, Walk&& walk) {
   if (scan.box_keys) {
     const KeyBox box = *scan.box_keys;
-    walk_ray(*scan.grid, from, from_key, to, to_key, [&](std::uint64_t code) {
-      if (box.contains(morton::decode(code))) collect(code);
+    walk([&](std::uint64_t brick, std::uint64_t voxels) {
+      voxels &= voxels_in_box(box, brick);
+      if (voxels != 0) batch_.add_misses_in_brick(brick, voxels);
     });
   } else {
-    walk_ray(*scan.grid, from, from_key, to, to_key, collect);
+    walk([&](std::uint64_t brick, std::uint64_t voxels) { batch_.add_misses_in_brick(brick, voxels); });
   }
-  for (std::size_t i = 1; i <= last; ++i) batch_.add_misses_in_brick(runs[i].code, runs[i].voxels);
+}
+
+void RayTracer::add_segment_misses(const ScanContext& scan, Vec3f from, Key from_key, Vec3f to, Key to_key) {
+  add_walk_misses(scan, [&](auto&& run) { walk_ray_runs(*scan.grid, from, from_key, to, to_key, run); });
 }
 
 void RayTracer::add_end(const ScanContext& scan, const PreparedRay& ray) {
   if (scan.box_keys && !scan.box_keys->contains(ray.end_key)) return;
-  if (ray.miss_end) batch_.add_miss(morton::encode(ray.end_key));
-  if (ray.hit && !scan.hits_first) batch_.add_hit(morton::encode(ray.end_key));
+  if (ray.miss_end) batch_.add_miss(ray.end_code);
+  if (ray.hit && !scan.hits_first) batch_.add_hit(ray.end_code);
 }
 
 void RayTracer::add_hits(const ScanContext& scan, std::span<const PreparedRay> rays) {
@@ -110,7 +113,7 @@ void RayTracer::add_hits(const ScanContext& scan, std::span<const PreparedRay> r
   const int depth = scan.clear_depth;
   for (const PreparedRay& ray : rays) {
     if (!ray.hit || (scan.box_keys && !scan.box_keys->contains(ray.end_key))) continue;
-    const std::uint64_t code = morton::encode(ray.end_key);
+    const std::uint64_t code = ray.end_code;
     batch_.add_hit(code);
     coarse.push_back(code >> (3 * depth));
   }
@@ -151,86 +154,130 @@ void RayTracer::trace(const ScanContext& scan, std::span<const Vec3f> ends, Inse
   }
 }
 
+bool RayTracer::clear_node_whole(const ScanContext& scan, std::uint64_t code, OccupancyTree::Cursor& cursor) {
+  const int depth = scan.clear_depth;
+  NodeDecision& decision = decisions_[(code >> (3 * depth)) & (kDecisions - 1)];
+  if (decision.code == code) return decision.cleared;
+  decision.code = code;
+  decision.cleared = false;
+  if (cursor.max_log_odds(code, depth) > scan.tree->thresholds().occupied) return false;  // a known obstacle
+  if (scan.box_keys) {
+    const Key first = morton::decode(code);
+    const std::uint32_t last = (1u << depth) - 1;
+    if (!scan.box_keys->contains(first) || !scan.box_keys->contains({first.x + last, first.y + last, first.z + last})) {
+      return false;
+    }
+  }
+  decision.cleared = batch_.add_miss_node_unless_hit(code, depth);  // refuses nodes that hold or touch a hit
+  return decision.cleared;
+}
+
+namespace {
+
+/// Node index along one axis at depth `depth` of a coordinate, clamped to the map.
+std::uint32_t node_index(const Grid& grid, double coordinate, int depth) {
+  const double key = std::floor(coordinate / grid.resolution()) + double(grid.key_offset());
+  const double clamped = std::clamp(key, 0.0, double(grid.keys_per_axis() - 1));
+  return static_cast<std::uint32_t>(clamped) >> depth;
+}
+
+}  // namespace
+
 void RayTracer::trace_group(const ScanContext& scan, std::span<const PreparedRay> rays,
                             OccupancyTree::Cursor& cursor) {
   if (rays.empty()) return;
   const Grid& grid = *scan.grid;
   const int depth = scan.clear_depth;
-  // The coarse ray: to the end of the group's middle ray.
-  const PreparedRay& guide = rays[rays.size() / 2];
-  crossings_.clear();
-  walk_nodes(grid, depth, Vec3d(guide.begin), guide.begin_key, Vec3d(guide.end), guide.end_key,
-             [this](const NodeCrossing& c) { crossings_.push_back(c); });
-  const Vec3d begin(guide.begin);
-  const Vec3d direction = Vec3d(guide.end) - begin;
-  const double length = direction.norm();
-  const Vec3d unit = length > 0.0 ? direction / length : direction;
-  // Segment ends are nudged a hundredth of a voxel past a node's exit, so
-  // that the voxel walk covers every voxel of the node along the ray.
-  const double nudge = 0.01 * grid.resolution();
-  const float occupied = scan.tree->thresholds().occupied;
-  const std::size_t total = crossings_.size();
   const std::size_t fine = static_cast<std::size_t>(scan.fine_steps);
-  const std::size_t coarse = total > fine ? total - fine : 0;
 
-  // Consecutive coarse rays (in Morton order of their ends) cross nearly the
-  // same nodes, and a node cleared whole stays so for the whole scan (what
-  // decides it, the map and this scan's hits, does not change while
-  // tracing). So a node the previous coarse ray cleared whole is skipped
-  // without asking the map or the batch again.
-  std::size_t previous = 0;
-  cleared_.clear();
-  for (std::size_t i = 0; i < coarse; ++i) {
-    const NodeCrossing& c = crossings_[i];
-    bool seen = false;
-    for (std::size_t j = previous; j < previous_cleared_.size() && j < previous + 3; ++j) {
-      if (previous_cleared_[j] == c.code) {
-        seen = true;
-        previous = j + 1;
-        break;
-      }
-    }
-    if (seen) {
-      cleared_.push_back(c.code);
-      continue;
-    }
-    bool whole = cursor.max_log_odds(c.code, depth) <= occupied;  // no obstacle the map knows of
-    if (whole && scan.box_keys) {
-      const Key first = morton::decode(c.code);
-      const std::uint32_t last = (1u << depth) - 1;
-      whole = scan.box_keys->contains(first) &&
-              scan.box_keys->contains({first.x + last, first.y + last, first.z + last});
-    }
-    if (whole && batch_.add_miss_node_unless_hit(c.code, depth)) {
-      cleared_.push_back(c.code);
-      continue;
-    }
-    // Voxel by voxel through this node, along the coarse ray.
-    const Vec3f from = static_cast<Vec3f>(begin + unit * c.t_in);
-    const Vec3f to = static_cast<Vec3f>(begin + unit * std::min(c.t_out + nudge, length));
-    const std::optional<Key> from_key = grid.key_checked(from);
-    const std::optional<Key> to_key = grid.key_checked(to);
-    if (from_key && to_key) add_segment_misses(scan, from, *from_key, to, *to_key);
-  }
-  previous_cleared_.swap(cleared_);
-
-  // Every ray of the group: the last `fine_steps` nodes voxel by voxel,
-  // starting as far from its origin (proportionally) as the coarse ray left off.
-  const double share = coarse > 0 && length > 0.0 ? crossings_[coarse - 1].t_out / length : 0.0;
+  // The guide is the group's middle ray. At a fraction s of their lengths,
+  // all rays of the group lie within (1 - s) begin_spread + s end_spread of
+  // the guide's point (begins differ only when a box clips them).
+  const PreparedRay& guide = rays[rays.size() / 2];
+  const Vec3d guide_begin(guide.begin);
+  const Vec3d guide_end(guide.end);
+  double begin_spread = 0.0;
+  double end_spread = 0.0;
   for (const PreparedRay& ray : rays) {
-    if (fine > 0) {
-      if (share == 0.0) {
-        add_segment_misses(scan, ray.begin, ray.begin_key, ray.end, ray.end_key);
-      } else {
-        const Vec3d from_begin(ray.begin);
-        const Vec3f from = static_cast<Vec3f>(from_begin + (Vec3d(ray.end) - from_begin) * share);
-        if (const std::optional<Key> from_key = grid.key_checked(from)) {
-          add_segment_misses(scan, from, *from_key, ray.end, ray.end_key);
+    begin_spread = std::max(begin_spread, (Vec3d(ray.begin) - guide_begin).norm());
+    end_spread = std::max(end_spread, (Vec3d(ray.end) - guide_end).norm());
+  }
+  // Walking the guide, every node the group's rays may cross along each of
+  // its nodes (a box around the guide's segment, widened by the spread) is
+  // cleared whole, until one of them may not be (it holds an obstacle or a
+  // hit, is next to one, or is one of the last `fine`): from there on every
+  // ray goes by itself, so that every ray crosses nodes it may not clear
+  // itself, voxel by voxel, as the exact integrators do.
+  crossings_.clear();
+  walk_nodes(grid, depth, guide_begin, guide.begin_key, guide_end, guide.end_key,
+             [this](const NodeCrossing& c) { crossings_.push_back(c); });
+  const std::size_t guide_coarse = crossings_.size() > fine ? crossings_.size() - fine : 0;
+  const Vec3d guide_direction = guide_end - guide_begin;
+  const double guide_length = guide_direction.norm();
+  double stop_share = 0.0;  // the fraction of their lengths where the rays go on by themselves
+  for (std::size_t i = 0; i < guide_coarse; ++i) {
+    const double s_in = crossings_[i].t_in / guide_length;
+    const double s_out = crossings_[i].t_out / guide_length;
+    // (Less a millionth of a voxel: the guide's own entry and exit points lie
+    // on the faces of its node, and rounding must not add the neighbours.)
+    const double spread = std::max((1.0 - s_in) * begin_spread + s_in * end_spread,
+                                   (1.0 - s_out) * begin_spread + s_out * end_spread) -
+                          1e-6 * grid.resolution();
+    const Vec3d a = guide_begin + guide_direction * s_in;
+    const Vec3d b = guide_begin + guide_direction * s_out;
+    std::uint32_t low[3];
+    std::uint32_t high[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      low[axis] = node_index(grid, std::min(a[axis], b[axis]) - spread, depth);
+      high[axis] = node_index(grid, std::max(a[axis], b[axis]) + spread, depth);
+    }
+    bool all_cleared = true;
+    for (std::uint32_t z = low[2]; z <= high[2] && all_cleared; ++z) {
+      for (std::uint32_t y = low[1]; y <= high[1] && all_cleared; ++y) {
+        for (std::uint32_t x = low[0]; x <= high[0] && all_cleared; ++x) {
+          all_cleared = clear_node_whole(scan, morton::encode({x << depth, y << depth, z << depth}), cursor);
         }
       }
     }
+    if (!all_cleared) break;
+    stop_share = s_out;
+  }
+  for (const PreparedRay& ray : rays) {
+    if (stop_share == 0.0) {
+      trace_rest(scan, ray, ray.begin, ray.begin_key, cursor);
+    } else {
+      const Vec3d begin(ray.begin);
+      const Vec3f from = static_cast<Vec3f>(begin + (Vec3d(ray.end) - begin) * stop_share);
+      if (const std::optional<Key> from_key = grid.key_checked(from)) trace_rest(scan, ray, from, *from_key, cursor);
+    }
     add_end(scan, ray);
   }
+}
+
+void RayTracer::trace_rest(const ScanContext& scan, const PreparedRay& ray, Vec3f from, Key from_key,
+                           OccupancyTree::Cursor& cursor) {
+  const Grid& grid = *scan.grid;
+  const int depth = scan.clear_depth;
+  // The end node and the `fine_steps` nodes before it are traced voxel by
+  // voxel whatever they hold: found walking back from the end.
+  const std::size_t tail = static_cast<std::size_t>(scan.fine_steps) + 1;
+  tail_.clear();
+  tail_.push_back(morton::node_begin(ray.end_code, depth));
+  bool whole_ray_in_tail = false;
+  if (tail > 1) {
+    walk_nodes(grid, depth, Vec3d(ray.end), ray.end_key, Vec3d(from), from_key, [&](const NodeCrossing& c) {
+      if (tail_.size() < tail + 1) tail_.push_back(c.code);
+    });
+    // walk_nodes gives the end node too, and stops before the node of `from`.
+    whole_ray_in_tail = tail_.size() < tail + 1;
+  }
+  const auto skip = [&](std::uint64_t node) {
+    if (whole_ray_in_tail || std::find(tail_.begin(), tail_.end(), node) != tail_.end()) return false;
+    return clear_node_whole(scan, node, cursor);
+  };
+  add_walk_misses(scan, [&](auto&& run) {
+    walk_ray_skipping(grid, depth, from, from_key, ray.end, ray.end_key, skip, run);
+  });
 }
 
 }  // namespace umbra

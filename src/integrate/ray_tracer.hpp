@@ -12,14 +12,17 @@
 //    in the box are updated;
 //  - simple / discrete: every voxel before the end voxel gets a miss
 //    (OctoMap's walk), collected a brick (4x4x4 voxels) at a time;
-//  - fast: the rays are grouped by the depth-`clear_depth` node their end
-//    lies in; one coarse ray per group (to the end of its middle ray) clears
-//    the nodes it crosses whole, except the last `fine_steps` before the end
-//    node and any node that the map says holds an obstacle or that holds, or
-//    touches a node that holds, a hit of this scan: those are traced voxel by
-//    voxel along it. Then every ray of the group is traced voxel by voxel
-//    over the last `fine_steps` nodes. Hits are added for the whole scan
-//    before any ray (ScanContext::hits_first), so that every tracer knows them.
+//  - fast: the rays (one per end voxel, to its first point) are grouped by
+//    the depth-`clear_depth` node their end lies in. The group's middle ray,
+//    the guide, walks the coarse nodes and clears whole every node the
+//    group's rays may cross along it (its node widened by the spread of the
+//    group) until one of them may not be cleared: a node the map says holds
+//    an obstacle, that holds or touches a hit of this scan, or one of the
+//    last `fine_steps` before the end node. From there every ray goes on by
+//    itself: nodes it may clear are cleared whole, the others it crosses
+//    voxel by voxel, as do the last `fine_steps` nodes and the end node.
+//    Hits are added for the whole scan before any ray
+//    (ScanContext::hits_first), so that every tracer knows them.
 #pragma once
 
 #include <cstdint>
@@ -68,6 +71,7 @@ struct PreparedRay {
   Key begin_key;
   Vec3f end;
   Key end_key;
+  std::uint64_t end_code;  ///< Morton code of end_key
   bool hit;       ///< the end voxel gets a hit
   bool miss_end;  ///< the end voxel gets a miss (the ray was clipped there)
 };
@@ -94,20 +98,34 @@ class RayTracer {
  private:
   /// Misses for the voxels from `from` up to, not including, the voxel of `to`.
   void add_segment_misses(const ScanContext& scan, Vec3f from, Key from_key, Vec3f to, Key to_key);
+  /// Misses for the voxels of the runs walk(run) hands to run(brick, voxels)
+  /// (only those in the box, if there is one).
+  template <typename Walk>
+  void add_walk_misses(const ScanContext& scan, Walk&& walk);
   void add_end(const ScanContext& scan, const PreparedRay& ray);
+  /// Fast integrator: clears the depth-clear_depth node `code` whole if
+  /// nothing forbids it (a known obstacle, a hit of this scan in or next to
+  /// it, the box); true if it is cleared whole now.
+  bool clear_node_whole(const ScanContext& scan, std::uint64_t code, OccupancyTree::Cursor& cursor);
+  /// Fast integrator: one ray from `from` (on it) to its end: nodes cleared
+  /// whole where allowed, voxel by voxel elsewhere and over the last
+  /// fine_steps nodes and the end node.
+  void trace_rest(const ScanContext& scan, const PreparedRay& ray, Vec3f from, Key from_key,
+                  OccupancyTree::Cursor& cursor);
 
-  /// A run of a ray's voxels inside one brick (see UpdateBatch): bit i of
-  /// `voxels` is voxel (code & ~63) + i.
-  struct BrickRun {
+  /// What clear_node_whole decided for a node in this scan (it cannot
+  /// change during a scan), direct-mapped by the low 4 bits of the node's
+  /// coordinates: rays of one group cross the same nodes.
+  struct NodeDecision {
     std::uint64_t code;
-    std::uint64_t voxels;
+    bool cleared;
   };
+  static constexpr std::size_t kDecisions = 4096;
 
   UpdateBatch batch_;
-  std::vector<BrickRun> runs_;            // one ray's runs; capacity kept between rays
-  std::vector<NodeCrossing> crossings_;  // fast: one ray's coarse nodes
-  std::vector<std::uint64_t> cleared_;   // fast: the nodes this ray found cleared whole, in ray order
-  std::vector<std::uint64_t> previous_cleared_;  // ... and those of the previous ray
+  std::vector<NodeDecision> decisions_ = std::vector<NodeDecision>(kDecisions);
+  std::vector<NodeCrossing> crossings_;  // fast: the guide ray's coarse nodes
+  std::vector<std::uint64_t> tail_;      // fast: the nodes one ray traces voxel by voxel whatever
 };
 
 }  // namespace umbra

@@ -157,4 +157,16 @@ std::vector<CameraPose> demo_camera_path() {
   // clang-format on
 }
 
+DepthCameraModel noisy_depth_camera(std::uint32_t seed) {
+  DepthCameraModel model;
+  model.noise_stddev = 0.002;
+  model.noise_per_square_metre = 0.0015;
+  model.seed = seed;
+  return model;
+}
+
+std::vector<DepthFrame> demo_depth_sequence(std::uint32_t seed) {
+  return simulate_depth_sequence(make_demo_scene(), demo_camera_path(), noisy_depth_camera(seed));
+}
+
 }  // namespace umbra::sim

@@ -1,13 +1,19 @@
 // walk_ray against a literal, key-based copy of OctoMap's computeRayKeys
 // (tests/support/dense_grid), on random rays, axis-aligned rays, rays along
-// voxel borders and rays that touch the map's edge.
+// voxel borders and rays that touch the map's edge; walk_ray_skipping
+// against walk_ray when it skips nothing and against a brute-force
+// segment/cube test when it skips nodes.
+#include <bit>
 #include <cstdlib>
+#include <functional>
 #include <random>
+#include <set>
 
 #include <gtest/gtest.h>
 
 #include "support/dense_grid.hpp"
 #include "integrate/ray_walker.hpp"
+#include "umbra/core/aabb.hpp"
 
 namespace umbra {
 namespace {
@@ -93,6 +99,125 @@ TEST(RayWalker, OutsideEndsVisitNothing) {
   EXPECT_FALSE(inside);
   EXPECT_TRUE(walk(grid, {-5, 0, 0}, {0, 0, 0}, inside).empty());
   EXPECT_FALSE(inside);
+}
+
+using Runs = std::vector<std::pair<std::uint64_t, std::uint64_t>>;  // brick, voxels
+
+Runs walk_skipping(const Grid& grid, int depth, Vec3f from, Vec3f to, const std::function<bool(std::uint64_t)>& skip) {
+  Runs runs;
+  walk_ray_skipping(grid, depth, from, grid.key(Vec3d(from)), to, grid.key(Vec3d(to)), skip,
+                    [&](std::uint64_t brick, std::uint64_t voxels) { runs.emplace_back(brick, voxels); });
+  return runs;
+}
+
+/// The runs of a walk as codes, brick by brick.
+std::vector<std::uint64_t> codes_of(const Runs& runs) {
+  std::vector<std::uint64_t> codes;
+  for (const auto& [brick, voxels] : runs) {
+    for (std::uint64_t v = voxels; v != 0; v &= v - 1) codes.push_back(brick + static_cast<std::uint64_t>(std::countr_zero(v)));
+  }
+  return codes;
+}
+
+TEST(RayWalker, RunsAreTheWalksVoxelsBrickByBrick) {
+  const Grid grid(0.1, 6);
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<float> coordinate(-3.19f, 3.19f);
+  for (int i = 0; i < 3000; ++i) {
+    const Vec3f from{coordinate(rng), coordinate(rng), coordinate(rng)};
+    const Vec3f to{coordinate(rng), coordinate(rng), coordinate(rng)};
+    Runs expected;  // walk_ray's codes grouped into stretches within one brick
+    walk_ray(grid, from, to, [&](std::uint64_t code) {
+      const std::uint64_t brick = code & ~std::uint64_t{63};
+      if (expected.empty() || expected.back().first != brick) expected.emplace_back(brick, 0);
+      expected.back().second |= std::uint64_t{1} << (code & 63);
+    });
+    Runs runs;
+    walk_ray_runs(grid, from, grid.key(Vec3d(from)), to, grid.key(Vec3d(to)),
+                  [&](std::uint64_t brick, std::uint64_t voxels) { runs.emplace_back(brick, voxels); });
+    ASSERT_EQ(runs, expected) << "ray " << i;
+  }
+}
+
+TEST(RayWalkerSkipping, SkippingNothingIsWalkRay) {
+  const Grid grid(0.1, 6);  // [-3.2, 3.2): many rays touch the edge
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> coordinate(-3.19f, 3.19f);
+  for (int i = 0; i < 3000; ++i) {
+    const Vec3f from{coordinate(rng), coordinate(rng), coordinate(rng)};
+    const Vec3f to{coordinate(rng), coordinate(rng), coordinate(rng)};
+    Runs expected;
+    walk_ray_runs(grid, from, grid.key(Vec3d(from)), to, grid.key(Vec3d(to)),
+                  [&](std::uint64_t brick, std::uint64_t voxels) { expected.emplace_back(brick, voxels); });
+    std::size_t asked = 0;
+    const auto actual = walk_skipping(grid, 2, from, to, [&](std::uint64_t) {
+      ++asked;
+      return false;
+    });
+    ASSERT_EQ(actual, expected) << "ray " << i;
+    std::set<std::uint64_t> nodes;
+    for (const std::uint64_t code : codes_of(expected)) nodes.insert(code >> 6);
+    EXPECT_EQ(asked, nodes.size()) << "asked once per node entered, ray " << i;
+  }
+}
+
+/// Length of the part of segment a-b inside the cube [low, low + size]^3 (-1: none).
+double length_inside(Vec3d a, Vec3d b, Vec3d low, double size) {
+  const Aabb cube{low, low + Vec3d{size, size, size}};
+  const auto part = cube.clip(a, b);
+  return part ? (part->second - part->first) * (b - a).norm() : -1.0;
+}
+
+TEST(RayWalkerSkipping, JumpsOverSkippedNodesAndWalksTheOthersVoxelByVoxel) {
+  const double resolution = 0.1;
+  const Grid grid(resolution, 6);
+  const int depth = 2;  // 40 cm nodes
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> coordinate(-3.19f, 3.19f);
+  std::size_t jumps = 0;
+  std::size_t visited_total = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Vec3f from{coordinate(rng), coordinate(rng), coordinate(rng)};
+    const Vec3f to{coordinate(rng), coordinate(rng), coordinate(rng)};
+    // A fixed pseudo-random half of the nodes is skipped.
+    auto skipped = [](std::uint64_t node_code) { return ((node_code >> 6) * 0x9E3779B97F4A7C15ULL) >> 63 != 0; };
+    const auto visited = codes_of(walk_skipping(grid, depth, from, to, [&](std::uint64_t node) {
+      jumps += skipped(node);
+      return skipped(node);
+    }));
+    visited_total += visited.size();
+    const std::set<std::uint64_t> seen(visited.begin(), visited.end());
+    ASSERT_EQ(seen.size(), visited.size()) << "a voxel visited twice, ray " << i;
+    const Key end_key = grid.key(Vec3d(to));
+    for (const std::uint64_t code : visited) {
+      ASSERT_FALSE(skipped(code >> 6 << 6)) << "visited a voxel of a skipped node, ray " << i;
+      ASSERT_NE(morton::decode(code), end_key);
+      // Every visited voxel lies on the segment (to rounding).
+      ASSERT_GT(length_inside(Vec3d(from), Vec3d(to), grid.min_corner(morton::decode(code)), resolution), -0.5)
+          << "ray " << i;
+    }
+    // Every voxel the segment crosses for more than a hundredth of a voxel,
+    // outside the skipped nodes and away from the end, is visited.
+    const Key a = grid.key(Vec3d(from));
+    for (std::uint32_t z = std::min(a.z, end_key.z); z <= std::max(a.z, end_key.z); ++z) {
+      for (std::uint32_t y = std::min(a.y, end_key.y); y <= std::max(a.y, end_key.y); ++y) {
+        for (std::uint32_t x = std::min(a.x, end_key.x); x <= std::max(a.x, end_key.x); ++x) {
+          const Key key{x, y, z};
+          const std::uint64_t code = morton::encode(key);
+          if (skipped(code >> 6 << 6)) continue;
+          if (std::abs(int(x) - int(end_key.x)) <= 1 && std::abs(int(y) - int(end_key.y)) <= 1 &&
+              std::abs(int(z) - int(end_key.z)) <= 1) {
+            continue;
+          }
+          if (length_inside(Vec3d(from), Vec3d(to), grid.min_corner(key), resolution) > 0.01 * resolution) {
+            ASSERT_TRUE(seen.count(code)) << "crossed voxel " << x << "," << y << "," << z << " missed, ray " << i;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(jumps, 500u);
+  EXPECT_GT(visited_total, 5000u);
 }
 
 }  // namespace

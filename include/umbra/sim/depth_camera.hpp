@@ -96,4 +96,13 @@ std::vector<DepthFrame> simulate_depth_sequence(const Scene& scene, std::span<co
 /// it. Every pose is in free space, at least 0.3 m from any surface.
 std::vector<CameraPose> demo_camera_path();
 
+/// The depth camera the tests and benchmarks use: DepthCameraModel's defaults
+/// (640 x 240 pixels, hfov 115, vfov 60, 6.5 m) with noise of a Kinect-like
+/// spread (2 mm + 1.5 mm per square metre of range: 1.6 cm at 3 m, 6.5 cm at
+/// 6.5 m) and the given seed.
+DepthCameraModel noisy_depth_camera(std::uint32_t seed = 1);
+
+/// noisy_depth_camera() along demo_camera_path() in make_demo_scene().
+std::vector<DepthFrame> demo_depth_sequence(std::uint32_t seed = 1);
+
 }  // namespace umbra::sim
