@@ -12,6 +12,11 @@ UMBRA_APT_PACKAGES=(
   clang                                         # fuzz targets (optional label)
   bzip2 python3                                 # test helpers
   chromium                                      # the `umbra view` page tested in a headless browser
+  # ROS 1 (ros/: umbra_server, `umbra build` of .bag files, their tests; optional, found by CMake):
+  ros-core-dev libroscpp-dev libsensor-msgs-dev libtf2-ros-dev librosbag-dev
+  libstd-srvs-dev libvisualization-msgs-dev libtf2-msgs-dev
+  python3-gencpp python3-genmsg python3-empy     # message headers (ros/generate_messages.py)
+  ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-visualization-msgs ros-tf2-msgs ros-actionlib-msgs ros-std-srvs
 )
 
 # Commands installed only when missing, as COMMAND:PACKAGE: Node.js and npm

@@ -13,6 +13,9 @@
 #include "report.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/scan_source.hpp"
+#ifdef UMBRA_WITH_ROS
+#include "umbra_ros/rosbag_source.hpp"
+#endif
 
 namespace umbra::cli {
 namespace {
@@ -35,6 +38,8 @@ struct BuildOptions {
   std::string calibration;
   std::string association;
   std::string camera;
+  std::vector<std::string> topics;
+  std::string frame = "map";
 };
 
 struct ScanRow {
@@ -70,6 +75,31 @@ std::vector<double> parse_numbers(const std::string& text, std::size_t count, co
   return values;
 }
 
+/// The reader of one input; .bag files go to the ROS reader (ROS builds only: open_scan_source refuses them).
+std::unique_ptr<ScanSource> open_input(const std::string& input, const BuildOptions& options,
+                                       const ScanSourceOptions& source_options) {
+#ifdef UMBRA_WITH_ROS
+  if (scan_format_for(input, options.format) == "rosbag") {
+    return ros_io::open_rosbag(input, ros_io::RosbagOptions{options.topics, options.frame});
+  }
+#else
+  (void)options;
+#endif
+  return open_scan_source(input, source_options);
+}
+
+/// Warns about clouds a .bag reader skipped for want of a transform.
+void report_skipped(const ScanSource& source) {
+#ifdef UMBRA_WITH_ROS
+  if (const auto* bag = dynamic_cast<const ros_io::RosbagScanSource*>(&source); bag && bag->skipped_clouds() > 0) {
+    std::printf("warning: %zu clouds had no transform to the map frame and were skipped (first: %s)\n",
+                bag->skipped_clouds(), bag->first_skip_reason().c_str());
+  }
+#else
+  (void)source;
+#endif
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -97,7 +127,14 @@ int run_build(const BuildOptions& options) {
     const std::vector<double> c = parse_numbers(options.camera, 5, "--camera");
     source_options.depth_camera = {c[0], c[1], c[2], c[3], c[4]};
   }
-  for (const std::string& input : options.inputs) (void)scan_format_for(input, options.format);  // fail early
+  source_options.topics = options.topics;
+  source_options.frame = options.frame;
+  for (const std::string& input : options.inputs) {  // fail early
+    const std::string format = scan_format_for(input, options.format);
+#ifndef UMBRA_WITH_ROS
+    if (format == "rosbag") (void)open_scan_source(input, source_options);  // says that .bag needs the ROS build
+#endif
+  }
 
   MapConfig config;
   config.resolution = options.resolution;
@@ -122,7 +159,7 @@ int run_build(const BuildOptions& options) {
   ProgressBar bar("building");
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t file = 0; file < options.inputs.size(); ++file) {
-    const std::unique_ptr<ScanSource> source = open_scan_source(options.inputs[file], source_options);
+    const std::unique_ptr<ScanSource> source = open_input(options.inputs[file], options, source_options);
     Scan scan;
     for (;;) {
       const auto read_start = std::chrono::steady_clock::now();
@@ -143,6 +180,7 @@ int run_build(const BuildOptions& options) {
       const double fraction = (static_cast<double>(file) + source->progress()) / static_cast<double>(options.inputs.size());
       bar.update(fraction, std::to_string(rows.size()) + " scans");
     }
+    report_skipped(*source);
   }
   bar.finish();
   const double build_seconds = seconds_since(start);
@@ -192,7 +230,8 @@ Command add_build_command(CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "build",
       "Build a map from point clouds: OctoMap ScanGraph (.graph), ASCII x y z [r g b] (.xyz .dat .txt, also .bz2), "
-      "PLY, PCD, KITTI velodyne (.bin or a folder, with --poses), TUM RGB-D (a sequence folder)");
+      "PLY, PCD, KITTI velodyne (.bin or a folder, with --poses), TUM RGB-D (a sequence folder), ROS bags (.bag, "
+      "PointCloud2 with TF; ROS builds only)");
   command->add_option("inputs", options->inputs, "point-cloud files or sequence folders, inserted in order")
       ->required()
       ->check(CLI::ExistingPath);
@@ -223,11 +262,14 @@ Command add_build_command(CLI::App& app) {
   command->add_option("--origin", options->origin, "sensor origin x,y,z for files without poses (.xyz, .ply, .pcd, lone .bin)")
       ->capture_default_str();
   command->add_option("--format", options->format, "input format for every input (default: by name)")
-      ->check(CLI::IsMember({"graph", "xyz", "ply", "pcd", "kitti", "tum"}));
+      ->check(CLI::IsMember({"graph", "xyz", "ply", "pcd", "kitti", "tum", "rosbag"}));
   command->add_option("--poses", options->poses, "kitti: poses file (12 numbers per line)");
   command->add_option("--calibration", options->calibration, "kitti: calib.txt with the velodyne-to-camera Tr");
   command->add_option("--association", options->association, "tum: association file (default: the folder's *assoc*.txt)");
   command->add_option("--camera", options->camera, "tum: fx,fy,cx,cy,depth_scale (default: TUM fr2 Kinect, 5000)");
+  command->add_option("--topic", options->topics, "rosbag: a PointCloud2 topic to read (repeatable; default: all)");
+  command->add_option("--frame", options->frame, "rosbag: the map frame, clouds are moved into it with the bag's TF")
+      ->capture_default_str();
   return [options] { return run_build(*options); };
 }
 

@@ -9,12 +9,15 @@
 // must not be compiled with floating-point contraction (FMA) enabled.
 //
 // Cost: a few double additions and compares per voxel; the Morton code is
-// stepped with bit operations instead of being re-encoded.
+// stepped with bit operations instead of being re-encoded. A visitor that
+// returns bool stops the walk by returning false (a visibility check ends at
+// the first occupied voxel); one that returns nothing sees the whole walk.
 #pragma once
 
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <type_traits>
 
 #include "umbra/core/grid.hpp"
 #include "umbra/core/morton.hpp"
@@ -30,6 +33,17 @@ inline double octomap_norm(Vec3f v) {
 }
 
 namespace detail {
+
+/// Calls visit(code); false when the visitor asks the walk to stop.
+template <typename Visit>
+bool visit_voxel(Visit& visit, std::uint64_t code) {
+  if constexpr (std::is_same_v<decltype(visit(code)), bool>) {
+    return visit(code);
+  } else {
+    visit(code);
+    return true;
+  }
+}
 
 /// The DDA state of one ray: everything the stepping loop reads.
 struct RayState {
@@ -81,7 +95,7 @@ void step_ray(RayState& ray, Visit& visit) {
     }
     if (!inside || ray.code == ray.end_code) return;
     if (std::min(std::min(ray.t_max[0], ray.t_max[1]), ray.t_max[2]) > ray.length) return;
-    visit(ray.code);
+    if (!visit_voxel(visit, ray.code)) return;
   }
 }
 
@@ -96,7 +110,7 @@ void walk_ray(const Grid& grid, Vec3f origin, Key origin_key, Vec3f end, Key end
   detail::RayState ray;
   ray.code = morton::encode(origin_key);
   ray.end_code = morton::encode(end_key);
-  visit(ray.code);
+  if (!detail::visit_voxel(visit, ray.code)) return;
 
   Vec3f direction = end - origin;
   const auto length = static_cast<float>(octomap_norm(direction));

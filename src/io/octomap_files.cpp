@@ -260,23 +260,48 @@ Header parse_header(ByteInput& in, const std::string& name) {
   if (!have_size) lexer.fail_at(data_line, "the header has no 'size' line (the number of nodes)");
 
   if (id == "1") id = "OcTree";  // the legacy id liboctomap still accepts
-  if (id == "OcTree" || id == "OcTreeStamped") {
-    header.color = false;
-  } else if (id == "ColorOcTree") {
-    header.color = header.format == OctoMapFormat::ot;  // a .bt file carries no colour
-  } else if (id == "OcTreeBase" || id == "CountingOcTree") {
-    lexer.fail_at(id_line, "tree type " + quote_text(id) +
-                               " is a CountingOcTree (liboctomap registers it as 'OcTreeBase'): it counts hits, it "
-                               "holds no occupancy; umbra reads the occupancy trees OcTree, OcTreeStamped and "
-                               "ColorOcTree");
-  } else {
-    lexer.fail_at(id_line, "unknown tree type " + quote_text(id) +
-                               ": umbra reads the occupancy trees liboctomap 1.9.7 knows: OcTree, OcTreeStamped, "
-                               "ColorOcTree (and the legacy id '1', an OcTree)");
-  }
+  if (const std::string problem = unreadable_tree_type(id); !problem.empty()) lexer.fail_at(id_line, problem);
+  header.color = id == "ColorOcTree" && header.format == OctoMapFormat::ot;  // a .bt file carries no colour
   header.tree_type = id;
   header.data_offset = in.offset();
   return header;
+}
+
+std::string unreadable_tree_type(const std::string& id) {
+  if (id == "OcTree" || id == "OcTreeStamped" || id == "ColorOcTree") return "";
+  if (id == "OcTreeBase" || id == "CountingOcTree") {
+    return "tree type " + quote_text(id) +
+           " is a CountingOcTree (liboctomap registers it as 'OcTreeBase'): it counts hits, it holds no occupancy; "
+           "umbra reads the occupancy trees OcTree, OcTreeStamped and ColorOcTree";
+  }
+  return "unknown tree type " + quote_text(id) +
+         ": umbra reads the occupancy trees liboctomap 1.9.7 knows: OcTree, OcTreeStamped, ColorOcTree (and the "
+         "legacy id '1', an OcTree)";
+}
+
+std::uint64_t count_tree_nodes(const Header& header, std::span<const std::uint8_t> data, const std::string& name) {
+  if (header.format == OctoMapFormat::ot) {
+    const std::size_t node_bytes = header.color ? 8 : 5;
+    if (data.size() % node_bytes != 0) {
+      throw FormatError::at_byte(name, data.size() - data.size() % node_bytes,
+                                 "the tree data ends inside a node: " + std::to_string(data.size()) +
+                                     " bytes are not a whole number of " + std::to_string(node_bytes) + "-byte " +
+                                     header.tree_type + " nodes (truncated data?)");
+    }
+    return data.size() / node_bytes;
+  }
+  if (data.size() % 2 != 0) {
+    throw FormatError::at_byte(name, data.size() - 1,
+                               "the .bt tree data has an odd number of bytes (" + std::to_string(data.size()) +
+                                   "): every node with children takes 2 (truncated data?)");
+  }
+  if (data.empty()) return 0;
+  // Every node but the root appears once as a non-zero 2-bit code in its parent's pair.
+  std::uint64_t nodes = 1;
+  for (const std::uint8_t byte : data) {
+    for (unsigned shift = 0; shift < 8; shift += 2) nodes += ((byte >> shift) & 3u) != 0 ? 1 : 0;
+  }
+  return nodes;
 }
 
 std::string resolution_text(double resolution) {
@@ -406,12 +431,15 @@ struct EncodedFile {
   octomap_io::EncodedTree tree;
 };
 
+const char* tree_id(const OccupancyMap& map, OctoMapFormat format) {
+  return format == OctoMapFormat::ot && map.has_color() ? "ColorOcTree" : "OcTree";
+}
+
 EncodedFile encode(const OccupancyMap& map, OctoMapFormat format, const std::string& what) {
   octomap_io::require_octomap_depth(map, what);
   EncodedFile file;
   file.tree = format == OctoMapFormat::bt ? octomap_io::encode_bt(map) : octomap_io::encode_ot(map);
-  const char* id = format == OctoMapFormat::ot && map.has_color() ? "ColorOcTree" : "OcTree";
-  file.header = octomap_io::header_text(format, id, file.tree.nodes, map.resolution());
+  file.header = octomap_io::header_text(format, tree_id(map, format), file.tree.nodes, map.resolution());
   return file;
 }
 
@@ -443,6 +471,35 @@ std::vector<std::uint8_t> encode_octomap(const OccupancyMap& map, OctoMapFormat 
   std::vector<std::uint8_t> bytes(file.header.begin(), file.header.end());
   bytes.insert(bytes.end(), file.tree.bytes.begin(), file.tree.bytes.end());
   return bytes;
+}
+
+OctoMapTreeData encode_octomap_tree(const OccupancyMap& map, OctoMapFormat format) {
+  EncodedFile file = encode(map, format, "encode_octomap_tree");
+  return {format, tree_id(map, format), map.resolution(), std::move(file.tree.bytes)};
+}
+
+OccupancyMap decode_octomap_tree(OctoMapFormat format, const std::string& id, double resolution,
+                                 std::span<const std::uint8_t> data, const std::string& name,
+                                 const SensorModel& sensor) {
+  sensor.validate();
+  octomap_io::Header header;
+  header.format = format;
+  header.tree_type = id == "1" ? std::string("OcTree") : id;
+  if (const std::string problem = octomap_io::unreadable_tree_type(header.tree_type); !problem.empty()) {
+    throw FormatError(name, problem);
+  }
+  header.color = header.tree_type == "ColorOcTree" && format == OctoMapFormat::ot;
+  if (!(std::isfinite(resolution) && resolution > 0.0 && std::isfinite(1.0 / resolution))) {
+    throw FormatError(name, "the resolution must be a finite number > 0 (the voxel edge in metres), got " +
+                                octomap_io::resolution_text(resolution));
+  }
+  header.resolution = resolution;
+  header.file_bytes = data.size();
+  header.data_offset = 0;
+  header.nodes = octomap_io::count_tree_nodes(header, data, name);
+  octomap_io::ByteInput in(data);
+  return format == OctoMapFormat::bt ? octomap_io::decode_bt(in, header, name, sensor)
+                                     : octomap_io::decode_ot(in, header, name, sensor);
 }
 
 void save_octomap(const OccupancyMap& map, const std::filesystem::path& path, OctoMapFormat format) {

@@ -82,6 +82,14 @@ inline constexpr std::string_view kOtFirstLine = "# Octomap OcTree file";
 /// `in` is then at the first byte of the tree. Throws FormatError with a line number.
 Header parse_header(ByteInput& in, const std::string& name);
 
+/// Why `id` is not a tree type umbra reads (a message), or empty when it is one.
+std::string unreadable_tree_type(const std::string& id);
+
+/// The number of nodes in tree data without a file header (what a header's
+/// `size` would say): .ot from its length, .bt from its child codes. Throws
+/// FormatError when the length cannot be whole nodes.
+std::uint64_t count_tree_nodes(const Header& header, std::span<const std::uint8_t> data, const std::string& name);
+
 /// Throws FormatError (at the size line) unless the header's `size` is
 /// possible for the number of bytes after the header; nothing is read.
 void check_declared_size(const Header& header, const std::string& name);

@@ -3,7 +3,8 @@
 // The format comes from ScanSourceOptions::format when it names a known
 // format, else from the file's extension (case-insensitive, after removing a
 // trailing ".bz2"): .graph is an OctoMap ScanGraph, .xyz/.dat/.txt are ASCII
-// points, .ply PLY, .pcd PCD, .bin a KITTI velodyne scan; an existing folder
+// points, .ply PLY, .pcd PCD, .bin a KITTI velodyne scan, .bag a ROS bag
+// (read in ROS builds by ros/src/rosbag_source.cpp; refused here); an existing folder
 // without one of these extensions is a TUM RGB-D sequence when it holds
 // depth/ and rgb/, KITTI velodyne scans when it holds .bin files. Telling a folder's format costs one
 // directory listing. The readers live in scan_graph_reader.cpp,
@@ -35,7 +36,7 @@ struct FormatExtension {
   std::string_view format;
 };
 
-constexpr std::array<FormatExtension, 7> kExtensions{{
+constexpr std::array<FormatExtension, 8> kExtensions{{
     {".graph", "graph"},
     {".xyz", "xyz"},
     {".dat", "xyz"},
@@ -43,9 +44,10 @@ constexpr std::array<FormatExtension, 7> kExtensions{{
     {".ply", "ply"},
     {".pcd", "pcd"},
     {".bin", "kitti"},
+    {".bag", "rosbag"},
 }};
 
-constexpr std::array<std::string_view, 6> kFormats{"graph", "xyz", "ply", "pcd", "kitti", "tum"};
+constexpr std::array<std::string_view, 7> kFormats{"graph", "xyz", "ply", "pcd", "kitti", "tum", "rosbag"};
 
 std::string lower_case(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(),
@@ -137,6 +139,12 @@ std::unique_ptr<ScanSource> open_scan_source(const std::filesystem::path& path,
       return open_tum_sequence(find_tum_association(path, options.association), options.depth_camera);
     }
     return open_tum_sequence(path, options.depth_camera);
+  }
+  if (format == "rosbag") {
+    throw std::runtime_error("cannot read " + path.string() +
+                             ": ROS bag files (.bag) are read only by umbra built with ROS 1 (Debian's ROS packages, "
+                             "listed in scripts/common.sh, present when configuring; see docs/ros.md); this build "
+                             "has no ROS support");
   }
   return open_xyz_file(path, options.origin);
 }

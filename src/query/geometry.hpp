@@ -12,6 +12,7 @@
 // axis test is the dearest (15 axes).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -47,7 +48,7 @@ inline double distance_squared(Vec3d p, const Aabb& box) {
 inline double farthest_distance_squared(Vec3d p, const Aabb& box) {
   double sum = 0.0;
   for (int axis = 0; axis < 3; ++axis) {
-    const double d = std::fmax(std::fabs(p[axis] - box.min[axis]), std::fabs(p[axis] - box.max[axis]));
+    const double d = std::max(std::fabs(p[axis] - box.min[axis]), std::fabs(p[axis] - box.max[axis]));
     sum += d * d;
   }
   return sum;
@@ -95,6 +96,9 @@ struct FrustumGeometry {
   /// exact near the boundary (a margin keeps it safe): callers resolve
   /// "partly" down to single points with contains().
   [[nodiscard]] Overlap overlap(const Aabb& box) const;
+  /// contains(point), deciding with the side planes and the squared range
+  /// where the margin allows and with contains() only near the boundary.
+  [[nodiscard]] bool contains_quickly(Vec3d point) const;
 
   Frustum frustum;
   Vec3d f, l, u;

@@ -961,5 +961,110 @@ TEST(OctoMapMalformed, FilesThatCannotBeOpened) {
   }
 }
 
+// --- tree data without the header (octomap_msgs/Octomap's `data`) ------------------------
+
+/// liboctomap's writeBinaryData / writeData: the tree without the file header.
+Bytes octomap_bt_data(octomap::OcTree& tree) {
+  std::ostringstream out;
+  EXPECT_TRUE(tree.writeBinaryData(out));
+  return to_bytes(out.str());
+}
+
+template <typename Tree>
+Bytes octomap_ot_data(const Tree& tree) {
+  std::ostringstream out;
+  EXPECT_TRUE(tree.writeData(out));
+  return to_bytes(out.str());
+}
+
+/// The FormatError message decoding tree data gives; a test failure if it decodes.
+std::string tree_data_error(OctoMapFormat format, const std::string& id, double resolution, const Bytes& data) {
+  try {
+    (void)decode_octomap_tree(format, id, resolution, data, "msg");
+  } catch (const FormatError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected a FormatError, but the data was read";
+  return "";
+}
+
+TEST(OctoMapTreeData, EncodedAsLiboctomapWritesItsData) {
+  for (const bool color : {false, true}) {
+    const OccupancyMap map = random_map(41, color);
+    const OctoMapTreeData bt = encode_octomap_tree(map, OctoMapFormat::bt);
+    EXPECT_EQ(bt.id, "OcTree");
+    EXPECT_EQ(bt.resolution, map.resolution());
+    const auto bt_tree = octomap_read_bt(encode_octomap(map, OctoMapFormat::bt));
+    EXPECT_EQ(bt.data, octomap_bt_data(*bt_tree));
+
+    const OctoMapTreeData ot = encode_octomap_tree(map, OctoMapFormat::ot);
+    EXPECT_EQ(ot.id, color ? "ColorOcTree" : "OcTree");
+    const auto ot_tree = octomap_read_ot(encode_octomap(map, OctoMapFormat::ot));
+    ASSERT_NE(ot_tree, nullptr);
+    if (color) {
+      EXPECT_EQ(ot.data, octomap_ot_data(dynamic_cast<octomap::ColorOcTree&>(*ot_tree)));
+    } else {
+      EXPECT_EQ(ot.data, octomap_ot_data(dynamic_cast<octomap::OcTree&>(*ot_tree)));
+    }
+  }
+  EXPECT_THROW((void)encode_octomap_tree(OccupancyMap(0.1, 15), OctoMapFormat::bt), std::invalid_argument);
+}
+
+TEST(OctoMapTreeData, DecodesLiboctomapsDataLikeItsFiles) {
+  octomap::OcTree tree(0.1);
+  insert_into_octomap(tree, office_scans(3));
+  const OccupancyMap from_ot = decode_octomap_tree(OctoMapFormat::ot, "OcTree", 0.1, octomap_ot_data(tree));
+  expect_same_leaves(octomap_leaves(tree), umbra_leaves(from_ot));
+  EXPECT_EQ(from_ot.resolution(), 0.1);
+
+  // Unpruned, not maximum likelihood: the data as a ROS node with this tree would send it.
+  const Bytes bt = octomap_bt_data(tree);
+  const OccupancyMap from_bt = decode_octomap_tree(OctoMapFormat::bt, "OcTree", 0.1, bt);
+  octomap::OcTree read_back(0.1);  // liboctomap's own reading of that data
+  std::istringstream in(to_text(bt));
+  read_back.readBinaryData(in);
+  expect_same_leaves(octomap_leaves(read_back), umbra_leaves(from_bt));
+  EXPECT_FALSE(umbra_leaves(from_bt).empty());
+
+  octomap::ColorOcTree color_tree(0.1);
+  insert_into_octomap(color_tree, office_scans(2));
+  for (auto it = color_tree.begin_leafs(), end = color_tree.end_leafs(); it != end; ++it) it->setColor(10, 20, 30);
+  color_tree.updateInnerOccupancy();
+  const OccupancyMap coloured = decode_octomap_tree(OctoMapFormat::ot, "ColorOcTree", 0.1, octomap_ot_data(color_tree));
+  EXPECT_TRUE(coloured.has_color());
+  expect_same_leaves(octomap_leaves(color_tree), umbra_leaves(coloured));
+
+  // An empty tree is no bytes.
+  EXPECT_TRUE(umbra_leaves(decode_octomap_tree(OctoMapFormat::bt, "OcTree", 0.1, Bytes{})).empty());
+  EXPECT_TRUE(encode_octomap_tree(OccupancyMap(0.1), OctoMapFormat::ot).data.empty());
+}
+
+TEST(OctoMapTreeData, BadDataIsAClearError) {
+  octomap::OcTree tree(0.1);
+  insert_into_octomap(tree, office_scans(1));
+  const Bytes ot = octomap_ot_data(tree);
+  const Bytes bt = octomap_bt_data(tree);
+
+  std::string message = tree_data_error(OctoMapFormat::ot, "OcTree", 0.1, Bytes(ot.begin(), ot.end() - 2));
+  EXPECT_TRUE(contains(message, "msg: byte " + std::to_string((ot.size() - 2) / 5 * 5))) << message;
+  EXPECT_TRUE(contains(message, "not a whole number of 5-byte OcTree nodes")) << message;
+  message = tree_data_error(OctoMapFormat::ot, "OcTree", 0.1, Bytes(ot.begin(), ot.end() - 5));
+  EXPECT_TRUE(contains(message, "msg: byte")) << message;  // whole nodes, but the tree is cut short
+
+  message = tree_data_error(OctoMapFormat::bt, "OcTree", 0.1, Bytes(bt.begin(), bt.end() - 1));
+  EXPECT_TRUE(contains(message, "odd number of bytes")) << message;
+  message = tree_data_error(OctoMapFormat::bt, "OcTree", 0.1, Bytes(bt.begin(), bt.end() - 2));
+  EXPECT_TRUE(contains(message, "msg: byte")) << message;
+
+  message = tree_data_error(OctoMapFormat::bt, "CountingOcTree", 0.1, bt);
+  EXPECT_TRUE(contains(message, "CountingOcTree")) << message;
+  message = tree_data_error(OctoMapFormat::ot, "OcTree\nsize 3", 0.1, ot);
+  EXPECT_TRUE(contains(message, "unknown tree type")) << message;
+  for (const double resolution : {0.0, -0.1, std::numeric_limits<double>::quiet_NaN(), 1e-320}) {
+    message = tree_data_error(OctoMapFormat::ot, "OcTree", resolution, ot);
+    EXPECT_TRUE(contains(message, "resolution must be")) << message;
+  }
+}
+
 }  // namespace
 }  // namespace umbra

@@ -9,7 +9,8 @@
 namespace umbra::test {
 
 DenseGrid::DenseGrid(double resolution, int depth_levels, float clamp_min, float clamp_max)
-    : resolution_(resolution),
+    : rays_(resolution, depth_levels),
+      resolution_(resolution),
       depth_levels_(depth_levels),
       size_(1u << depth_levels),
       offset_(std::int64_t{1} << (depth_levels - 1)),
@@ -63,7 +64,12 @@ void DenseGrid::set(Key key, float value) {
   values_[index(key)] = std::min(std::max(value, clamp_min_), clamp_max_) + 0.0f;
 }
 
-bool DenseGrid::key_of(Vec3f point, Key& key) const {
+OctoMapRays::OctoMapRays(double resolution, int depth_levels)
+    : resolution_(resolution),
+      offset_(std::int64_t{1} << (depth_levels - 1)),
+      size_(std::int64_t{1} << depth_levels) {}
+
+bool OctoMapRays::key_of(Vec3f point, Key& key) const {
   for (int axis = 0; axis < 3; ++axis) {
     const double scaled = std::floor((1.0 / resolution_) * static_cast<double>(point[axis]));
     if (!(scaled >= -static_cast<double>(offset_) && scaled < static_cast<double>(offset_))) return false;
@@ -72,11 +78,11 @@ bool DenseGrid::key_of(Vec3f point, Key& key) const {
   return true;
 }
 
-double DenseGrid::centre(std::uint32_t k) const {
+double OctoMapRays::centre(std::uint32_t k) const {
   return (static_cast<double>(static_cast<std::int64_t>(k) - offset_) + 0.5) * resolution_;
 }
 
-bool DenseGrid::ray_keys(Vec3f origin, Vec3f end, std::vector<Key>& keys) const {
+bool OctoMapRays::ray_keys(Vec3f origin, Vec3f end, std::vector<Key>& keys) const {
   keys.clear();
   Key key_origin;
   Key key_end;
@@ -125,7 +131,7 @@ bool DenseGrid::ray_keys(Vec3f origin, Vec3f end, std::vector<Key>& keys) const 
     }
     current[dim] += step[dim];
     t_max[dim] += t_delta[dim];
-    if (current[dim] < 0 || current[dim] >= static_cast<std::int64_t>(size_)) return true;
+    if (current[dim] < 0 || current[dim] >= size_) return true;
     const Key k{static_cast<std::uint32_t>(current[0]), static_cast<std::uint32_t>(current[1]),
                 static_cast<std::uint32_t>(current[2])};
     if (k == key_end) return true;

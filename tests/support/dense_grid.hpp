@@ -17,6 +17,25 @@
 
 namespace umbra::test {
 
+/// OctoMap's computeRayKeys written out key by key, for grids of any depth
+/// (DenseGrid uses it; tests of large maps use it alone).
+class OctoMapRays {
+ public:
+  OctoMapRays(double resolution, int depth_levels);
+  /// The voxels computeRayKeys visits from origin to end (end voxel
+  /// excluded); false when either end is outside the grid.
+  bool ray_keys(Vec3f origin, Vec3f end, std::vector<Key>& keys) const;
+  /// OctoMap's coordToKeyChecked.
+  bool key_of(Vec3f point, Key& key) const;
+  /// OctoMap's keyToCoord along one axis.
+  [[nodiscard]] double centre(std::uint32_t k) const;
+
+ private:
+  double resolution_;
+  std::int64_t offset_;
+  std::int64_t size_;
+};
+
 struct DenseScanOptions {
   bool discrete = false;
   double max_range = -1.0;
@@ -33,7 +52,9 @@ class DenseGrid {
 
   /// The voxels OctoMap's computeRayKeys visits from origin to end (end voxel
   /// excluded); false when either end is outside the grid.
-  [[nodiscard]] bool ray_keys(Vec3f origin, Vec3f end, std::vector<Key>& keys) const;
+  [[nodiscard]] bool ray_keys(Vec3f origin, Vec3f end, std::vector<Key>& keys) const {
+    return rays_.ray_keys(origin, end, keys);
+  }
   /// OctoMap's insertPointCloud on this grid; with `colors` (one per point),
   /// every point that gives a hit also blends its colour into its voxel.
   void insert_scan(Vec3f origin, std::span<const Vec3f> points, const DenseScanOptions& options,
@@ -59,9 +80,10 @@ class DenseGrid {
   [[nodiscard]] std::size_t index(Key key) const {
     return (std::size_t{key.z} * size_ + key.y) * size_ + key.x;
   }
-  [[nodiscard]] bool key_of(Vec3f point, Key& key) const;
-  [[nodiscard]] double centre(std::uint32_t k) const;
+  [[nodiscard]] bool key_of(Vec3f point, Key& key) const { return rays_.key_of(point, key); }
+  [[nodiscard]] double centre(std::uint32_t k) const { return rays_.centre(k); }
 
+  OctoMapRays rays_;
   double resolution_;
   int depth_levels_;
   std::uint32_t size_;

@@ -31,6 +31,10 @@
 // holds eight equal childless siblings that OctoMap did not merge, the map
 // comes back with auto-pruning off so that it is written back unchanged.
 //
+// Tree data (encode_octomap_tree / decode_octomap_tree): the same trees
+// without the text header, as liboctomap's writeBinaryData / writeData give
+// them and as ROS's octomap_msgs/Octomap carries them in `data`.
+//
 // Sensor model: OctoMap files store only `res` and `size`. A loaded map has
 // OctoMap's defaults (hit 0.7, miss 0.4, clamping 0.1192..0.971, thresholds
 // 0.5) or the SensorModel passed in; .bt leaves take that model's clamping
@@ -106,6 +110,28 @@ struct OctoMapFileInfo {
 /// The file `save_octomap` would write, in memory. Throws
 /// std::invalid_argument unless map.depth_levels() == 16.
 [[nodiscard]] std::vector<std::uint8_t> encode_octomap(const OccupancyMap& map, OctoMapFormat format);
+
+/// The tree of an OctoMap file without the file's text header: the bytes
+/// liboctomap's writeBinaryData (.bt) or writeData (.ot) write, which is
+/// what a ROS octomap_msgs/Octomap message carries in `data` (with `id`,
+/// `resolution` and `binary` beside it).
+struct OctoMapTreeData {
+  OctoMapFormat format = OctoMapFormat::bt;
+  std::string id;             ///< the tree type: "OcTree", or "ColorOcTree" for an .ot of a map with colour
+  double resolution = 0.0;    ///< metres
+  std::vector<std::uint8_t> data;
+};
+
+/// The tree data encode_octomap would write after its header. Throws
+/// std::invalid_argument unless map.depth_levels() == 16.
+[[nodiscard]] OctoMapTreeData encode_octomap_tree(const OccupancyMap& map, OctoMapFormat format);
+
+/// Reads tree data without a file header (the node count a file's header
+/// would give is taken from the data). `id` is checked as a file's header
+/// id is; errors name `name` and the byte offset within `data`.
+[[nodiscard]] OccupancyMap decode_octomap_tree(OctoMapFormat format, const std::string& id, double resolution,
+                                               std::span<const std::uint8_t> data,
+                                               const std::string& name = "<memory>", const SensorModel& sensor = {});
 
 /// Writes `map` as a .bt or .ot file, atomically (temporary file, flushed,
 /// renamed over `path`). Throws std::invalid_argument for maps that are not

@@ -26,6 +26,11 @@
 //          or the association file itself with format "tum"; every row
 //          whose depth and colour images exist is one scan, back-projected
 //          with ScanSourceOptions::depth_camera, origin = the camera position.
+//   rosbag ROS 1 bag, .bag: PointCloud2 messages moved into the frame
+//          ScanSourceOptions::frame with the bag's TF. Read only by umbra
+//          built with ROS (ros/include/umbra_ros/rosbag_source.hpp, used by
+//          the umbra program); open_scan_source itself refuses it with a
+//          message saying so.
 // See ply_file.hpp, pcd_file.hpp, kitti_sequence.hpp and tum_sequence.hpp.
 //
 // Errors: malformed files throw umbra::FormatError naming the file and the
@@ -76,7 +81,7 @@ struct DepthCamera {
 };
 
 struct ScanSourceOptions {
-  std::string format;  ///< "graph", "xyz", "ply", "pcd", "kitti", "tum"; empty: chosen by the name
+  std::string format;  ///< "graph", "xyz", "ply", "pcd", "kitti", "tum", "rosbag"; empty: chosen by the name
   Vec3f origin{};      ///< sensor origin for formats that carry none (xyz, ply, pcd without viewpoint, lone .bin)
   /// kitti: the poses file (KITTI odometry: 12 numbers per line, the 3x4
   /// row-major pose of camera 0 in the world, one line per scan).
@@ -89,6 +94,10 @@ struct ScanSourceOptions {
   /// taken relative to the folder); empty: the folder's one *assoc*.txt.
   std::filesystem::path association;
   DepthCamera depth_camera;  ///< tum: intrinsics and depth scale
+  /// rosbag: the PointCloud2 topics to read; empty: every PointCloud2 topic.
+  std::vector<std::string> topics;
+  /// rosbag: the map frame the clouds are moved into with the bag's TF.
+  std::string frame = "map";
 };
 
 /// Opens `path`; throws std::runtime_error / FormatError as described above.
@@ -98,7 +107,7 @@ std::unique_ptr<ScanSource> open_scan_source(const std::filesystem::path& path,
 /// The format name open_scan_source would use for `path`, or throws
 /// std::invalid_argument listing the known extensions. By name (after
 /// removing a trailing .bz2, any case): .graph graph; .xyz .dat .txt xyz;
-/// .ply ply; .pcd pcd; .bin kitti. Otherwise an existing folder holding
+/// .ply ply; .pcd pcd; .bin kitti; .bag rosbag. Otherwise an existing folder holding
 /// depth/ and rgb/ is tum, one holding .bin files is kitti. A known
 /// `format` wins over all of this.
 std::string scan_format_for(const std::filesystem::path& path, const std::string& format = "");

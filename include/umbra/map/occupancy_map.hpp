@@ -40,6 +40,7 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/color.hpp"
@@ -49,6 +50,7 @@
 #include "umbra/core/vec3.hpp"
 #include "umbra/map/insert_options.hpp"
 #include "umbra/query/collision.hpp"
+#include "umbra/query/information_gain.hpp"
 #include "umbra/query/predicate.hpp"
 #include "umbra/query/query_range.hpp"
 #include "umbra/query/shapes.hpp"
@@ -228,6 +230,17 @@ class OccupancyMap {
   /// stored). Bad arguments throw as for cast_ray.
   bool cast_ray_octomap(Vec3f origin, Vec3f direction, Vec3f& end, bool ignore_unknown = false,
                         double max_range = -1.0) const;
+  // --- information gain (query/information_gain.hpp) ------------------------
+  /// The unknown finest voxels a sensor with this field of view would see:
+  /// centre in the frustum, no occupied voxel on the ray from its origin.
+  /// Throws std::invalid_argument for a bad frustum or options,
+  /// std::out_of_range when the frustum's origin lies outside the map.
+  [[nodiscard]] GainResult information_gain(const Frustum& frustum, const GainOptions& options = {}) const;
+  /// The same for many poses: result[i] is the gain of frustums[i]. Poses
+  /// run on options.threads threads; the map is held for reading one pose
+  /// at a time. Every frustum is checked before any is answered.
+  [[nodiscard]] std::vector<GainResult> information_gain(std::span<const Frustum> frustums,
+                                                         const GainOptions& options = {}) const;
 
   // --- pruning ------------------------------------------------------------
   /// On by default: eight equal children are merged into their parent. With

@@ -1,0 +1,49 @@
+// open_rosbag: a ScanSource over a ROS 1 bag file (.bag), in ROS builds only.
+//
+// Every sensor_msgs/PointCloud2 message on the chosen topics (all
+// PointCloud2 topics when none is named), in the bag's time order, is one
+// scan: decoded by decode_point_cloud2 and moved into the map frame with the
+// transform tf2 gives from the cloud's frame to `frame` at the cloud's
+// stamp, from every transform on /tf and /tf_static in the bag (tf2
+// interpolates between them); the sensor origin is the cloud frame's origin.
+// A cloud already in `frame` needs no transform. A cloud for which tf2 has
+// no transform (before the first or after the last one on its chain) is
+// skipped and counted; if every cloud is skipped, next() throws with tf2's
+// reason.
+//
+// Cost: opening reads every /tf and /tf_static message of the bag into a
+// tf2 buffer (memory: all transforms; small beside the clouds); then one
+// cloud at a time is read and decoded.
+//
+// Errors: a file that is not a bag, or a bag without the named topics or
+// without any PointCloud2 topic, throws umbra::FormatError naming the file
+// (and the topics it has); a malformed cloud throws FormatError naming the
+// message index, topic and what is wrong.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "umbra/io/scan_source.hpp"
+
+namespace umbra::ros_io {
+
+struct RosbagOptions {
+  std::vector<std::string> topics;  ///< PointCloud2 topics; empty: every PointCloud2 topic in the bag
+  std::string frame = "map";        ///< the map frame (a leading '/' is ignored)
+};
+
+class RosbagScanSource : public ScanSource {
+ public:
+  /// Clouds skipped because tf2 had no transform to the map frame at their time.
+  [[nodiscard]] virtual std::size_t skipped_clouds() const = 0;
+  /// tf2's reason for the first skipped cloud (empty if none).
+  [[nodiscard]] virtual const std::string& first_skip_reason() const = 0;
+};
+
+std::unique_ptr<RosbagScanSource> open_rosbag(const std::filesystem::path& path, const RosbagOptions& options = {});
+
+}  // namespace umbra::ros_io

@@ -1,0 +1,186 @@
+// MapServer: see map_server.hpp.
+#include "map_server.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <vector>
+
+#include "cloud_message.hpp"
+#include "map_messages.hpp"
+
+namespace umbra::ros_io {
+namespace {
+
+constexpr std::uint32_t kCloudQueue = 5;  // as octomap_server: clouds waiting for their transform
+/// ~clear_bbx sets voxels one by one (the map has no whole-node setter): boxes with more known voxels than this
+/// (about a minute of work) are refused rather than stalling the node.
+constexpr std::uint64_t kMaxClearedVoxels = std::uint64_t{1} << 26;
+
+/// Keys from..to (inclusive) on each axis.
+struct KeyBox {
+  Key min;
+  Key max;
+};
+
+/// The voxel keys of the box [a, b] (either corner order), clamped to the map.
+KeyBox key_box(const OccupancyMap& map, const geometry_msgs::Point& a, const geometry_msgs::Point& b) {
+  const double half = map.grid().half_extent();
+  const double inside = half - map.resolution() * 0.5;  // a coordinate whose voxel is in the map
+  auto axis_key = [&](double c) {
+    return map.key(Vec3d{std::clamp(c, -inside, inside), 0.0, 0.0}).x;
+  };
+  const std::array<double, 3> lo{std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
+  const std::array<double, 3> hi{std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
+  KeyBox box;
+  for (int axis = 0; axis < 3; ++axis) {
+    box.min[axis] = axis_key(lo[static_cast<std::size_t>(axis)]);
+    box.max[axis] = axis_key(hi[static_cast<std::size_t>(axis)]);
+  }
+  return box;
+}
+
+}  // namespace
+
+MapServer::MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, ServerSettings settings, OccupancyMap map)
+    : settings_(std::move(settings)),
+      map_(std::move(map)),
+      tf_buffer_(ros::Duration(60.0)),
+      tf_listener_(tf_buffer_, node),
+      cloud_subscriber_(node, "cloud_in", kCloudQueue),
+      cloud_filter_(cloud_subscriber_, tf_buffer_, settings_.frame, kCloudQueue, node) {
+  map_.set_auto_prune(settings_.compress_map);
+  cloud_filter_.registerCallback(&MapServer::insert_cloud, this);
+  cloud_filter_.registerFailureCallback(
+      [](const sensor_msgs::PointCloud2::ConstPtr& cloud, tf2_ros::filter_failure_reasons::FilterFailureReason) {
+        ROS_WARN_THROTTLE(5.0, "umbra_server: dropped a cloud in frame '%s' at %.3f: no transform to the map frame",
+                          cloud->header.frame_id.c_str(), cloud->header.stamp.toSec());
+      });
+  const bool latch = settings_.latch;
+  binary_publisher_ = node.advertise<octomap_msgs::Octomap>("octomap_binary", 1, latch);
+  full_publisher_ = node.advertise<octomap_msgs::Octomap>("octomap_full", 1, latch);
+  occupied_publisher_ = node.advertise<visualization_msgs::MarkerArray>("occupied_cells_vis_array", 1, latch);
+  free_publisher_ = node.advertise<visualization_msgs::MarkerArray>("free_cells_vis_array", 1, latch);
+  centers_publisher_ = node.advertise<sensor_msgs::PointCloud2>("octomap_point_cloud_centers", 1, latch);
+  binary_service_ = node.advertiseService("octomap_binary", &MapServer::get_binary, this);
+  full_service_ = node.advertiseService("octomap_full", &MapServer::get_full, this);
+  reset_service_ = private_node.advertiseService("reset", &MapServer::reset, this);
+  clear_bbx_service_ = private_node.advertiseService("clear_bbx", &MapServer::clear_bbx, this);
+}
+
+bool MapServer::wanted(const ros::Publisher& publisher) const {
+  return settings_.latch || publisher.getNumSubscribers() > 0;
+}
+
+void MapServer::insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
+  const std::string name = "cloud in frame '" + cloud->header.frame_id + "' at " + std::to_string(cloud->header.stamp.toSec());
+  try {
+    const std::string cloud_frame = tf2_frame(cloud->header.frame_id);
+    RigidTransform to_map;
+    if (cloud_frame != settings_.frame) {
+      to_map = to_rigid_transform(tf_buffer_.lookupTransform(settings_.frame, cloud_frame, cloud->header.stamp).transform);
+    }
+    cloud_to_scan(*cloud, to_map, decoded_, scan_, name);
+    if (std::isfinite(settings_.pointcloud_min_z) || std::isfinite(settings_.pointcloud_max_z)) {
+      // Keep points strictly inside (min_z, max_z) in the map frame; NaN points go too.
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < scan_.points.size(); ++i) {
+        const float z = scan_.points[i].z;
+        if (!(z >= settings_.pointcloud_min_z && z <= settings_.pointcloud_max_z)) continue;
+        scan_.points[kept] = scan_.points[i];
+        if (!scan_.colors.empty()) scan_.colors[kept] = scan_.colors[i];
+        ++kept;
+      }
+      scan_.points.resize(kept);
+      if (!scan_.colors.empty()) scan_.colors.resize(kept);
+    }
+    const InsertStats stats = settings_.color && !scan_.colors.empty()
+                                  ? map_.insert_point_cloud(scan_.origin, scan_.points, scan_.colors, settings_.insert)
+                                  : map_.insert_point_cloud(scan_.origin, scan_.points, settings_.insert);
+    if (stats.out_of_bounds > 0) {
+      ROS_WARN_THROTTLE(5.0, "umbra_server: %zu points of a cloud lie outside the map and were skipped", stats.out_of_bounds);
+    }
+  } catch (const std::exception& e) {
+    ROS_ERROR("umbra_server: cannot insert the %s: %s", name.c_str(), e.what());
+    return;
+  }
+  publish_all(cloud->header.stamp);
+}
+
+void MapServer::publish_all(const ros::Time& stamp) {
+  if (wanted(binary_publisher_)) binary_publisher_.publish(octomap_message(map_, OctoMapFormat::bt, settings_.frame, stamp));
+  if (wanted(full_publisher_)) full_publisher_.publish(octomap_message(map_, OctoMapFormat::ot, settings_.frame, stamp));
+  const bool free_cells = settings_.cells.free_cells && wanted(free_publisher_);
+  if (wanted(occupied_publisher_) || wanted(centers_publisher_) || free_cells) {
+    CellStyle style = settings_.cells;
+    style.free_cells = free_cells;
+    const CellMessages cells = cell_messages(map_, style, settings_.frame, stamp);
+    if (wanted(occupied_publisher_)) occupied_publisher_.publish(cells.occupied);
+    if (wanted(centers_publisher_)) centers_publisher_.publish(cells.centers);
+    if (free_cells) free_publisher_.publish(cells.free);
+  }
+}
+
+bool MapServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  map_.clear();
+  ROS_INFO("umbra_server: map cleared");
+  publish_all(ros::Time::now());
+  return true;
+}
+
+bool MapServer::clear_bbx(octomap_msgs::BoundingBoxQuery::Request& request, octomap_msgs::BoundingBoxQuery::Response&) {
+  const auto finite = [](const geometry_msgs::Point& p) {
+    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+  };
+  if (!finite(request.min) || !finite(request.max)) {
+    ROS_ERROR("umbra_server: ~clear_bbx needs finite corners");
+    return false;
+  }
+  const KeyBox box = key_box(map_, request.min, request.max);
+  const float free_value = map_.sensor_model().clamp_min_log_odds();
+  // First the parts of known leaves inside the box (a pruned leaf may reach outside it), then set them.
+  std::vector<KeyBox> parts;
+  map_.for_each_leaf([&](const Node& leaf) {
+    if (leaf.state == OccupancyState::unknown || leaf.log_odds == free_value) return;
+    const std::uint32_t last = (std::uint32_t{1} << leaf.depth) - 1u;
+    KeyBox part;
+    for (int axis = 0; axis < 3; ++axis) {
+      part.min[axis] = std::max(leaf.key[axis], box.min[axis]);
+      part.max[axis] = std::min(leaf.key[axis] + last, box.max[axis]);
+      if (part.min[axis] > part.max[axis]) return;
+    }
+    parts.push_back(part);
+  });
+  std::uint64_t voxels = 0;
+  for (const KeyBox& part : parts) {
+    voxels += std::uint64_t{part.max.x - part.min.x + 1} * (part.max.y - part.min.y + 1) * (part.max.z - part.min.z + 1);
+  }
+  if (voxels > kMaxClearedVoxels) {
+    ROS_ERROR("umbra_server: ~clear_bbx refused: the box holds %llu known voxels to set, more than %llu; clear smaller "
+              "boxes", static_cast<unsigned long long>(voxels), static_cast<unsigned long long>(kMaxClearedVoxels));
+    return false;
+  }
+  for (const KeyBox& part : parts) {
+    for (std::uint32_t x = part.min.x; x <= part.max.x; ++x) {
+      for (std::uint32_t y = part.min.y; y <= part.max.y; ++y) {
+        for (std::uint32_t z = part.min.z; z <= part.max.z; ++z) map_.set_log_odds(Key{x, y, z}, free_value);
+      }
+    }
+  }
+  ROS_INFO("umbra_server: cleared the box (%g %g %g)..(%g %g %g): %zu leaves changed", request.min.x, request.min.y,
+           request.min.z, request.max.x, request.max.y, request.max.z, parts.size());
+  publish_all(ros::Time::now());
+  return true;
+}
+
+bool MapServer::get_binary(octomap_msgs::GetOctomap::Request&, octomap_msgs::GetOctomap::Response& response) {
+  response.map = octomap_message(map_, OctoMapFormat::bt, settings_.frame, ros::Time::now());
+  return true;
+}
+
+bool MapServer::get_full(octomap_msgs::GetOctomap::Request&, octomap_msgs::GetOctomap::Response& response) {
+  response.map = octomap_message(map_, OctoMapFormat::ot, settings_.frame, ros::Time::now());
+  return true;
+}
+
+}  // namespace umbra::ros_io

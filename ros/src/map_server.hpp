@@ -1,0 +1,90 @@
+// MapServer: the umbra_server node, a drop-in for octomap_server.
+//
+// Subscribes to `cloud_in` (sensor_msgs/PointCloud2); a tf2 message filter
+// holds each cloud until the transform from its frame to ~frame_id at its
+// stamp is known, then the cloud is decoded, moved into the map frame,
+// cut to (pointcloud_min_z, pointcloud_max_z) and inserted with umbra's
+// integrator from the sensor frame's origin. After every cloud (and after a
+// reset or a box clearing) it publishes, with the cloud's stamp:
+//   octomap_binary   octomap_msgs/Octomap, .bt tree data (free/occupied)
+//   octomap_full     octomap_msgs/Octomap, .ot tree data (log-odds)
+//   occupied_cells_vis_array   visualization_msgs/MarkerArray
+//   free_cells_vis_array       (with ~publish_free_space)
+//   octomap_point_cloud_centers  sensor_msgs/PointCloud2
+// latched (~latch, default true) or only while someone subscribes.
+// Services: octomap_binary and octomap_full (octomap_msgs/GetOctomap),
+// ~reset (std_srvs/Empty: forget everything), ~clear_bbx
+// (octomap_msgs/BoundingBoxQuery: every known voxel in the box becomes
+// free at the clamping minimum; unknown voxels stay unknown).
+//
+// Threads: ROS callbacks run one at a time (ros::spin); each insertion
+// uses ~threads cores inside umbra.
+//
+// Cost per cloud: the insertion, then one pass over the map per published
+// message kind (as octomap_server). Clearing a box sets each known voxel in
+// it that is not already at the clamping minimum, one by one (boxes of more
+// than 2^26 such voxels are refused with an error).
+#pragma once
+
+#include <message_filters/subscriber.h>
+#include <octomap_msgs/BoundingBoxQuery.h>
+#include <octomap_msgs/GetOctomap.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <std_srvs/Empty.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <memory>
+
+#include "server_settings.hpp"
+#include "umbra/io/scan_source.hpp"
+#include "umbra/map/occupancy_map.hpp"
+#include "umbra_ros/point_cloud2.hpp"
+
+namespace umbra::ros_io {
+
+class MapServer {
+ public:
+  /// Advertises and subscribes. `map` is the starting map (empty, or loaded from a file).
+  MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, ServerSettings settings, OccupancyMap map);
+
+  /// Publishes the current map (at start-up, for a loaded map).
+  void publish_all(const ros::Time& stamp);
+
+ private:
+  void insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud);
+  bool reset(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
+  bool clear_bbx(octomap_msgs::BoundingBoxQuery::Request& request, octomap_msgs::BoundingBoxQuery::Response& response);
+  bool get_binary(octomap_msgs::GetOctomap::Request& request, octomap_msgs::GetOctomap::Response& response);
+  bool get_full(octomap_msgs::GetOctomap::Request& request, octomap_msgs::GetOctomap::Response& response);
+  [[nodiscard]] bool wanted(const ros::Publisher& publisher) const;
+
+  // --- Unknown-aware collision check service: RESERVED ---------------------------------------
+  // A service ~check_collision (a box, sphere or segment with a radius in the map frame; answer:
+  // free or blocked, with unknown space counting as blocked unless the request says otherwise)
+  // belongs here. It will call the query layer's is_free, which is being written separately;
+  // umbra_server implements no collision query of its own. docs/ros.md describes the plan.
+  // ----------------------------------------------------------------------------------------------
+
+  ServerSettings settings_;
+  OccupancyMap map_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  message_filters::Subscriber<sensor_msgs::PointCloud2> cloud_subscriber_;
+  tf2_ros::MessageFilter<sensor_msgs::PointCloud2> cloud_filter_;
+  ros::Publisher binary_publisher_;
+  ros::Publisher full_publisher_;
+  ros::Publisher occupied_publisher_;
+  ros::Publisher free_publisher_;
+  ros::Publisher centers_publisher_;
+  ros::ServiceServer binary_service_;
+  ros::ServiceServer full_service_;
+  ros::ServiceServer reset_service_;
+  ros::ServiceServer clear_bbx_service_;
+  DecodedCloud decoded_;
+  Scan scan_;
+};
+
+}  // namespace umbra::ros_io

@@ -1,0 +1,49 @@
+// umbra_server's parameters: octomap_server's names and meanings, plus
+// umbra's integrator settings. Read once at start-up from the node's
+// private namespace (~name); docs/ros.md has the table.
+//
+// octomap_server parameters umbra_server reads: frame_id, resolution,
+// sensor_model/{hit,miss,min,max,max_range}, pointcloud_{min,max}_z,
+// occupancy_{min,max}_z, height_map, color_factor, color/{r,g,b,a},
+// color_free/{r,g,b,a}, publish_free_space, latch, compress_map. Those it
+// does not implement (filter_ground, filter_speckles, ground_filter/*,
+// base_frame_id, incremental_2D_projection, the projected 2D map) are
+// reported by name when set, never silently ignored.
+//
+// umbra's own: integrator (simple | discrete | fast), clear_depth,
+// fine_steps, threads, keep_colors (keep an RGB per voxel from clouds with
+// rgb; then the full map is a ColorOcTree).
+#pragma once
+
+#include <ros/node_handle.h>
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "map_messages.hpp"
+#include "umbra/core/log_odds.hpp"
+#include "umbra/map/insert_options.hpp"
+
+namespace umbra::ros_io {
+
+struct ServerSettings {
+  std::string frame = "map";  ///< frame_id, without a leading '/'
+  double resolution = 0.05;
+  /// octomap_server's defaults (the clamping range differs slightly from liboctomap's 0.1192..0.971).
+  SensorModel sensor{0.7, 0.4, 0.12, 0.97};
+  double pointcloud_min_z = -std::numeric_limits<double>::infinity();
+  double pointcloud_max_z = std::numeric_limits<double>::infinity();
+  CellStyle cells;
+  bool latch = true;
+  bool compress_map = true;  ///< prune after every cloud (umbra's automatic pruning)
+  bool color = false;  ///< keep_colors
+  InsertOptions insert;  ///< max_range from sensor_model/max_range; integrator, clear_depth, fine_steps, threads
+  /// octomap_server parameters that are set but not implemented, as "name: what happens instead".
+  std::vector<std::string> ignored;
+};
+
+/// Reads and checks the parameters; throws std::invalid_argument naming the parameter and its value.
+ServerSettings read_settings(const ros::NodeHandle& private_node);
+
+}  // namespace umbra::ros_io

@@ -1,0 +1,421 @@
+#include "query/gain_counter.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "integrate/ray_walker.hpp"
+
+namespace umbra::detail {
+namespace {
+
+double binary_entropy_bits(float log_odds) {
+  const double p = probability(log_odds);
+  if (p <= 0.0 || p >= 1.0) return 0.0;
+  return -(p * std::log2(p) + (1.0 - p) * std::log2(1.0 - p));
+}
+
+/// A float point widened to double, through a volatile copy: GCC 12.2 at
+/// -O2 and above (Debian 12's compiler) drops the float rounding of x and y
+/// when it sees a double -> float -> double round trip of a point (its SLP
+/// vectorizer; five-line reproducer in docs/design.md). The rays start and
+/// end at float points, and their keys and the image's geometry must use
+/// exactly those.
+Vec3d widen(Vec3f p) {
+  const volatile float x = p.x;
+  const volatile float y = p.y;
+  const volatile float z = p.z;
+  return {double(x), double(y), double(z)};
+}
+
+/// Key of child `slot` (x = 1, y = 2, z = 4) of the node at `depth` whose first voxel is `key`.
+Key child_key(Key key, int depth, unsigned slot) {
+  const std::uint32_t half = 1u << (depth - 1);
+  return {key.x + ((slot & 1u) ? half : 0u), key.y + ((slot & 2u) ? half : 0u), key.z + ((slot & 4u) ? half : 0u)};
+}
+
+Aabb grown(const Aabb& box, double by) {
+  return {box.min - Vec3d{by, by, by}, box.max + Vec3d{by, by, by}};
+}
+
+/// Whether the segment from `a` to `b` meets the box shrunk by `margin` on
+/// every side (`inside`) and the box grown by it (`near`): one slab test for both.
+struct SegmentBox {
+  bool inside;
+  bool near;
+};
+SegmentBox segment_meets(Vec3d a, Vec3d b, const Aabb& box, double margin) {
+  double in0 = 0.0, in1 = 1.0, out0 = 0.0, out1 = 1.0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double d = b[axis] - a[axis];
+    const double low = box.min[axis] - a[axis];
+    const double high = box.max[axis] - a[axis];
+    if (d == 0.0) {
+      if (low - margin > 0.0 || high + margin < 0.0) return {false, false};
+      if (low + margin > 0.0 || high - margin < 0.0) in0 = 2.0;  // never inside the shrunk box
+      continue;
+    }
+    const double inverse = 1.0 / d;
+    double enter = (low + margin) * inverse;
+    double leave = (high - margin) * inverse;
+    if (enter > leave) std::swap(enter, leave);
+    in0 = std::max(in0, enter);
+    in1 = std::min(in1, leave);
+    enter = (low - margin) * inverse;
+    leave = (high + margin) * inverse;
+    if (enter > leave) std::swap(enter, leave);
+    out0 = std::max(out0, enter);
+    out1 = std::min(out1, leave);
+    if (out0 > out1) return {false, false};
+  }
+  return {in0 <= in1, true};
+}
+
+/// A bound on how far the voxels a walk from `origin` visits stray from
+/// the exact segment, and on how far a voxel centre rounded to float lies
+/// from the exact one, for rays of at most `range`: the walk steps along a
+/// normalised float direction (relative error below 4e-7), from borders
+/// placed with float half voxels; centres are rounded to float (relative
+/// 6e-8). Four times that, to be sure.
+double margin_for(Vec3d origin, double range, double resolution) {
+  const double coordinates = std::max({std::fabs(origin.x), std::fabs(origin.y), std::fabs(origin.z)}) + range;
+  return 4.0 * (4e-7 * range + 6e-8 * coordinates + 3e-8 * resolution);
+}
+
+// Image resolution: a pixel is about a voxel seen at the far range (finer
+// buys little: the footprints of the nodes the walk asks about are larger),
+// within a pixel budget.
+constexpr double kPixelsPerFarVoxel = 1.0;
+constexpr double kMaxPixels = 400000.0;
+// Widest cone (in voxels across, where its obstacles are) worth sweeping.
+constexpr double kMaxSweepWidth = 16.0;
+
+}  // namespace
+
+GainCounter::GainCounter(const Grid& grid) : grid_(grid) {}
+
+Aabb GainCounter::centres_of(Key key, int depth) const {
+  const Vec3d low = grid_.center(key);
+  const double span = grid_.resolution() * double((1u << depth) - 1u);
+  return {low, low + Vec3d{span, span, span}};
+}
+
+bool GainCounter::in_frustum(Key key, Overlap parent) const {
+  if (parent == Overlap::inside) return true;
+  return frustum_->contains_quickly(grid_.center(key));
+}
+
+Aabb GainCounter::cube_of(Key key, int depth) const {
+  const Vec3d low = grid_.min_corner(key, depth);
+  const double size = grid_.node_size(depth);
+  return {low, low + Vec3d{size, size, size}};
+}
+
+GainResult GainCounter::count(const OccupancyTree& tree, const Frustum& frustum, const GainOptions& options) {
+  tree_ = &tree;
+  thresholds_ = tree.thresholds();
+  fast_ = options.method == GainMethod::fast;
+  fast_depth_ = options.fast_depth;
+  voxels_ = 0;
+  entropy_ = 0.0;
+  clear_shift_ = 64;
+  setup_pose(frustum);
+  // A sensor inside an obstacle sees nothing: every walk starts in its voxel.
+  OccupancyTree::Cursor cursor(tree);
+  const bool inside_obstacle = thresholds_.is_occupied(cursor.max_log_odds(morton::encode(origin_key_), 0));
+  if (!inside_obstacle) visit_node(tree_->root(), Key{}, Overlap::partly);
+  GainResult result;
+  result.unknown_voxels = voxels_;
+  const double r = grid_.resolution();
+  result.volume = double(voxels_) * r * r * r;
+  result.entropy_bits = entropy_;
+  return result;
+}
+
+void GainCounter::setup_pose(const Frustum& frustum) {
+  frustum_.emplace(frustum);
+  origin_ = Vec3f(frustum.origin);
+  const Vec3d apex = widen(origin_);
+  origin_key_ = grid_.key(apex);  // throws std::out_of_range outside the map
+  const double res = grid_.resolution();
+  const double apex_shift = (apex - frustum.origin).norm();
+  const double range = frustum.max_range + apex_shift;
+  margin_ = margin_for(apex, range, res);
+  obstacles_.clear();
+  touching_ = false;
+  // With margins not small against a voxel the image would decide little;
+  // walk every ray then (and the walk's own reasoning needs them small).
+  use_image_ = margin_ < res / 64.0;
+  if (!use_image_) return;
+
+  ViewImage::Setup setup;
+  setup.apex = apex;
+  setup.f = frustum_->f;
+  setup.l = frustum_->l;
+  setup.u = frustum_->u;
+  const double tan_h = std::tan(frustum.hfov / 2);
+  const double tan_v = std::tan(frustum.vfov / 2);
+  double pixel = res / (frustum.max_range * kPixelsPerFarVoxel);
+  const double area = 4.0 * (tan_h + 4 * pixel) * (tan_v + 4 * pixel);
+  if (area / (pixel * pixel) > kMaxPixels) pixel = std::sqrt(area / kMaxPixels);
+  // The border holds every centre of the frustum as seen from the apex
+  // (the frustum is defined from the exact origin): centres other than the
+  // origin's lie at least res/4 away, so their direction moves by at most
+  // apex_shift / (res/4) radians, stretched by 1 + x^2 + y^2 on the plane.
+  const double stretch = 1.0 + tan_h * tan_h + tan_v * tan_v;
+  const double border = 2.0 * pixel + 1.01 * apex_shift / (res / 4) * stretch;
+  setup.half_width = tan_h + border;
+  setup.half_height = tan_v + border;
+  setup.pixel = pixel;
+  setup.near_plane = res * 1e-3;
+  setup.candidates = true;
+  image_.reset(setup);
+
+  // Obstacles anywhere in the image's pyramid up to the range (also before
+  // min_range: they block just the same).
+  Frustum view = frustum;
+  view.origin = apex;
+  view.hfov = 2.0 * std::atan(setup.half_width);
+  view.vfov = 2.0 * std::atan(setup.half_height);
+  view.min_range = 0.0;
+  view.max_range = range + 2.0 * margin_;
+  // The occupied voxels of the same region, as bits (the box of the
+  // pyramid cut at the range, within the box of the range's ball).
+  Vec3d low = apex;
+  Vec3d high = apex;
+  for (const double side : {-setup.half_width, setup.half_width}) {
+    for (const double up : {-setup.half_height, setup.half_height}) {
+      const Vec3d corner = apex + (setup.f + setup.l * side + setup.u * up) * view.max_range;
+      for (int a = 0; a < 3; ++a) {
+        low[a] = std::min(low[a], corner[a]);
+        high[a] = std::max(high[a], corner[a]);
+      }
+    }
+  }
+  Key low_key;
+  Key high_key;
+  const auto last = std::int64_t{grid_.keys_per_axis()} - 1;
+  for (int a = 0; a < 3; ++a) {
+    const double from = std::max(low[a], apex[a] - view.max_range) / res;
+    const double to = std::min(high[a], apex[a] + view.max_range) / res;
+    low_key[a] = std::uint32_t(std::clamp<std::int64_t>(std::int64_t(std::floor(from)) + grid_.key_offset() - 1, 0, last));
+    high_key[a] = std::uint32_t(std::clamp<std::int64_t>(std::int64_t(std::floor(to)) + grid_.key_offset() + 1, 0, last));
+  }
+  occupied_.reset(low_key, high_key);
+  draw_obstacles(FrustumGeometry(view), tree_->root(), Key{}, Overlap::partly);
+  image_.finish();
+  sweep_pose_ = {&occupied_, &grid_, apex, origin_key_, margin_};
+}
+
+void GainCounter::draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key key, Overlap overlap) {
+  if (!thresholds_.is_occupied(tree_->log_odds(ref))) return;
+  const int depth = ref.depth;
+  const Aabb cube = cube_of(key, depth);
+  const Aabb reach = grown(cube, margin_);
+  if (tree_->has_children(ref) && !tree_->all_children_same(ref)) {
+    if (overlap != Overlap::inside) {
+      overlap = view.overlap(reach);
+      if (overlap == Overlap::outside) return;
+    }
+    for (unsigned slot = 0; slot < 8; ++slot) {
+      draw_obstacles(view, tree_->child(ref, slot), child_key(key, depth, slot), overlap);
+    }
+    return;
+  }
+  // A solid obstacle: every voxel in it is occupied. Its part before the
+  // near plane lies within near_plane / cos(widest angle) of the apex; an
+  // obstacle that close could block rays there without showing in their
+  // pixels, so the image then proves no visibility at all.
+  // (Its footprint below tells whether it is in the view's angles.)
+  const ViewImage::Setup& s = image_.setup();
+  const double near = std::sqrt(distance_squared(s.apex, reach));
+  if (near > view.frustum.max_range) return;
+  const double widest = std::sqrt(1.0 + s.half_width * s.half_width + s.half_height * s.half_height);
+  if (near <= s.near_plane * widest) touching_ = true;
+  PixelRect rect;
+  bool clipped = false;
+  if (!image_.footprint(reach, rect, clipped)) return;
+  image_.draw(rect, near, static_cast<std::uint32_t>(obstacles_.size()));
+  obstacles_.push_back(cube);
+  const std::uint32_t last = (1u << depth) - 1;
+  occupied_.set_box(key, {key.x + last, key.y + last, key.z + last});
+}
+
+// --- the walk over unknown space ------------------------------------------------------
+
+void GainCounter::visit_node(NodeRef ref, Key key, Overlap overlap) {
+  if (!tree_->contains_unknown(ref)) return;
+  const int depth = ref.depth;
+  if (!tree_->has_children(ref) || tree_->all_children_same(ref)) {
+    visit_region(key, depth, tree_->log_odds(ref), overlap);
+    return;
+  }
+  if (overlap != Overlap::inside) {
+    overlap = frustum_->overlap(centres_of(key, depth));
+    if (overlap == Overlap::outside) return;
+  }
+  switch (decide(key, depth, tree_->log_odds(ref))) {
+    case Visibility::visible: count_node(ref, key, overlap); return;
+    case Visibility::blocked: return;
+    case Visibility::undecided: break;
+  }
+  for (unsigned slot = 0; slot < 8; ++slot) visit_node(tree_->child(ref, slot), child_key(key, depth, slot), overlap);
+}
+
+void GainCounter::visit_region(Key key, int depth, float value, Overlap overlap) {
+  if (depth == 0) {
+    if (in_frustum(key, overlap) && voxel_visible(key)) add(1, value);
+    return;
+  }
+  if (overlap != Overlap::inside) {
+    overlap = frustum_->overlap(centres_of(key, depth));
+    if (overlap == Overlap::outside) return;
+  }
+  switch (decide(key, depth, value)) {
+    case Visibility::visible: count_region(key, depth, value, overlap); return;
+    case Visibility::blocked: return;
+    case Visibility::undecided: break;
+  }
+  for (unsigned slot = 0; slot < 8; ++slot) visit_region(child_key(key, depth, slot), depth - 1, value, overlap);
+}
+
+GainCounter::Visibility GainCounter::decide(Key key, int depth, float value) {
+  const Visibility surely = node_visibility(key, depth);
+  if (surely != Visibility::undecided || !fast_ || depth > fast_depth_) return surely;
+  // Fast: the two opposite corner voxels decide a node without obstacles
+  // inside when they agree (with an obstacle inside, the voxels in front of
+  // it and behind it differ).
+  if (thresholds_.is_occupied(value)) return Visibility::undecided;
+  const std::uint32_t last = (1u << depth) - 1;
+  const bool low = voxel_visible(key);
+  const bool high = voxel_visible({key.x + last, key.y + last, key.z + last});
+  if (low != high) return Visibility::undecided;
+  return low ? Visibility::visible : Visibility::blocked;
+}
+
+void GainCounter::count_node(NodeRef ref, Key key, Overlap overlap) {
+  if (!tree_->contains_unknown(ref)) return;
+  const int depth = ref.depth;
+  if (!tree_->has_children(ref) || tree_->all_children_same(ref)) {
+    count_region(key, depth, tree_->log_odds(ref), overlap);
+    return;
+  }
+  if (overlap != Overlap::inside) {
+    overlap = frustum_->overlap(centres_of(key, depth));
+    if (overlap == Overlap::outside) return;
+  }
+  for (unsigned slot = 0; slot < 8; ++slot) count_node(tree_->child(ref, slot), child_key(key, depth, slot), overlap);
+}
+
+void GainCounter::count_region(Key key, int depth, float value, Overlap overlap) {
+  if (depth == 0) {
+    if (in_frustum(key, overlap)) add(1, value);
+    return;
+  }
+  if (overlap != Overlap::inside) {
+    overlap = frustum_->overlap(centres_of(key, depth));
+    if (overlap == Overlap::outside) return;
+  }
+  if (overlap == Overlap::inside) {
+    add(std::uint64_t{1} << (3 * depth), value);
+    return;
+  }
+  for (unsigned slot = 0; slot < 8; ++slot) count_region(child_key(key, depth, slot), depth - 1, value, overlap);
+}
+
+void GainCounter::add(std::uint64_t voxels, float value) {
+  voxels_ += voxels;
+  if (value != entropy_value_) {
+    entropy_value_ = value;
+    entropy_of_value_ = binary_entropy_bits(value);
+  }
+  entropy_ += double(voxels) * entropy_of_value_;
+}
+
+// --- visibility --------------------------------------------------------------------
+
+GainCounter::Visibility GainCounter::node_visibility(Key key, int depth) {
+  if (!use_image_) return Visibility::undecided;
+  // The centres the walks aim at (rounded to float: within the margin).
+  const Aabb targets = grown(centres_of(key, depth), margin_);
+  const ViewImage::Setup& s = image_.setup();
+  // Near the apex directions are not what the image assumes (and the
+  // origin's own voxel has an empty walk): the image says nothing there.
+  PixelRect rect;
+  bool clipped = false;
+  if (touching_ || distance_squared(s.apex, targets) < 0.0625 * grid_.resolution() * grid_.resolution() ||
+      !image_.footprint(targets, rect, clipped) || clipped) {
+    return Visibility::undecided;
+  }
+  const double obstacle_free = double(image_.nearest(rect));  // no obstacle nearer in the cone
+  if (obstacle_free > std::sqrt(farthest_distance_squared(s.apex, targets))) return Visibility::visible;
+  // For eight voxels or fewer a sweep costs more than the rays it saves.
+  if (depth < 2) return Visibility::undecided;
+  // Some rays reach the node's near side without passing an obstacle: a
+  // sweep would not prove it hidden.
+  const double obstacles_before = double(image_.nearest_in_every_pixel(rect));
+  if (obstacles_before >= std::sqrt(distance_squared(s.apex, targets))) return Visibility::undecided;
+  // Wide cones straddle the edges of what hides them: their parts will do.
+  const double across = double(std::max(rect.x1 - rect.x0, rect.y1 - rect.y0) + 1) * s.pixel * obstacles_before;
+  if (across > kMaxSweepWidth * grid_.resolution()) return Visibility::undecided;
+  return sweep_.hidden(sweep_pose_, targets, obstacle_free) ? Visibility::blocked : Visibility::undecided;
+}
+
+bool GainCounter::voxel_visible(Key key) {
+  if (key == origin_key_) return true;  // the walk to the origin's own voxel is empty
+  switch (ray_visibility_from_image(key)) {
+    case Visibility::visible: return true;
+    case Visibility::blocked: return false;
+    case Visibility::undecided: break;
+  }
+  return walk_is_clear(key);
+}
+
+GainCounter::Visibility GainCounter::ray_visibility_from_image(Key key) const {
+  if (!use_image_) return Visibility::undecided;
+  const Vec3d apex = image_.setup().apex;
+  const Vec3d target = widen(grid_.center_f(key));
+  const Vec3d d = target - apex;
+  int px = 0;
+  int py = 0;
+  if (!image_.pixel_of(d, px, py)) return Visibility::undecided;
+  const double distance = d.norm();
+  if (!touching_ && double(image_.nearest(px, py)) > distance) return Visibility::visible;
+  int count = 0;
+  bool overflow = false;
+  const ViewImage::Candidate* candidates = image_.candidates(px, py, count, overflow);
+  bool grazed = false;
+  for (int i = 0; i < count && double(candidates[i].near) <= distance; ++i) {
+    const Aabb& cube = obstacles_[candidates[i].index];
+    // Through the inside, shrunk by the margin: the walk surely visits it
+    // (before the target's voxel, which is unknown and so not in it).
+    const SegmentBox meets = segment_meets(apex, target, cube, margin_);
+    if (meets.inside) return Visibility::blocked;
+    grazed |= meets.near;
+  }
+  if (!grazed && !overflow && !touching_) return Visibility::visible;
+  return Visibility::undecided;
+}
+
+bool GainCounter::walk_is_clear(Key key) {
+  bool blocked = false;
+  auto visit = [&](std::uint64_t code) {
+    if (clear_shift_ < 64 && (code >> clear_shift_) == clear_prefix_) return true;
+    NodeRef ref = tree_->root();
+    for (;;) {
+      if (!thresholds_.is_occupied(tree_->log_odds(ref))) {
+        clear_shift_ = 3u * unsigned(ref.depth);
+        clear_prefix_ = code >> clear_shift_;
+        return true;
+      }
+      if (!tree_->has_children(ref)) {
+        blocked = true;
+        return false;
+      }
+      ref = tree_->child(ref, morton::slot(code, ref.depth - 1));
+    }
+  };
+  walk_ray(grid_, origin_, origin_key_, grid_.center_f(key), key, visit);
+  return !blocked;
+}
+
+}  // namespace umbra::detail

@@ -1,0 +1,121 @@
+// GainCounter: the information gain of one pose at a time (definition in
+// include/umbra/query/information_gain.hpp; how and why in docs/design.md,
+// "Information gain").
+//
+// For a pose it
+//  1. draws the occupied voxels and solid occupied nodes of the field of
+//     view into a ViewImage (the obstacles, grown by the margin that covers
+//     the ray walk's rounding) and into an OccupiedBitmap;
+//  2. walks the tree through the nodes that hold unknown space and whose
+//     voxel centres can lie in the frustum, and decides whole nodes:
+//     visible when the node's footprint in the image shows no obstacle
+//     nearer than its farthest centre (its unknown voxels in the frustum
+//     are then counted without looking at rays); hidden when an
+//     OcclusionSweep proves every walk to it blocked. Any other node is
+//     split (a childless node into virtual children of its value);
+//  3. decides each remaining voxel by its own ray: visible when its pixel
+//     shows no obstacle before it, or none of the pixel's candidate
+//     obstacles comes near the ray; blocked when the ray passes through the
+//     inside of a candidate; otherwise (rays grazing an obstacle, pixels
+//     with too many obstacles) the voxel walk itself decides, stopping at
+//     the first occupied voxel.
+// The fast method also decides an undecided node of at most 2^fast_depth
+// voxels per edge by the rays to its two opposite corner voxels when they
+// agree (both visible: counted whole; both blocked: skipped), and splits it
+// when they do not.
+//
+// Every "surely" uses `margin_`, a bound on how far the walk's float
+// arithmetic strays from the exact segment (see margin_for()): a voxel the
+// walk visits is always within the margin of the segment, and the walk
+// always visits a voxel whose inside, shrunk by the margin, the segment
+// crosses. When the margin is not small against the voxels (huge
+// coordinates), nothing is decided from the image and every voxel is walked.
+//
+// Cost: drawing is O(obstacles in view x their footprint in pixels); the
+// walk visits O(nodes on the boundaries of visibility and of the frustum);
+// a walked ray costs a few nanoseconds per voxel it passes. One counter per
+// thread: it keeps its image and buffers between poses. The caller holds
+// the map for reading.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "query/geometry.hpp"
+#include "query/occlusion_sweep.hpp"
+#include "query/view_image.hpp"
+#include "tree/occupancy_tree.hpp"
+#include "umbra/core/grid.hpp"
+#include "umbra/query/information_gain.hpp"
+#include "umbra/query/shapes.hpp"
+
+namespace umbra::detail {
+
+class GainCounter {
+ public:
+  explicit GainCounter(const Grid& grid);
+  /// The gain of `frustum` (validated by the caller) in `tree`, which the
+  /// caller holds for reading. Throws std::out_of_range when the frustum's
+  /// origin lies outside the map.
+  GainResult count(const OccupancyTree& tree, const Frustum& frustum, const GainOptions& options);
+
+ private:
+  enum class Visibility : unsigned char { visible, blocked, undecided };
+
+  void setup_pose(const Frustum& frustum);
+  void draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key key, Overlap overlap);
+  // The walk over unknown space: a tree node, or a region of one value (a
+  // childless node or part of one).
+  void visit_node(NodeRef ref, Key key, Overlap overlap);
+  void visit_region(Key key, int depth, float value, Overlap overlap);
+  // Counting every unknown voxel in the frustum, once visibility is settled.
+  void count_node(NodeRef ref, Key key, Overlap overlap);
+  void count_region(Key key, int depth, float value, Overlap overlap);
+  void add(std::uint64_t voxels, float value);
+  [[nodiscard]] Visibility node_visibility(Key key, int depth);
+  bool voxel_visible(Key key);
+  /// What the image and the sweep prove of a node (whose value, the maximum
+  /// of its voxels, is `value`); for the fast method also what its corner
+  /// voxels suggest.
+  Visibility decide(Key key, int depth, float value);
+  [[nodiscard]] Visibility ray_visibility_from_image(Key key) const;
+  bool walk_is_clear(Key key);
+  [[nodiscard]] Aabb centres_of(Key key, int depth) const;
+  /// Whether the centre of voxel `key` lies in the frustum, given what its parent region's overlap was.
+  [[nodiscard]] bool in_frustum(Key key, Overlap parent) const;
+  [[nodiscard]] Aabb cube_of(Key key, int depth) const;
+
+  const Grid& grid_;
+  const OccupancyTree* tree_ = nullptr;  // the tree of the current count()
+  LogOddsThresholds thresholds_;
+
+  // The pose.
+  std::optional<FrustumGeometry> frustum_;
+  Vec3f origin_;      // the rays' float origin (the image's apex)
+  Key origin_key_;
+  double margin_ = 0.0;
+  bool use_image_ = false;
+  bool touching_ = false;  // an obstacle touches the origin: the image proves no visibility
+  bool fast_ = false;
+  int fast_depth_ = 0;
+
+  ViewImage image_;
+  OccupiedBitmap occupied_;  // the drawn obstacles' voxels
+  OcclusionSweep sweep_;
+  OcclusionSweep::Pose sweep_pose_{};
+  std::vector<Aabb> obstacles_;  // cubes of the drawn obstacles (not grown)
+
+  // The result so far.
+  std::uint64_t voxels_ = 0;
+  double entropy_ = 0.0;
+  float entropy_value_ = 0.0f;  // the value entropy_of_value_ belongs to
+  double entropy_of_value_ = 1.0;
+
+  // Memo of the occupied-voxel lookup of walked rays: the last node found to
+  // hold no occupied voxel (its code prefix), so a ray through it needs no lookup.
+  unsigned clear_shift_ = 64;
+  std::uint64_t clear_prefix_ = 0;
+};
+
+}  // namespace umbra::detail

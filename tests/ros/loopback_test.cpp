@@ -1,0 +1,454 @@
+// umbra_server against a real ROS 1 master on the loopback interface.
+//
+// The test starts `roscore` on a free port of 127.0.0.1 (ROS_MASTER_URI,
+// ROS_HOSTNAME, ROS_HOME pointing at its own scratch folder), starts
+// umbra_server with octomap_server's parameters, and publishes scans as a
+// robot would: the sensor pose on /tf, then the cloud (FLOAT64 x y z in the
+// sensor frame, a row of NaN, padding) on the node's cloud_in. After each
+// cloud it waits for the node's octomap_binary / octomap_full messages with
+// that cloud's stamp. The last ones must hold, byte for byte, the tree of
+// the map `umbra build` makes from the same scans (a bag of the same
+// messages for the simulated office; the .graph file itself for the shared
+// 3DTK scans) and the library makes from the simulator's points directly.
+// Then ~clear_bbx must free exactly the known voxels of a box, and ~reset
+// must empty the map. Every process the test starts is stopped by its id at
+// the end. Without roscore or umbra_server the test is skipped with a message.
+//
+// Waiting has generous limits (a hung node fails the test instead of hanging
+// CI); they bound waits, they do not measure speed.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <octomap_msgs/BoundingBoxQuery.h>
+#include <octomap_msgs/Octomap.h>
+#include <ros/ros.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <std_srvs/Empty.h>
+#include <tf2_msgs/TFMessage.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "map_messages.hpp"
+#include "ros_test_support.hpp"
+#include "support/test_support.hpp"
+#include "umbra/io/map_file.hpp"
+
+#include <gtest/gtest.h>
+
+namespace umbra::test {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+constexpr auto kStartLimit = std::chrono::seconds(120);
+constexpr auto kMessageLimit = std::chrono::seconds(300);
+
+/// A free TCP port on 127.0.0.1 (the kernel's choice; released again for roscore to take).
+int free_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  address.sin_port = 0;
+  socklen_t length = sizeof address;
+  if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
+      ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) != 0) {
+    if (fd >= 0) ::close(fd);
+    return -1;
+  }
+  const int port = ntohs(address.sin_port);
+  ::close(fd);
+  return port;
+}
+
+/// A child process in a process group of its own (roscore starts rosmaster and rosout under it); stopped on
+/// destruction: SIGINT to the group, SIGKILL after a grace period.
+class Child {
+ public:
+  Child(const std::vector<std::string>& argv, const fs::path& log) {
+    pid_ = ::fork();
+    if (pid_ == 0) {
+      ::setpgid(0, 0);
+      const FILE* out = std::freopen(log.c_str(), "w", stdout);
+      (void)out;
+      ::dup2(STDOUT_FILENO, STDERR_FILENO);
+      std::vector<char*> args;
+      for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+      args.push_back(nullptr);
+      ::execvp(args[0], args.data());
+      std::_Exit(127);
+    }
+    if (pid_ > 0) ::setpgid(pid_, pid_);
+  }
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+  ~Child() { stop(); }
+
+  /// True while the process runs.
+  bool running() {
+    if (pid_ <= 0) return false;
+    int status = 0;
+    if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+      pid_ = -1;
+      return false;
+    }
+    return true;
+  }
+
+  /// The exit code once the process has ended by itself, within `limit`; nothing if it still runs.
+  std::optional<int> exit_code(std::chrono::seconds limit) {
+    const auto end = Clock::now() + limit;
+    while (pid_ > 0 && Clock::now() < end) {
+      int status = 0;
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return std::nullopt;
+  }
+
+  void stop() {
+    if (pid_ <= 0) return;
+    ::kill(-pid_, SIGINT);
+    for (int i = 0; i < 100; ++i) {  // up to 10 s for roslaunch to stop its children
+      int status = 0;
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        ::kill(-pid_, SIGKILL);  // anything of the group still left
+        pid_ = -1;
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    ::kill(-pid_, SIGKILL);
+    ::waitpid(pid_, nullptr, 0);
+    pid_ = -1;
+  }
+
+ private:
+  pid_t pid_ = -1;
+};
+
+/// Waits until `done` holds, spinning ROS callbacks; false after `limit`.
+bool wait_for(const std::function<bool()>& done, std::chrono::seconds limit) {
+  const auto end = Clock::now() + limit;
+  while (!done()) {
+    if (Clock::now() > end || !ros::ok()) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
+std::string log_text(const fs::path& path) {
+  const std::vector<std::uint8_t> bytes = read_bytes(path);
+  return std::string(bytes.begin(), bytes.end());
+}
+
+/// The latest message on a topic, and how many came.
+template <typename M>
+struct Latest {
+  std::mutex mutex;
+  typename M::ConstPtr message;
+  std::size_t count = 0;
+  void take(const typename M::ConstPtr& m) {
+    std::lock_guard lock(mutex);
+    message = m;
+    ++count;
+  }
+  typename M::ConstPtr get() {
+    std::lock_guard lock(mutex);
+    return message;
+  }
+};
+
+std::vector<std::uint8_t> data_of(const octomap_msgs::Octomap& message) {
+  return std::vector<std::uint8_t>(message.data.begin(), message.data.end());
+}
+
+/// One roscore and one ROS client for the whole test program (roscpp can be initialised once per process).
+class RosMaster : public ::testing::Environment {
+ public:
+  void SetUp() override {
+    if (std::system("command -v roscore > /dev/null 2>&1") != 0) {
+      skip_reason_ = "roscore not found: install Debian's ros-core-dev (scripts/common.sh) to run the ROS loopback test";
+      return;
+    }
+    dir_ = scratch_dir();
+    const int port = free_port();
+    ASSERT_GT(port, 0) << "no free port on 127.0.0.1";
+    const std::string master = "http://127.0.0.1:" + std::to_string(port);
+    ::setenv("ROS_MASTER_URI", master.c_str(), 1);
+    ::setenv("ROS_HOSTNAME", "127.0.0.1", 1);
+    ::unsetenv("ROS_IP");
+    ::setenv("ROS_HOME", dir_.c_str(), 1);
+    ::setenv("ROS_LOG_DIR", (dir_ / "log").c_str(), 1);
+    roscore_ = std::make_unique<Child>(std::vector<std::string>{"roscore", "-p", std::to_string(port)}, dir_ / "roscore.log");
+    int argc = 0;
+    ros::init(argc, nullptr, "umbra_loopback_test", ros::init_options::NoSigintHandler | ros::init_options::AnonymousName);
+    ASSERT_TRUE(wait_for([&] { return ros::master::check() || !roscore_->running(); }, kStartLimit) &&
+                roscore_->running())
+        << "roscore did not come up on " << master << ":\n" << log_text(dir_ / "roscore.log");
+    node_ = std::make_unique<ros::NodeHandle>();
+    spinner_ = std::make_unique<ros::AsyncSpinner>(1);
+    spinner_->start();
+  }
+
+  void TearDown() override {
+    if (spinner_) spinner_->stop();
+    node_.reset();
+    if (ros::isInitialized()) ros::shutdown();
+    roscore_.reset();  // stops roscore, rosmaster and rosout
+  }
+
+  static inline std::string skip_reason_;
+  static inline std::unique_ptr<ros::NodeHandle> node_;
+
+ private:
+  fs::path dir_;
+  std::unique_ptr<Child> roscore_;
+  std::unique_ptr<ros::AsyncSpinner> spinner_;
+};
+
+class Loopback : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!RosMaster::skip_reason_.empty()) GTEST_SKIP() << RosMaster::skip_reason_;
+    ASSERT_TRUE(RosMaster::node_) << "no ROS master (see the environment's failure above)";
+    node_ = RosMaster::node_.get();
+    dir_ = scratch_dir();
+  }
+
+  void TearDown() override {
+    binary_sub_.shutdown();
+    full_sub_.shutdown();
+    markers_sub_.shutdown();
+    cloud_pub_.shutdown();
+    tf_pub_.shutdown();
+    server_.reset();  // stops umbra_server
+  }
+
+  /// Starts umbra_server with OctoMap's sensor model (umbra's defaults, as `umbra build` uses) and `params`.
+  void start_server(double resolution, const std::vector<std::string>& params = {}) {
+    std::vector<std::string> argv{UMBRA_SERVER_PATH,
+                                  "cloud_in:=/robot/points",
+                                  "_frame_id:=/map",
+                                  "_resolution:=" + std::to_string(resolution),
+                                  "_sensor_model/min:=0.1192",
+                                  "_sensor_model/max:=0.971",
+                                  "_threads:=2"};
+    argv.insert(argv.end(), params.begin(), params.end());
+    server_ = std::make_unique<Child>(argv, dir_ / "umbra_server.log");
+    binary_sub_ = node_->subscribe<octomap_msgs::Octomap>("/octomap_binary", 5,
+                                                          [this](const octomap_msgs::Octomap::ConstPtr& m) { binary_.take(m); });
+    full_sub_ = node_->subscribe<octomap_msgs::Octomap>("/octomap_full", 5,
+                                                        [this](const octomap_msgs::Octomap::ConstPtr& m) { full_.take(m); });
+    markers_sub_ = node_->subscribe<visualization_msgs::MarkerArray>(
+        "/occupied_cells_vis_array", 5, [this](const visualization_msgs::MarkerArray::ConstPtr& m) { markers_.take(m); });
+    cloud_pub_ = node_->advertise<sensor_msgs::PointCloud2>("/robot/points", 10);
+    tf_pub_ = node_->advertise<tf2_msgs::TFMessage>("/tf", 100);
+    ASSERT_TRUE(wait_for([&] { return (cloud_pub_.getNumSubscribers() > 0 && tf_pub_.getNumSubscribers() > 0) ||
+                                      !server_->running(); },
+                         kStartLimit) &&
+                server_->running())
+        << "umbra_server did not subscribe to the cloud and /tf:\n" << log_text(dir_ / "umbra_server.log");
+  }
+
+  /// Publishes the scans one at a time (pose first), each time waiting for both maps with its stamp.
+  void publish(const std::vector<RosScan>& scans, double first_time) {
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      const ros::Time stamp(first_time + 0.1 * static_cast<double>(i));
+      tf2_msgs::TFMessage tf;
+      tf.transforms.push_back(to_transform(scans[i], "map", "lidar", stamp));
+      tf_pub_.publish(tf);
+      cloud_pub_.publish(to_cloud(scans[i], "lidar", stamp));
+      const bool arrived = wait_for(
+          [&] {
+            const auto b = binary_.get();
+            const auto f = full_.get();
+            return b && f && b->header.stamp == stamp && f->header.stamp == stamp;
+          },
+          kMessageLimit);
+      ASSERT_TRUE(arrived) << "no map for scan " << i << " at " << stamp << ":\n" << log_text(dir_ / "umbra_server.log");
+    }
+  }
+
+  /// Checks the last published maps against `expected`.
+  void expect_published(const OccupancyMap& expected) {
+    const auto binary = binary_.get();
+    const auto full = full_.get();
+    ASSERT_TRUE(binary && full);
+    EXPECT_TRUE(binary->binary);
+    EXPECT_FALSE(full->binary);
+    EXPECT_EQ(binary->id, "OcTree");
+    EXPECT_EQ(binary->header.frame_id, "map");
+    EXPECT_EQ(binary->resolution, expected.resolution());
+    EXPECT_EQ(data_of(*binary), tree_bytes(expected, OctoMapFormat::bt));
+    EXPECT_EQ(data_of(*full), tree_bytes(expected, OctoMapFormat::ot));
+    // Decoded with umbra's reader: the same map, leaf by leaf.
+    const OccupancyMap decoded = ros_io::map_from_message(*full);
+    EXPECT_EQ(tree_bytes(decoded, OctoMapFormat::ot), tree_bytes(expected, OctoMapFormat::ot));
+  }
+
+  fs::path dir_;
+  ros::NodeHandle* node_ = nullptr;
+  std::unique_ptr<Child> server_;
+  ros::Subscriber binary_sub_;
+  ros::Subscriber full_sub_;
+  ros::Subscriber markers_sub_;
+  ros::Publisher cloud_pub_;
+  ros::Publisher tf_pub_;
+  Latest<octomap_msgs::Octomap> binary_;
+  Latest<octomap_msgs::Octomap> full_;
+  Latest<visualization_msgs::MarkerArray> markers_;
+};
+
+TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
+  const double resolution = 0.1;
+  const std::vector<RosScan> scans = office_scans(6);
+  ASSERT_NO_FATAL_FAILURE(start_server(resolution));
+  ASSERT_NO_FATAL_FAILURE(publish(scans, 1000.0));
+
+  // `umbra build` on a bag of the same messages, and the library on the simulator's points.
+  {
+    rosbag::Bag bag((dir_ / "same.bag").string(), rosbag::bagmode::Write);
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      const ros::Time stamp(1000.0 + 0.1 * static_cast<double>(i));
+      tf2_msgs::TFMessage tf;
+      tf.transforms.push_back(to_transform(scans[i], "map", "lidar", stamp));
+      bag.write("/tf", stamp, tf);
+      bag.write("/robot/points", stamp, to_cloud(scans[i], "lidar", stamp));
+    }
+  }
+  const CommandResult built = run_command(std::string(UMBRA_CLI_PATH) + " build " + (dir_ / "same.bag").string() +
+                                          " --frame map --res 0.1 -o " + (dir_ / "same.umb").string() + " 2>&1");
+  ASSERT_EQ(built.exit_code, 0) << built.output;
+  const OccupancyMap from_cli = load_map(dir_ / "same.umb");
+  const OccupancyMap reference = reference_map(scans, resolution);
+  EXPECT_EQ(tree_bytes(from_cli, OctoMapFormat::ot), tree_bytes(reference, OctoMapFormat::ot));
+  ASSERT_NO_FATAL_FAILURE(expect_published(from_cli));
+
+  // The occupied-cell markers list the occupied leaves.
+  ASSERT_TRUE(wait_for([&] { auto m = markers_.get(); return m && !m->markers.empty() && m->markers[0].header.stamp == ros::Time(1000.5); },
+                       kMessageLimit));
+  std::size_t cubes = 0;
+  for (const auto& marker : markers_.get()->markers) cubes += marker.points.size();
+  std::size_t occupied = 0;
+  reference.for_each_leaf([&](const Node& leaf) { occupied += leaf.state == OccupancyState::occupied ? 1 : 0; });
+  EXPECT_EQ(cubes, occupied);
+  EXPECT_GT(occupied, 100u);
+
+  // ~clear_bbx: every known voxel in the box becomes free (clamping minimum); unknown ones stay unknown.
+  octomap_msgs::BoundingBoxQuery box;
+  box.request.min.x = 2.0;
+  box.request.min.y = 4.0;
+  box.request.min.z = -0.5;
+  box.request.max.x = 3.2;
+  box.request.max.y = 7.5;
+  box.request.max.z = 1.0;
+  const std::size_t before = full_.count;
+  ASSERT_TRUE(ros::service::call("/umbra_server/clear_bbx", box));
+  ASSERT_TRUE(wait_for([&] { return full_.count > before; }, kMessageLimit));
+  OccupancyMap cleared = reference;
+  const Key low = cleared.key({2.0, 4.0, -0.5});
+  const Key high = cleared.key({3.2, 7.5, 1.0});
+  std::size_t known = 0;
+  for (std::uint32_t x = low.x; x <= high.x; ++x) {
+    for (std::uint32_t y = low.y; y <= high.y; ++y) {
+      for (std::uint32_t z = low.z; z <= high.z; ++z) {
+        const Key key{x, y, z};
+        if (reference.node(key).state == OccupancyState::unknown) continue;
+        cleared.set_log_odds(key, cleared.sensor_model().clamp_min_log_odds());
+        ++known;
+      }
+    }
+  }
+  EXPECT_GT(known, 1000u);
+  ASSERT_TRUE(wait_for([&] { return full_.get() && binary_.get() && binary_.count == full_.count; }, kMessageLimit));
+  ASSERT_NO_FATAL_FAILURE(expect_published(cleared));
+
+  // ~reset: an empty map.
+  std_srvs::Empty empty;
+  const std::size_t before_reset = full_.count;
+  ASSERT_TRUE(ros::service::call("/umbra_server/reset", empty));
+  ASSERT_TRUE(wait_for([&] { return full_.count > before_reset && binary_.count == full_.count; }, kMessageLimit));
+  EXPECT_TRUE(full_.get()->data.empty());
+  EXPECT_TRUE(binary_.get()->data.empty());
+}
+
+TEST_F(Loopback, IntegratorRangeAndHeightParameters) {
+  const double resolution = 0.1;
+  const std::vector<RosScan> scans = office_scans(3);
+  ASSERT_NO_FATAL_FAILURE(start_server(resolution, {"_integrator:=fast", "_fine_steps:=1", "_clear_depth:=2",
+                                                    "_sensor_model/max_range:=8.0", "_pointcloud_min_z:=0.5",
+                                                    "_pointcloud_max_z:=2.0"}));
+  ASSERT_NO_FATAL_FAILURE(publish(scans, 3000.0));
+  // The library with the same settings on the points whose z lies in [0.5, 2.0].
+  OccupancyMap expected(resolution, kOctoMapDepthLevels);
+  InsertOptions options;
+  options.integrator = IntegratorKind::fast;
+  options.fine_steps = 1;
+  options.clear_depth = 2;
+  options.max_range = 8.0;
+  std::size_t dropped = 0;
+  for (const RosScan& scan : scans) {
+    std::vector<Vec3f> kept;
+    for (const Vec3f& p : scan.points) {
+      if (p.z >= 0.5f && p.z <= 2.0f) kept.push_back(p);
+    }
+    dropped += scan.points.size() - kept.size();
+    expected.insert_point_cloud(Vec3f(scan.position), kept, options);
+  }
+  EXPECT_GT(dropped, 1000u);  // the floor, at least
+  ASSERT_NO_FATAL_FAILURE(expect_published(expected));
+  // Not the map of the unfiltered points.
+  EXPECT_NE(data_of(*full_.get()), tree_bytes(reference_map(scans, resolution), OctoMapFormat::ot));
+}
+
+TEST_F(Loopback, BadParametersStopTheNodeWithAMessage) {
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"_integrator:=bogus", "bad parameter ~integrator"},
+      {"_resolution:=-0.1", "bad parameter ~resolution"},
+      {"_sensor_model/hit:=0.3", "bad parameter ~sensor_model/{hit,miss,min,max}"},
+  };
+  int run = 0;
+  for (const auto& [argument, expected] : cases) {
+    const fs::path log = dir_ / "bad.log";
+    // A name of its own: private parameters stay on the master after a node ends.
+    Child server({UMBRA_SERVER_PATH, argument, "__name:=umbra_server_bad_" + std::to_string(run++)}, log);
+    const std::optional<int> code = server.exit_code(kStartLimit);
+    ASSERT_TRUE(code.has_value()) << argument << ": umbra_server kept running";
+    EXPECT_EQ(*code, 1) << argument;
+    EXPECT_NE(log_text(log).find(expected), std::string::npos) << argument << ":\n" << log_text(log);
+  }
+}
+
+TEST_F(Loopback, SharedThreeDtkScans) {
+  UMBRA_REQUIRE_SHARED_DATA(graph, "3dtk/3dtk_registered.graph");
+  const double resolution = 0.2;
+  const std::vector<RosScan> scans = file_scans(graph.string());
+  ASSERT_FALSE(scans.empty());
+  ASSERT_NO_FATAL_FAILURE(start_server(resolution, {"_integrator:=simple"}));
+  ASSERT_NO_FATAL_FAILURE(publish(scans, 2000.0));
+  const CommandResult built = run_command(std::string(UMBRA_CLI_PATH) + " build " + graph.string() +
+                                          " --res 0.2 -o " + (dir_ / "3dtk.umb").string() + " 2>&1");
+  ASSERT_EQ(built.exit_code, 0) << built.output;
+  ASSERT_NO_FATAL_FAILURE(expect_published(load_map(dir_ / "3dtk.umb")));
+}
+
+const auto* const kRosMaster = ::testing::AddGlobalTestEnvironment(new RosMaster);
+
+}  // namespace
+}  // namespace umbra::test
