@@ -1,0 +1,169 @@
+#include "nbv_planner.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace umbra::explore {
+
+namespace {
+
+[[noreturn]] void bad_field(const char* field, const std::string& requirement, double value) {
+  std::ostringstream out;
+  out << "PlannerConfig::" << field << " must be " << requirement << ", got " << value;
+  throw std::invalid_argument(out.str());
+}
+
+/// Uniform in [low, high) from the engine's bits, the same with every standard library.
+double uniform(std::mt19937& rng, double low, double high) {
+  return low + (high - low) * (double(rng()) / 4294967296.0);
+}
+
+/// Times a query into a tally.
+template <typename Query>
+auto timed(QueryTally& tally, Query&& query) {
+  const auto start = std::chrono::steady_clock::now();
+  auto result = query();
+  tally.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ++tally.count;
+  return result;
+}
+
+}  // namespace
+
+Frustum CameraView::frustum(const Pose& pose) const {
+  return Frustum::from_degrees(pose.position, pose.yaw * 180.0 / std::numbers::pi, pitch_deg, hfov_deg, vfov_deg, 0.0,
+                               max_range);
+}
+
+void PlannerConfig::validate() const {
+  if (!(robot_radius > 0.0)) bad_field("robot_radius", "> 0", robot_radius);
+  if (!(safety_margin >= 0.0)) bad_field("safety_margin", ">= 0", safety_margin);
+  if (!(extension_range > 0.0)) bad_field("extension_range", "> 0", extension_range);
+  if (initial_nodes < 1) bad_field("initial_nodes", ">= 1", initial_nodes);
+  if (max_nodes < initial_nodes) bad_field("max_nodes", ">= initial_nodes", max_nodes);
+  if (samples_per_node < 1) bad_field("samples_per_node", ">= 1", samples_per_node);
+  if (!(lambda >= 0.0)) bad_field("lambda", ">= 0", lambda);
+  if (!(min_gain > 0.0)) bad_field("min_gain", "> 0", min_gain);
+  for (int a = 0; a < 3; ++a) {
+    if (!(bounds.min[std::size_t(a)] < bounds.max[std::size_t(a)])) {
+      bad_field("bounds", "a box with min < max on every axis; min on that axis", bounds.min[std::size_t(a)]);
+    }
+  }
+  if (!(camera.hfov_deg > 0.0 && camera.hfov_deg < 180.0)) bad_field("camera.hfov_deg", "in (0, 180)", camera.hfov_deg);
+  if (!(camera.vfov_deg > 0.0 && camera.vfov_deg < 180.0)) bad_field("camera.vfov_deg", "in (0, 180)", camera.vfov_deg);
+  if (!(std::abs(camera.pitch_deg) < 90.0)) bad_field("camera.pitch_deg", "in (-90, 90)", camera.pitch_deg);
+  if (!(camera.max_range > 0.0)) bad_field("camera.max_range", "> 0", camera.max_range);
+}
+
+NbvPlanner::NbvPlanner(const PlannerConfig& config, std::uint32_t seed, const std::atomic<bool>* inserting)
+    : config_(config), rng_(seed), inserting_(inserting) {
+  config_.validate();
+}
+
+void NbvPlanner::count_overlap() {
+  if (inserting_ != nullptr && inserting_->load(std::memory_order_relaxed)) ++stats_.queries_during_insertion;
+}
+
+bool NbvPlanner::node_free(const ExplorationMap& map, Vec3d position) {
+  count_overlap();
+  return timed(stats_.node_checks, [&] { return map.is_free(Sphere{position, config_.check_radius()}); });
+}
+
+bool NbvPlanner::edge_free(const ExplorationMap& map, Vec3d from, Vec3d to) {
+  count_overlap();
+  return timed(stats_.edge_checks, [&] { return map.is_free(Capsule{from, to, config_.check_radius()}); });
+}
+
+double NbvPlanner::view_gain(const ExplorationMap& map, const Pose& pose) {
+  count_overlap();
+  return timed(stats_.gains, [&] { return map.gain(config_.camera.frustum(pose)); });
+}
+
+int NbvPlanner::add_node(const ExplorationMap& map, int parent, const Pose& pose) {
+  const TreeNode& up = tree_[std::size_t(parent)];
+  TreeNode node;
+  node.pose = pose;
+  node.parent = parent;
+  node.path_length = up.path_length + (pose.position - up.pose.position).norm();
+  node.gain = view_gain(map, pose);
+  node.score = up.score + node.gain * std::exp(-config_.lambda * node.path_length);
+  tree_.push_back(node);
+  ++stats_.nodes;
+  return int(tree_.size()) - 1;
+}
+
+PlanStep NbvPlanner::plan(const ExplorationMap& map, const Pose& robot) {
+  ++stats_.steps;
+  tree_.clear();
+  tree_.push_back({robot, -1, 0.0, 0.0, 0.0});
+
+  // What is left of the last best branch, as long as it is still free.
+  int parent = 0;
+  for (const Pose& pose : previous_branch_) {
+    if (!node_free(map, pose.position) || !edge_free(map, tree_[std::size_t(parent)].pose.position, pose.position)) {
+      break;
+    }
+    parent = add_node(map, parent, pose);
+  }
+  auto has_gain = [&] {
+    for (std::size_t i = 1; i < tree_.size(); ++i) {
+      if (tree_[i].gain >= config_.min_gain) return true;
+    }
+    return false;
+  };
+  bool gain_found = has_gain();
+
+  const std::uint64_t max_samples = std::uint64_t(config_.max_nodes) * std::uint64_t(config_.samples_per_node);
+  for (std::uint64_t sample = 0; sample < max_samples; ++sample) {
+    const int nodes = int(tree_.size()) - 1;
+    if (nodes >= config_.max_nodes || (nodes >= config_.initial_nodes && gain_found)) break;
+    ++stats_.samples;
+    const Vec3d target{uniform(rng_, config_.bounds.min.x, config_.bounds.max.x),
+                       uniform(rng_, config_.bounds.min.y, config_.bounds.max.y),
+                       uniform(rng_, config_.bounds.min.z, config_.bounds.max.z)};
+    std::size_t nearest = 0;
+    double nearest_distance = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < tree_.size(); ++i) {
+      const double d = (tree_[i].pose.position - target).norm();
+      if (d < nearest_distance) {
+        nearest_distance = d;
+        nearest = i;
+      }
+    }
+    if (nearest_distance < 1e-6) continue;
+    const Vec3d from = tree_[nearest].pose.position;
+    const Vec3d to = from + (target - from) * (std::min(nearest_distance, config_.extension_range) / nearest_distance);
+    const double yaw = uniform(rng_, -std::numbers::pi, std::numbers::pi);
+    if (!node_free(map, to) || !edge_free(map, from, to)) continue;
+    const int added = add_node(map, int(nearest), {to, yaw});
+    gain_found = gain_found || tree_[std::size_t(added)].gain >= config_.min_gain;
+  }
+
+  PlanStep step;
+  step.tree_nodes = int(tree_.size()) - 1;
+  if (!gain_found) {
+    previous_branch_.clear();
+    return step;
+  }
+  std::size_t best = 1;
+  for (std::size_t i = 1; i < tree_.size(); ++i) {
+    if (tree_[i].score > tree_[best].score) best = i;
+  }
+  // The branch root -> best, reversed; its first node is where to fly.
+  std::vector<std::size_t> branch;
+  for (std::size_t i = best; i != 0; i = std::size_t(tree_[i].parent)) branch.push_back(i);
+  step.gain_found = true;
+  step.next = tree_[branch.back()].pose;
+  step.best_gain = tree_[best].gain;
+  step.best_score = tree_[best].score;
+  previous_branch_.clear();
+  for (auto it = branch.rbegin() + 1; it != branch.rend(); ++it) previous_branch_.push_back(tree_[*it].pose);
+  return step;
+}
+
+}  // namespace umbra::explore

@@ -1,0 +1,135 @@
+// NbvPlanner: one step of a receding-horizon next-best-view planner, after
+// Bircher et al., "Receding Horizon Next-Best-View Planner for 3D
+// Exploration" (ICRA 2016; the nbvplanner the UFOMap paper's case study uses).
+//
+// From the robot's pose, grow a rapidly-exploring random tree in known free
+// space: sample a point in the exploration box, find the nearest node, step
+// from it towards the sample by at most `extension_range`; keep the new node
+// if the robot's ball there is free (unknown space blocks) and the edge from
+// the nearest node is free for the ball (a capsule). Each node gets a random
+// yaw and the gain of the camera's view from it (visible unknown volume),
+// and a score: its parent's score + gain * exp(-lambda * path length from
+// the robot). The tree starts with the robot's pose and with what is left of
+// the previous step's best branch (re-checked against the current map), so
+// the plan stays consistent from step to step. It grows to at least
+// `initial_nodes` nodes and on until some node has a gain of at least
+// `min_gain` or the tree has `max_nodes` nodes. The step returns the first
+// node of the branch to the best-scoring node: the robot flies that edge and
+// plans again. No node with gain: the exploration is over.
+//
+// Every map query goes through ExplorationMap and is timed per kind (node
+// collision, edge, gain), and counted.
+//
+// Cost: per step up to max_nodes * (1 ball check + 1 capsule check + 1 gain)
+// plus rejected samples' checks; the gains dominate.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include "exploration_map.hpp"
+#include "umbra/core/aabb.hpp"
+
+namespace umbra::explore {
+
+/// A position and a heading (yaw about +z, counter-clockwise from +x).
+struct Pose {
+  Vec3d position;
+  double yaw = 0.0;
+};
+
+/// The depth camera's field of view, in the frame of Frustum (shapes.hpp).
+struct CameraView {
+  double hfov_deg = 115.0;
+  double vfov_deg = 60.0;
+  double pitch_deg = 0.0;  ///< fixed on the robot
+  double max_range = 6.5;  ///< metres; the gain counts voxels up to here
+  [[nodiscard]] Frustum frustum(const Pose& pose) const;
+};
+
+struct PlannerConfig {
+  double robot_radius = 0.3;
+  /// Added to the robot's radius for every check: the map's voxels and the
+  /// robot's motion are coarse, and the robot must never touch a surface.
+  double safety_margin = 0.1;
+  double extension_range = 1.5;  ///< metres, longest edge
+  int initial_nodes = 15;
+  int max_nodes = 150;
+  /// Samples tried per step at most, as a multiple of max_nodes (in a
+  /// cramped map most samples give no node).
+  int samples_per_node = 20;
+  double lambda = 0.5;    ///< 1/m, discount of gain with path length
+  double min_gain = 0.5;  ///< m^3: less is no gain
+  Aabb bounds;            ///< where nodes may lie (the building's inside)
+  CameraView camera;
+
+  /// Throws std::invalid_argument naming the first bad field.
+  void validate() const;
+  [[nodiscard]] double check_radius() const { return robot_radius + safety_margin; }
+};
+
+/// Counts and seconds per kind of query, summed over steps.
+struct QueryTally {
+  std::uint64_t count = 0;
+  double seconds = 0.0;
+};
+
+struct PlannerStats {
+  QueryTally node_checks;  ///< ball collision checks
+  QueryTally edge_checks;  ///< capsule (segment with radius) checks
+  QueryTally gains;        ///< information gain of a view
+  std::uint64_t steps = 0;
+  std::uint64_t nodes = 0;    ///< tree nodes made (the roots not counted)
+  std::uint64_t samples = 0;  ///< samples drawn
+  /// Queries that began while the mapping thread was inserting (set by the
+  /// explorer): proof that mapping and planning overlapped.
+  std::uint64_t queries_during_insertion = 0;
+};
+
+struct PlanStep {
+  bool gain_found = false;
+  Pose next;              ///< first node of the best branch (when gain_found)
+  double best_gain = 0.0;  ///< m^3, the best node's own gain
+  double best_score = 0.0;
+  int tree_nodes = 0;
+};
+
+class NbvPlanner {
+ public:
+  /// `inserting` (may be null) is raised by the mapping thread while it
+  /// inserts: queries that start then are counted in the stats.
+  NbvPlanner(const PlannerConfig& config, std::uint32_t seed, const std::atomic<bool>* inserting = nullptr);
+
+  /// One step from `robot` (see the file comment).
+  PlanStep plan(const ExplorationMap& map, const Pose& robot);
+
+  [[nodiscard]] const PlannerStats& stats() const { return stats_; }
+
+ private:
+  struct TreeNode {
+    Pose pose;
+    int parent = -1;
+    double path_length = 0.0;  ///< metres from the root along the tree
+    double gain = 0.0;
+    double score = 0.0;
+  };
+
+  bool node_free(const ExplorationMap& map, Vec3d position);
+  bool edge_free(const ExplorationMap& map, Vec3d from, Vec3d to);
+  double view_gain(const ExplorationMap& map, const Pose& pose);
+  /// Adds a node under `parent` with its gain and score; returns its index.
+  int add_node(const ExplorationMap& map, int parent, const Pose& pose);
+  void count_overlap();
+
+  PlannerConfig config_;
+  std::mt19937 rng_;
+  const std::atomic<bool>* inserting_;
+  std::vector<TreeNode> tree_;
+  std::vector<Pose> previous_branch_;  ///< the last best branch after its first node
+  PlannerStats stats_;
+};
+
+}  // namespace umbra::explore
