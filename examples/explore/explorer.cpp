@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <latch>
 #include <limits>
 #include <mutex>
 #include <numbers>
@@ -128,9 +129,13 @@ ExplorationResult explore(ExplorationMap& map, const sim::Scene& scene, const si
   std::atomic<bool> failed{false};  // a thread threw: the other stops too
   std::exception_ptr mapping_error;
   std::exception_ptr planning_error;
+  // Neither thread may take a step in simulated time before the other is an
+  // actor of the clock (it would not be waited for).
+  std::latch actors_ready(2);
 
   std::thread mapping([&] {
     SimClock::Actor actor(clock);
+    actors_ready.arrive_and_wait();
     try {
       const double period = 1.0 / config.frame_rate;
       sim::DepthCameraModel camera = config.camera;
@@ -192,6 +197,7 @@ ExplorationResult explore(ExplorationMap& map, const sim::Scene& scene, const si
 
   std::thread planning([&] {
     SimClock::Actor actor(clock);
+    actors_ready.arrive_and_wait();
     try {
       NbvPlanner planner(config.planner, config.seed, &inserting);
       actor.wait_until(turn_time);
