@@ -108,7 +108,7 @@ class NbvPlanner {
 
   [[nodiscard]] const PlannerStats& stats() const { return stats_; }
 
- private:
+  /// A node of the tree; the root (index 0) is the robot's pose.
   struct TreeNode {
     Pose pose;
     int parent = -1;
@@ -116,6 +116,10 @@ class NbvPlanner {
     double gain = 0.0;
     double score = 0.0;
   };
+  /// The tree the last plan() grew (for tests and pictures).
+  [[nodiscard]] const std::vector<TreeNode>& tree() const { return tree_; }
+
+ private:
 
   bool node_free(const ExplorationMap& map, Vec3d position);
   bool edge_free(const ExplorationMap& map, Vec3d from, Vec3d to);
