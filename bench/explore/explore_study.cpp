@@ -168,6 +168,7 @@ std::string summary_markdown(const std::vector<Run>& runs, const StudyOptions& o
     return std::string(r.result.finished ? "no gain left at " : "budget spent at ") + fixed(r.result.end_time, 0) + " s";
   });
   row("planner iterations", [](const Run& r) { return std::to_string(r.result.planner.steps); });
+  row("iterations that grew the tree on (no gain near)", [](const Run& r) { return std::to_string(r.result.planner.grown_on); });
   row("planner iterations per second of planning", [](const Run& r) {
     return fixed(double(r.result.planner.steps) / std::max(1e-9, r.result.planning_time), 2);
   });
@@ -221,7 +222,7 @@ std::string summary_json(const std::vector<Run>& runs, double reachable_m3) {
       << ", \"time_to_90\": " << fixed(r.time_to(0.9), 2)
       << ", \"final_coverage\": " << fixed(r.coverage.empty() ? 0.0 : r.coverage.back().coverage, 5)
       << ", \"finished\": " << (r.finished ? "true" : "false") << ", \"end_time\": " << fixed(r.end_time, 2)
-      << ", \"steps\": " << r.planner.steps << ", \"nodes\": " << r.planner.nodes
+      << ", \"steps\": " << r.planner.steps << ", \"grown_on\": " << r.planner.grown_on << ", \"nodes\": " << r.planner.nodes
       << ", \"planning_time\": " << fixed(r.planning_time, 3) << ", \"flight_time\": " << fixed(r.flight_time, 3)
       << ", \"node_check_seconds\": " << fixed(r.planner.node_checks.seconds, 4)
       << ", \"edge_check_seconds\": " << fixed(r.planner.edge_checks.seconds, 4)

@@ -1,5 +1,6 @@
 #include "nbv_planner.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -46,6 +47,9 @@ void PlannerConfig::validate() const {
   if (!(extension_range > 0.0)) bad_field("extension_range", "> 0", extension_range);
   if (initial_nodes < 1) bad_field("initial_nodes", ">= 1", initial_nodes);
   if (max_nodes < initial_nodes) bad_field("max_nodes", ">= initial_nodes", max_nodes);
+  if (max_nodes_no_gain < max_nodes) bad_field("max_nodes_no_gain", ">= max_nodes", max_nodes_no_gain);
+  if (!(memory_bias >= 0.0 && memory_bias <= 1.0)) bad_field("memory_bias", "in [0, 1]", memory_bias);
+  if (memory_size < 0) bad_field("memory_size", ">= 0", memory_size);
   if (samples_per_node < 1) bad_field("samples_per_node", ">= 1", samples_per_node);
   if (!(lambda >= 0.0)) bad_field("lambda", ">= 0", lambda);
   if (!(min_gain > 0.0)) bad_field("min_gain", "> 0", min_gain);
@@ -97,35 +101,22 @@ int NbvPlanner::add_node(const ExplorationMap& map, int parent, const Pose& pose
   return int(tree_.size()) - 1;
 }
 
-PlanStep NbvPlanner::plan(const ExplorationMap& map, const Pose& robot) {
-  ++stats_.steps;
-  tree_.clear();
-  tree_.push_back({robot, -1, 0.0, 0.0, 0.0});
-
-  // What is left of the last best branch, as long as it is still free.
-  int parent = 0;
-  for (const Pose& pose : previous_branch_) {
-    if (!node_free(map, pose.position) || !edge_free(map, tree_[std::size_t(parent)].pose.position, pose.position)) {
-      break;
-    }
-    parent = add_node(map, parent, pose);
-  }
-  auto has_gain = [&] {
-    for (std::size_t i = 1; i < tree_.size(); ++i) {
-      if (tree_[i].gain >= config_.min_gain) return true;
-    }
-    return false;
-  };
-  bool gain_found = has_gain();
-
-  const std::uint64_t max_samples = std::uint64_t(config_.max_nodes) * std::uint64_t(config_.samples_per_node);
+bool NbvPlanner::grow(const ExplorationMap& map, int enough_nodes, int target_nodes, bool from_memory,
+                      bool gain_found) {
+  const std::uint64_t max_samples = std::uint64_t(target_nodes) * std::uint64_t(config_.samples_per_node);
   for (std::uint64_t sample = 0; sample < max_samples; ++sample) {
     const int nodes = int(tree_.size()) - 1;
-    if (nodes >= config_.max_nodes || (nodes >= config_.initial_nodes && gain_found)) break;
+    if (nodes >= target_nodes || (nodes >= enough_nodes && gain_found)) break;
     ++stats_.samples;
-    const Vec3d target{uniform(rng_, config_.bounds.min.x, config_.bounds.max.x),
-                       uniform(rng_, config_.bounds.min.y, config_.bounds.max.y),
-                       uniform(rng_, config_.bounds.min.z, config_.bounds.max.z)};
+    Vec3d target{uniform(rng_, config_.bounds.min.x, config_.bounds.max.x),
+                 uniform(rng_, config_.bounds.min.y, config_.bounds.max.y),
+                 uniform(rng_, config_.bounds.min.z, config_.bounds.max.z)};
+    // Both draws are made either way, so the sequence of draws does not depend on the memory.
+    const double pick = uniform(rng_, 0.0, 1.0);
+    const double which = uniform(rng_, 0.0, 1.0);
+    if (from_memory && !memory_.empty() && pick < config_.memory_bias) {
+      target = memory_[std::min(memory_.size() - 1, std::size_t(which * double(memory_.size())))].position;
+    }
     std::size_t nearest = 0;
     double nearest_distance = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < tree_.size(); ++i) {
@@ -143,8 +134,52 @@ PlanStep NbvPlanner::plan(const ExplorationMap& map, const Pose& robot) {
     const int added = add_node(map, int(nearest), {to, yaw});
     gain_found = gain_found || tree_[std::size_t(added)].gain >= config_.min_gain;
   }
+  return gain_found;
+}
+
+void NbvPlanner::remember(const std::vector<std::size_t>& branch) {
+  for (std::size_t i = 1; i < tree_.size(); ++i) {
+    if (tree_[i].gain < config_.min_gain || std::find(branch.begin(), branch.end(), i) != branch.end()) continue;
+    // One pose per neighbourhood, the newest: the memory spreads over the places left behind.
+    std::erase_if(memory_, [&](const Pose& old) {
+      return (old.position - tree_[i].pose.position).norm() < config_.extension_range;
+    });
+    memory_.push_back(tree_[i].pose);
+  }
+  if (memory_.size() > std::size_t(config_.memory_size)) {
+    memory_.erase(memory_.begin(), memory_.end() - config_.memory_size);
+  }
+}
+
+void NbvPlanner::refresh_memory(const ExplorationMap& map) {
+  std::erase_if(memory_, [&](const Pose& pose) { return view_gain(map, pose) < config_.min_gain; });
+}
+
+PlanStep NbvPlanner::plan(const ExplorationMap& map, const Pose& robot) {
+  ++stats_.steps;
+  tree_.clear();
+  tree_.push_back({robot, -1, 0.0, 0.0, 0.0});
+
+  // What is left of the last best branch, as long as it is still free.
+  int parent = 0;
+  for (const Pose& pose : previous_branch_) {
+    if (!node_free(map, pose.position) || !edge_free(map, tree_[std::size_t(parent)].pose.position, pose.position)) {
+      break;
+    }
+    parent = add_node(map, parent, pose);
+  }
+  bool gain_found = false;
+  for (std::size_t i = 1; i < tree_.size(); ++i) gain_found = gain_found || tree_[i].gain >= config_.min_gain;
 
   PlanStep step;
+  gain_found = grow(map, config_.initial_nodes, config_.max_nodes, false, gain_found);
+  if (!gain_found) {
+    // No gain near: grow on, drawn partly to the remembered poses that still have gain.
+    refresh_memory(map);
+    step.grown_on = true;
+    ++stats_.grown_on;
+    gain_found = grow(map, config_.max_nodes, config_.max_nodes_no_gain, true, false);
+  }
   step.tree_nodes = int(tree_.size()) - 1;
   if (!gain_found) {
     previous_branch_.clear();
@@ -163,6 +198,7 @@ PlanStep NbvPlanner::plan(const ExplorationMap& map, const Pose& robot) {
   step.best_score = tree_[best].score;
   previous_branch_.clear();
   for (auto it = branch.rbegin() + 1; it != branch.rend(); ++it) previous_branch_.push_back(tree_[*it].pose);
+  remember(branch);
   return step;
 }
 

@@ -15,7 +15,18 @@
 // `initial_nodes` nodes and on until some node has a gain of at least
 // `min_gain` or the tree has `max_nodes` nodes. The step returns the first
 // node of the branch to the best-scoring node: the robot flies that edge and
-// plans again. No node with gain: the exploration is over.
+// plans again.
+//
+// A tree of max_nodes stays within a few metres of the robot: once the
+// robot's surroundings are known it finds no gain although other rooms are
+// unexplored (the local minimum of receding-horizon planners). The planner
+// then grows the same tree on, to at most `max_nodes_no_gain` nodes (as
+// nbvplanner's cutoff iterations do), stopping at the first node with gain,
+// and draws a share `memory_bias` of its samples at remembered poses: nodes
+// of earlier trees that had gain but were not on the chosen branch (one per
+// extension_range, the newest), whose gain is computed again before they are
+// used (those without gain now are forgotten). Only when that larger tree has no node
+// with gain either is the exploration over.
 //
 // Every map query goes through ExplorationMap and is timed per kind (node
 // collision, edge, gain), and counted.
@@ -58,6 +69,13 @@ struct PlannerConfig {
   double extension_range = 1.5;  ///< metres, longest edge
   int initial_nodes = 15;
   int max_nodes = 150;
+  /// When no node of max_nodes has gain, the tree grows on to this many.
+  int max_nodes_no_gain = 1500;
+  /// Then this share of samples is drawn at a remembered pose with gain.
+  double memory_bias = 0.25;
+  /// Remembered poses at most (the oldest are dropped; each is one gain
+  /// computation when the tree grows on).
+  int memory_size = 64;
   /// Samples tried per step at most, as a multiple of max_nodes (in a
   /// cramped map most samples give no node).
   int samples_per_node = 20;
@@ -84,6 +102,7 @@ struct PlannerStats {
   std::uint64_t steps = 0;
   std::uint64_t nodes = 0;    ///< tree nodes made (the roots not counted)
   std::uint64_t samples = 0;  ///< samples drawn
+  std::uint64_t grown_on = 0;  ///< steps whose tree grew past max_nodes (no gain near)
   /// Queries that began while the mapping thread was inserting (set by the
   /// explorer): proof that mapping and planning overlapped.
   std::uint64_t queries_during_insertion = 0;
@@ -91,6 +110,7 @@ struct PlannerStats {
 
 struct PlanStep {
   bool gain_found = false;
+  bool grown_on = false;  ///< the tree grew past max_nodes to find gain
   Pose next;              ///< first node of the best branch (when gain_found)
   double best_gain = 0.0;  ///< m^3, the best node's own gain
   double best_score = 0.0;
@@ -126,6 +146,14 @@ class NbvPlanner {
   double view_gain(const ExplorationMap& map, const Pose& pose);
   /// Adds a node under `parent` with its gain and score; returns its index.
   int add_node(const ExplorationMap& map, int parent, const Pose& pose);
+  /// Draws samples until the tree has `target_nodes` nodes or, once it has
+  /// at least `enough_nodes`, some node has gain (or the samples run out).
+  /// Returns whether some node has gain.
+  bool grow(const ExplorationMap& map, int enough_nodes, int target_nodes, bool from_memory, bool gain_found);
+  /// Remembers the nodes of the tree with gain that are not on `branch`.
+  void remember(const std::vector<std::size_t>& branch);
+  /// Drops remembered poses that have no gain now.
+  void refresh_memory(const ExplorationMap& map);
   void count_overlap();
 
   PlannerConfig config_;
@@ -133,6 +161,7 @@ class NbvPlanner {
   const std::atomic<bool>* inserting_;
   std::vector<TreeNode> tree_;
   std::vector<Pose> previous_branch_;  ///< the last best branch after its first node
+  std::vector<Pose> memory_;           ///< poses of earlier trees with gain, oldest first
   PlannerStats stats_;
 };
 

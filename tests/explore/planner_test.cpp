@@ -154,10 +154,12 @@ TEST(NbvPlanner, NextStepKeepsTheRestOfTheBestBranch) {
 }
 
 TEST(NbvPlanner, DiscountingTurnsTheRobotTowardsNearGainWhenLambdaIsLarge) {
-  // From the middle of the room: 1 m^3 of gain at least 2 m to the west
-  // (x < 3), 10 m^3 at least 3.5 m to the east (x > 8.5). Without discount
-  // the first step goes east; with lambda = 3/m the east is worth at most
-  // 10 e^-10.5 = 2.8e-4 per node and the west at least e^-7.5 = 5.5e-4.
+  // A corridor along x (1 m wide and high) with the robot in the middle:
+  // 1 m^3 of gain at least 1 m to the west (x < 4), 100 m^3 at least 3 m to
+  // the east (x > 8). Without discount the first step goes east. With
+  // lambda = 5/m a west node within 1.6 m of path scores at least e^-8 =
+  // 3.4e-4, an east node adds at most 100 e^-15 = 3e-5 per node (and its
+  // descendants less and less): the first step goes west.
   class TwoSides final : public ExplorationMap {
    public:
     [[nodiscard]] std::string name() const override { return "two sides"; }
@@ -167,24 +169,28 @@ TEST(NbvPlanner, DiscountingTurnsTheRobotTowardsNearGainWhenLambdaIsLarge) {
     [[nodiscard]] bool is_free(const Sphere&) const override { return true; }
     [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
     [[nodiscard]] double gain(const Frustum& view) const override {
-      return view.origin.x > 8.5 ? 10.0 : (view.origin.x < 3.0 ? 1.0 : 0.0);
+      return view.origin.x > 8.0 ? 100.0 : (view.origin.x < 4.0 ? 1.0 : 0.0);
     }
     void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
     [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
   } map;
   PlannerConfig config = room_config();
+  config.bounds = Aabb{{0.5, 4.5, 1.5}, {9.5, 5.5, 2.5}};
   config.max_nodes = 150;
   config.initial_nodes = 150;
   const Pose robot{{5.0, 5.0, 2.0}, 0.0};
-  auto first_step_x = [&](double lambda) {
+  auto first_step_x = [&](double lambda, std::uint32_t seed) {
     config.lambda = lambda;
-    NbvPlanner planner(config, 3);
+    NbvPlanner planner(config, seed);
     const PlanStep step = planner.plan(map, robot);
     EXPECT_TRUE(step.gain_found);
     return step.next.position.x;
   };
-  EXPECT_GT(first_step_x(0.0), 5.0);
-  EXPECT_LT(first_step_x(3.0), 5.0);
+  for (std::uint32_t seed = 1; seed <= 5; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    EXPECT_GT(first_step_x(0.0, seed), 5.0);
+    EXPECT_LT(first_step_x(5.0, seed), 5.0);
+  }
 }
 
 TEST(NbvPlanner, NoGainMeansDoneAndSameSeedSameTree) {
@@ -208,6 +214,49 @@ TEST(NbvPlanner, NoGainMeansDoneAndSameSeedSameTree) {
   b.plan(map, robot);
   ASSERT_EQ(a.tree().size(), b.tree().size());
   for (std::size_t i = 0; i < a.tree().size(); ++i) EXPECT_EQ(a.tree()[i].pose.position, b.tree()[i].pose.position);
+}
+
+TEST(NbvPlanner, GrowsOnWhenNoGainIsNearAndStopsAtTheFirstGain) {
+  // A 40 m corridor with gain only beyond x = 25; the robot at x = 2. A tree
+  // of max_nodes = 20 cannot reach it: the tree grows on until a node there
+  // has gain, and the step is the first edge towards it.
+  class FarGain final : public ExplorationMap {
+   public:
+    [[nodiscard]] std::string name() const override { return "far gain"; }
+    [[nodiscard]] double resolution() const override { return 0.1; }
+    void assume_free(const Sphere&) override {}
+    void insert(Vec3f, std::span<const Vec3f>, double) override {}
+    [[nodiscard]] bool is_free(const Sphere&) const override { return true; }
+    [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
+    [[nodiscard]] double gain(const Frustum& view) const override { return view.origin.x > 25.0 ? 2.0 : 0.0; }
+    void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
+    [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
+  } map;
+  PlannerConfig config = room_config();
+  config.bounds = Aabb{{0.5, 4.0, 1.0}, {39.5, 6.0, 3.0}};
+  config.initial_nodes = 20;
+  config.max_nodes = 20;
+  config.max_nodes_no_gain = 2000;
+  const Pose robot{{2.0, 5.0, 2.0}, 0.0};
+  NbvPlanner planner(config, 9);
+  const PlanStep step = planner.plan(map, robot);
+  ASSERT_TRUE(step.gain_found);
+  EXPECT_TRUE(step.grown_on);
+  EXPECT_EQ(planner.stats().grown_on, 1u);
+  const auto& tree = planner.tree();
+  EXPECT_GT(tree.size(), 21u);
+  EXPECT_LT(tree.size(), 2001u);
+  // It stopped at the first node with gain: the newest node, the only one.
+  EXPECT_GT(tree.back().pose.position.x, 25.0);
+  for (std::size_t i = 1; i + 1 < tree.size(); ++i) EXPECT_LE(tree[i].pose.position.x, 25.0);
+  EXPECT_GT(step.next.position.x, robot.position.x);
+
+  // With no room to grow on, the same situation ends the exploration.
+  config.max_nodes_no_gain = config.max_nodes;
+  NbvPlanner capped(config, 9);
+  const PlanStep done = capped.plan(map, robot);
+  EXPECT_FALSE(done.gain_found);
+  EXPECT_EQ(done.tree_nodes, config.max_nodes);
 }
 
 TEST(NbvPlanner, BadConfigIsRefusedByName) {
