@@ -11,6 +11,7 @@ UMBRA_APT_PACKAGES=(
   liboctomap-dev                                # differential tests and benchmarks only
   clang                                         # fuzz targets (optional label)
   bzip2 python3                                 # test helpers
+  python3-matplotlib                            # the exploration study's coverage plot (bench/explore)
   chromium                                      # the `umbra view` page tested in a headless browser
   # ROS 1 (ros/: umbra_server, `umbra build` of .bag files, their tests; optional, found by CMake):
   ros-core-dev libroscpp-dev libsensor-msgs-dev libtf2-ros-dev librosbag-dev
