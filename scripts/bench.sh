@@ -2,7 +2,7 @@
 # Benchmarks against liboctomap: an optimised build without internal
 # assertions in build-bench/, then one benchmark program:
 #   scripts/bench.sh [insert] ARGS...   bench/insert_benchmark.cpp (the default)
-#   scripts/bench.sh query ARGS...      bench/query_benchmark.cpp
+#   scripts/bench.sh query ARGS...      bench/query/query_benchmark.cpp
 # ARGS go to the program (--help lists them); results: docs/benchmarks.md.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"

@@ -5,6 +5,8 @@
 //   box       minx miny minz maxx maxy maxz -> 1 / 0
 //   line      x1 y1 z1 x2 y2 z2             -> 1 / 0 (--radius R: the capsule)
 //   raycast   x y z dx dy dz max_range      -> "1 cx cy cz" (first occupied voxel's centre) or 0
+//   gain      x y z yaw_deg pitch_deg        -> "unknown_voxels volume_m3" seen from that pose
+//             (--hfov, --vfov, --min-range, --max-range, --method exact|fast)
 //   nodes     (no input) --state S [--box ..|--sphere ..] [--count] -> "x y z size state" per node
 //
 // All lines are read and checked first, then answered in one timed loop,
@@ -39,6 +41,12 @@ struct QueryOptions {
   std::string unknown = "blocks";
   int depth = 0;
   double radius = 0.0;
+  // gain
+  double hfov = 115.0;
+  double vfov = 60.0;
+  double min_range = 0.0;
+  double max_range = 6.5;
+  std::string method = "exact";
   // nodes
   std::string state;
   std::vector<double> box;
@@ -88,6 +96,7 @@ Kind kind_of(const std::string& kind) {
   if (kind == "box") return {6, "minx miny minz maxx maxy maxz"};
   if (kind == "line") return {6, "x1 y1 z1 x2 y2 z2"};
   if (kind == "raycast") return {7, "x y z dx dy dz max_range"};
+  if (kind == "gain") return {5, "x y z yaw_deg pitch_deg"};
   throw std::logic_error("unknown query kind " + kind);
 }
 
@@ -117,14 +126,23 @@ struct Answer {
   bool ok = false;
   bool yes = false;     // collides / hit
   Vec3d point;          // raycast: the centre of the voxel hit
+  GainResult gain{};    // gain
   std::string problem;  // when !ok
 };
 
-Answer answer(const OccupancyMap& map, const std::string& kind, const std::vector<double>& v,
-              const CollisionOptions& collision, double radius) {
+Answer answer(const OccupancyMap& map, const QueryOptions& options, const std::vector<double>& v,
+              const CollisionOptions& collision) {
+  const std::string& kind = options.kind;
+  const double radius = options.radius;
   Answer a;
   try {
-    if (kind == "sphere") {
+    if (kind == "gain") {
+      const Frustum view = Frustum::from_degrees({v[0], v[1], v[2]}, v[3], v[4], options.hfov, options.vfov,
+                                                 options.min_range, options.max_range);
+      GainOptions gain_options;
+      gain_options.method = options.method == "fast" ? GainMethod::fast : GainMethod::exact;
+      a.gain = map.information_gain(view, gain_options);
+    } else if (kind == "sphere") {
       a.yes = !map.is_free(Sphere{{v[0], v[1], v[2]}, v[3]}, collision).free;
     } else if (kind == "box") {
       const Aabb box{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}};
@@ -211,6 +229,14 @@ int run_query(const QueryOptions& options) {
     std::fprintf(stderr, "umbra: query %s needs --input FILE (or - for standard input)\n", options.kind.c_str());
     return 2;
   }
+  if (options.kind == "gain") {
+    try {  // the field of view and ranges, checked once rather than on every line
+      Frustum::from_degrees({}, 0.0, 0.0, options.hfov, options.vfov, options.min_range, options.max_range).validate();
+    } catch (const std::invalid_argument& e) {
+      std::fprintf(stderr, "umbra: query gain: %s\n", e.what());
+      return 2;
+    }
+  }
   const Kind kind = kind_of(options.kind);
   std::size_t bad = 0;
   std::vector<Line> lines;
@@ -226,7 +252,7 @@ int run_query(const QueryOptions& options) {
   std::vector<Answer> answers;
   answers.reserve(lines.size());
   const auto start = std::chrono::steady_clock::now();
-  for (const Line& line : lines) answers.push_back(answer(map, options.kind, line.values, collision, options.radius));
+  for (const Line& line : lines) answers.push_back(answer(map, options, line.values, collision));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   for (std::size_t i = 0; i < answers.size(); ++i) {
@@ -235,6 +261,8 @@ int run_query(const QueryOptions& options) {
       std::fprintf(stderr, "umbra: %s line %zu: %s\n", options.input == "-" ? "standard input" : options.input.c_str(),
                    lines[i].number, a.problem.c_str());
       ++bad;
+    } else if (options.kind == "gain") {
+      std::printf("%llu %.10g\n", static_cast<unsigned long long>(a.gain.unknown_voxels), a.gain.volume);
     } else if (options.kind == "raycast" && a.yes) {
       std::printf("1 %.10g %.10g %.10g\n", a.point.x, a.point.y, a.point.z);
     } else {
@@ -251,13 +279,13 @@ int run_query(const QueryOptions& options) {
 Command add_query_command(CLI::App& app) {
   auto options = std::make_shared<QueryOptions>();
   CLI::App* command = app.add_subcommand(
-      "query", "Answer collision, line, ray-cast and node queries about a map, one per input line");
+      "query", "Answer collision, line, ray-cast, information-gain and node queries about a map, one per input line");
   command->add_option("map", options->map_path, "map file (.umb, or OctoMap's .bt / .ot)")
       ->required()
       ->check(CLI::ExistingFile);
-  command->add_option("kind", options->kind, "sphere | box | line | raycast | nodes")
+  command->add_option("kind", options->kind, "sphere | box | line | raycast | gain | nodes")
       ->required()
-      ->check(CLI::IsMember({"sphere", "box", "line", "raycast", "nodes"}));
+      ->check(CLI::IsMember({"sphere", "box", "line", "raycast", "gain", "nodes"}));
   command->add_option("--input", options->input, "file of queries, one per line; - for standard input");
   command->add_option("--unknown", options->unknown, "unknown space blocks (default) or counts as free")
       ->check(CLI::IsMember({"blocks", "free"}));
@@ -265,6 +293,14 @@ Command add_query_command(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   command->add_option("--radius", options->radius, "line: check the capsule of this radius (m) around each segment")
       ->check(CLI::NonNegativeNumber);
+  command->add_option("--hfov", options->hfov, "gain: horizontal field of view (degrees)")
+      ->check(CLI::Range(0.0, 180.0, "in (0, 180)"));
+  command->add_option("--vfov", options->vfov, "gain: vertical field of view (degrees)")
+      ->check(CLI::Range(0.0, 180.0, "in (0, 180)"));
+  command->add_option("--min-range", options->min_range, "gain: near range (m)")->check(CLI::NonNegativeNumber);
+  command->add_option("--max-range", options->max_range, "gain: far range (m)")->check(CLI::PositiveNumber);
+  command->add_option("--method", options->method, "gain: exact, or fast (a few per cent off, faster)")
+      ->check(CLI::IsMember({"exact", "fast"}));
   command->add_option("--state", options->state, "nodes: only occupied, free or unknown ones")
       ->check(CLI::IsMember({"occupied", "free", "unknown"}));
   command->add_option("--box", options->box, "nodes: only those meeting minx,miny,minz,maxx,maxy,maxz")

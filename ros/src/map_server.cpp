@@ -66,6 +66,7 @@ MapServer::MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, Serve
   full_service_ = node.advertiseService("octomap_full", &MapServer::get_full, this);
   reset_service_ = private_node.advertiseService("reset", &MapServer::reset, this);
   clear_bbx_service_ = private_node.advertiseService("clear_bbx", &MapServer::clear_bbx, this);
+  check_collision_service_ = private_node.advertiseService("check_collision", &MapServer::check_collision, this);
 }
 
 bool MapServer::wanted(const ros::Publisher& publisher) const {
@@ -136,21 +137,27 @@ bool MapServer::clear_bbx(octomap_msgs::BoundingBoxQuery::Request& request, octo
     ROS_ERROR("umbra_server: ~clear_bbx needs finite corners");
     return false;
   }
+  if (request.min.x > request.max.x || request.min.y > request.max.y || request.min.z > request.max.z) {
+    ROS_ERROR("umbra_server: ~clear_bbx needs min <= max on every axis");
+    return false;
+  }
   const KeyBox box = key_box(map_, request.min, request.max);
   const float free_value = map_.sensor_model().clamp_min_log_odds();
   // First the parts of known leaves inside the box (a pruned leaf may reach outside it), then set them.
   std::vector<KeyBox> parts;
-  map_.for_each_leaf([&](const Node& leaf) {
-    if (leaf.state == OccupancyState::unknown || leaf.log_odds == free_value) return;
+  const Aabb region{{request.min.x, request.min.y, request.min.z}, {request.max.x, request.max.y, request.max.z}};
+  for (const Node& leaf : map_.query(pred::leaf() && !pred::unknown() && pred::intersects(region))) {
+    if (leaf.log_odds == free_value) continue;
     const std::uint32_t last = (std::uint32_t{1} << leaf.depth) - 1u;
     KeyBox part;
+    bool inside = true;
     for (int axis = 0; axis < 3; ++axis) {
       part.min[axis] = std::max(leaf.key[axis], box.min[axis]);
       part.max[axis] = std::min(leaf.key[axis] + last, box.max[axis]);
-      if (part.min[axis] > part.max[axis]) return;
+      inside = inside && part.min[axis] <= part.max[axis];
     }
-    parts.push_back(part);
-  });
+    if (inside) parts.push_back(part);
+  }
   std::uint64_t voxels = 0;
   for (const KeyBox& part : parts) {
     voxels += std::uint64_t{part.max.x - part.min.x + 1} * (part.max.y - part.min.y + 1) * (part.max.z - part.min.z + 1);
@@ -180,6 +187,38 @@ bool MapServer::get_binary(octomap_msgs::GetOctomap::Request&, octomap_msgs::Get
 
 bool MapServer::get_full(octomap_msgs::GetOctomap::Request&, octomap_msgs::GetOctomap::Response& response) {
   response.map = octomap_message(map_, OctoMapFormat::ot, settings_.frame, ros::Time::now());
+  return true;
+}
+
+bool MapServer::check_collision(umbra_msgs::CheckCollision::Request& request,
+                                umbra_msgs::CheckCollision::Response& response) {
+  const Vec3d a{request.a.x, request.a.y, request.a.z};
+  const Vec3d b{request.b.x, request.b.y, request.b.z};
+  const CollisionOptions options{request.unknown_is_free != 0, request.depth};
+  try {
+    CollisionResult result;
+    switch (request.shape) {
+      case umbra_msgs::CheckCollision::Request::SPHERE: result = map_.is_free(Sphere{a, request.radius}, options); break;
+      case umbra_msgs::CheckCollision::Request::BOX: result = map_.is_free(Aabb{a, b}, options); break;
+      case umbra_msgs::CheckCollision::Request::CAPSULE: result = map_.is_free(Capsule{a, b, request.radius}, options); break;
+      case umbra_msgs::CheckCollision::Request::SEGMENT: result = map_.is_free(Segment{a, b}, options); break;
+      default:
+        throw std::invalid_argument("unknown shape " + std::to_string(request.shape) +
+                                    " (SPHERE=0, BOX=1, CAPSULE=2, SEGMENT=3)");
+    }
+    response.valid = true;
+    response.free = result.free;
+    if (result.blocking) {
+      response.blocking_center.x = result.blocking->center.x;
+      response.blocking_center.y = result.blocking->center.y;
+      response.blocking_center.z = result.blocking->center.z;
+      response.blocking_size = result.blocking->size;
+    }
+  } catch (const std::exception& e) {  // a bad shape or depth, a region outside the map
+    response.valid = false;
+    response.free = false;
+    response.error = e.what();
+  }
   return true;
 }
 

@@ -35,6 +35,7 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
+#include <umbra_msgs/CheckCollision.h>
 
 #include <memory>
 
@@ -61,12 +62,9 @@ class MapServer {
   bool get_full(octomap_msgs::GetOctomap::Request& request, octomap_msgs::GetOctomap::Response& response);
   [[nodiscard]] bool wanted(const ros::Publisher& publisher) const;
 
-  // --- Unknown-aware collision check service: RESERVED ---------------------------------------
-  // A service ~check_collision (a box, sphere or segment with a radius in the map frame; answer:
-  // free or blocked, with unknown space counting as blocked unless the request says otherwise)
-  // belongs here. It will call the query layer's is_free, which is being written separately;
-  // umbra_server implements no collision query of its own. docs/ros.md describes the plan.
-  // ----------------------------------------------------------------------------------------------
+  /// ~check_collision (umbra_msgs/CheckCollision): is a sphere, box, capsule or segment free, unknown
+  /// space blocking unless the request says otherwise (the query layer's is_free).
+  bool check_collision(umbra_msgs::CheckCollision::Request& request, umbra_msgs::CheckCollision::Response& response);
 
   ServerSettings settings_;
   OccupancyMap map_;
@@ -83,6 +81,7 @@ class MapServer {
   ros::ServiceServer full_service_;
   ros::ServiceServer reset_service_;
   ros::ServiceServer clear_bbx_service_;
+  ros::ServiceServer check_collision_service_;
   DecodedCloud decoded_;
   Scan scan_;
 };

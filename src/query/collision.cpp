@@ -30,6 +30,7 @@ namespace {
 using detail::BlockingLookup;
 using detail::BlockingRule;
 using detail::NodeContext;
+using detail::child_key;
 using detail::Overlap;
 using detail::QueryScope;
 
@@ -94,15 +95,19 @@ class RegionCheck {
 
   CollisionResult run() {
     const OccupancyTree& tree = *scope_.tree;
-    NodeContext node = NodeContext::read(scope_, tree.root(), Key{});
-    // Straight down while a single child holds the whole bounding box.
-    while (!node.leaf && holds_blocking(node)) {
-      const unsigned slot = only_child_meeting_bounds(node);
+    // Straight down while a single child holds the whole bounding box,
+    // reading only what decides the step (the whole context once, below).
+    NodeRef ref = tree.root();
+    Key key{};
+    while (rule_.holds_blocking(tree.log_odds(ref), tree.contains_unknown(ref)) && ref.depth > scope_.depth &&
+           tree.has_children(ref) && !tree.all_children_same(ref)) {
+      const unsigned slot = only_child_meeting_bounds(key, ref.depth);
       if (slot == 8) break;
-      node = NodeContext::read(scope_, tree.child(node.ref, slot), node.child_key(slot));
+      key = child_key(key, ref.depth, slot);
+      ref = tree.child(ref, slot);
     }
     CollisionResult result;
-    if (const std::optional<NodeContext> blocking = check(node)) {
+    if (const std::optional<NodeContext> blocking = check(NodeContext::read(scope_, ref, key))) {
       result.free = false;
       result.blocking = blocking->to_node(scope_);
     }
@@ -115,12 +120,12 @@ class RegionCheck {
   }
 
   /// The child whose key range holds the whole bounding box, or 8 when it straddles.
-  [[nodiscard]] unsigned only_child_meeting_bounds(const NodeContext& n) const {
-    const std::uint32_t half = 1u << (n.depth - 1);
+  [[nodiscard]] unsigned only_child_meeting_bounds(Key key, int depth) const {
+    const std::uint32_t half = 1u << (depth - 1);
     unsigned slot = 0;
     for (int axis = 0; axis < 3; ++axis) {
-      const bool low = bounds_.min[axis] < n.key[axis] + half;
-      const bool high = bounds_.max[axis] >= n.key[axis] + half;
+      const bool low = bounds_.min[axis] < key[axis] + half;
+      const bool high = bounds_.max[axis] >= key[axis] + half;
       if (low && high) return 8;
       if (high) slot |= 1u << axis;
     }
@@ -137,7 +142,11 @@ class RegionCheck {
     for (unsigned slot = 0; slot < 8; ++slot) {
       const Key key = n.child_key(slot);
       if (!bounds_.meets(key, n.depth - 1)) continue;
-      if (auto found = check(NodeContext::read(scope_, scope_.tree->child(n.ref, slot), key))) return found;
+      const NodeRef child = scope_.tree->child(n.ref, slot);
+      // Most children hold nothing blocking: two reads decide that, before
+      // the whole context (leaf test, indicators) is read.
+      if (!rule_.holds_blocking(scope_.tree->log_odds(child), scope_.tree->contains_unknown(child))) continue;
+      if (auto found = check(NodeContext::read(scope_, child, key))) return found;
     }
     return std::nullopt;
   }
@@ -191,13 +200,15 @@ CollisionResult check_segment(const OccupancyMap& map, const Segment& segment, c
     CollisionResult result;
     NodeRef blocking{};
     std::uint64_t blocking_code = 0;
+    // Returns false to stop the walk at the first blocking voxel.
     auto visit = [&](std::uint64_t code) {
-      if (!result.free || !lookup.blocks(code, &blocking)) return;
+      if (!lookup.blocks(code, &blocking)) return true;
       result.free = false;
       blocking_code = code;
+      return false;
     };
     walk_ray(grid, from, *from_key, to, *to_key, visit);
-    visit(morton::encode(*to_key));
+    if (result.free) visit(morton::encode(*to_key));
     if (!result.free) result.blocking = detail::make_node(tree, grid, blocking, blocking_code);
     return result;
   });

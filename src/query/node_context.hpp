@@ -19,6 +19,13 @@ struct QueryScope {
   int depth;  ///< nodes at this depth count as leaves
 };
 
+/// Key of child `slot` (slot bits: x = 1, y = 2, z = 4) of the depth-`depth`
+/// node whose lowest voxel has `key`.
+inline Key child_key(Key key, int depth, unsigned slot) {
+  const std::uint32_t half = 1u << (depth - 1);
+  return {key.x + ((slot & 1u) ? half : 0u), key.y + ((slot & 2u) ? half : 0u), key.z + ((slot & 4u) ? half : 0u)};
+}
+
 struct NodeContext {
   NodeRef ref;
   Key key;     ///< finest key of the node's lowest corner voxel
@@ -52,10 +59,7 @@ struct NodeContext {
     return {low, low + Vec3d{size, size, size}};
   }
   /// Key of child `slot` (slot bits: x = 1, y = 2, z = 4).
-  [[nodiscard]] Key child_key(unsigned slot) const {
-    const std::uint32_t half = 1u << (depth - 1);
-    return {key.x + ((slot & 1u) ? half : 0u), key.y + ((slot & 2u) ? half : 0u), key.z + ((slot & 4u) ? half : 0u)};
-  }
+  [[nodiscard]] Key child_key(unsigned slot) const { return detail::child_key(key, depth, slot); }
   [[nodiscard]] Node to_node(const QueryScope& scope) const {
     return make_node(*scope.tree, *scope.grid, ref, code());
   }

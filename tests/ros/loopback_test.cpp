@@ -29,6 +29,7 @@
 #include <rosbag/bag.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_srvs/Empty.h>
+#include <umbra_msgs/CheckCollision.h>
 #include <tf2_msgs/TFMessage.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -37,6 +38,7 @@
 #include <functional>
 #include <mutex>
 #include <optional>
+#include <random>
 #include <thread>
 
 #include "map_messages.hpp"
@@ -378,6 +380,53 @@ TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
   EXPECT_GT(known, 1000u);
   ASSERT_TRUE(wait_for([&] { return full_.get() && binary_.get() && binary_.count == full_.count; }, kMessageLimit));
   ASSERT_NO_FATAL_FAILURE(expect_published(cleared));
+
+  // ~check_collision: the library's is_free on the map the node holds (the cleared one).
+  {
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<double> x(0.5, 19.5), y(0.5, 11.5), z(0.2, 2.8), r(0.05, 0.6);
+    std::size_t free_answers = 0;
+    for (int i = 0; i < 60; ++i) {
+      umbra_msgs::CheckCollision check;
+      const Vec3d a{x(rng), y(rng), z(rng)};
+      const Vec3d b{x(rng), y(rng), z(rng)};
+      check.request.shape = static_cast<std::uint8_t>(i % 4);
+      check.request.a.x = a.x;
+      check.request.a.y = a.y;
+      check.request.a.z = a.z;
+      check.request.b.x = i % 4 == 1 ? a.x + 0.3 : b.x;  // a box: a small one above a
+      check.request.b.y = i % 4 == 1 ? a.y + 0.4 : b.y;
+      check.request.b.z = i % 4 == 1 ? a.z + 0.2 : b.z;
+      check.request.radius = r(rng);
+      check.request.unknown_is_free = i % 3 == 0;
+      check.request.depth = i % 5 == 0 ? 2 : 0;
+      ASSERT_TRUE(ros::service::call("/umbra_server/check_collision", check));
+      ASSERT_TRUE(check.response.valid) << check.response.error;
+      const CollisionOptions options{check.request.unknown_is_free != 0, check.request.depth};
+      CollisionResult want;
+      switch (i % 4) {
+        case 0: want = cleared.is_free(Sphere{a, check.request.radius}, options); break;
+        case 1: want = cleared.is_free(Aabb{a, {a.x + 0.3, a.y + 0.4, a.z + 0.2}}, options); break;
+        case 2: want = cleared.is_free(Capsule{a, b, check.request.radius}, options); break;
+        default: want = cleared.is_free(Segment{a, b}, options); break;
+      }
+      EXPECT_EQ(check.response.free, want.free) << "check " << i;
+      if (!want.free) {
+        EXPECT_EQ(check.response.blocking_center.x, want.blocking->center.x) << "check " << i;
+        EXPECT_EQ(check.response.blocking_size, want.blocking->size) << "check " << i;
+      }
+      free_answers += want.free ? 1 : 0;
+    }
+    EXPECT_GT(free_answers, 0u);
+    EXPECT_LT(free_answers, 60u);
+    // A bad request: an answer saying why, not a failed call.
+    umbra_msgs::CheckCollision bad;
+    bad.request.shape = umbra_msgs::CheckCollision::Request::SPHERE;
+    bad.request.radius = -1.0;
+    ASSERT_TRUE(ros::service::call("/umbra_server/check_collision", bad));
+    EXPECT_FALSE(bad.response.valid);
+    EXPECT_NE(bad.response.error.find("radius"), std::string::npos) << bad.response.error;
+  }
 
   // ~reset: an empty map.
   std_srvs::Empty empty;

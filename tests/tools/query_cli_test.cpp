@@ -148,6 +148,46 @@ TEST_F(QueryCli, AnswersEqualTheLibrarysForEveryKind) {
   EXPECT_GT(clear, 0);
 }
 
+TEST_F(QueryCli, GainEqualsTheLibrarysForBothMethodsAndTheGivenFieldOfView) {
+  std::mt19937 rng(9);
+  const double h = map_->grid().half_extent() * 0.6;
+  std::uniform_real_distribution<double> u(-h, h);
+  std::uniform_real_distribution<double> yaw(-180.0, 180.0);
+  std::uniform_real_distribution<double> pitch(-30.0, 30.0);
+  std::vector<std::string> poses;
+  std::vector<std::vector<double>> values;
+  for (int i = 0; i < 25; ++i) {
+    values.push_back({u(rng), u(rng), u(rng), yaw(rng), pitch(rng)});
+    poses.push_back(text(values.back()));
+  }
+  std::uint64_t seen = 0;
+  for (const std::string method : {"exact", "fast"}) {
+    // A narrower view and ranges other than the defaults, so the options must reach the frustum.
+    const std::string flags = " --method " + method + " --hfov 70 --vfov 40 --min-range 0.1 --max-range 1.5";
+    SCOPED_TRACE(flags);
+    const CliRun run = run_query(quoted(dir_ / "map.umb") + " gain --input " + quoted(write_lines(poses)) + flags, dir_);
+    ASSERT_EQ(run.exit_code, 0) << (run.err.empty() ? "" : run.err.front());
+    ASSERT_EQ(run.out.size(), poses.size());
+    GainOptions options;
+    options.method = method == std::string("fast") ? GainMethod::fast : GainMethod::exact;
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      const std::vector<double>& v = values[i];
+      const GainResult want =
+          map_->information_gain(Frustum::from_degrees({v[0], v[1], v[2]}, v[3], v[4], 70, 40, 0.1, 1.5), options);
+      char expected[96];
+      std::snprintf(expected, sizeof expected, "%llu %.10g", static_cast<unsigned long long>(want.unknown_voxels),
+                    want.volume);
+      EXPECT_EQ(run.out[i], expected) << "pose " << i;
+      seen += want.unknown_voxels;
+    }
+    expect_timing(run, "gain", poses.size());
+  }
+  EXPECT_GT(seen, 0u);  // the poses see unknown space at all
+  // A field of view that cannot be is a usage error, before any line is read.
+  const CliRun bad = run_query(quoted(dir_ / "map.umb") + " gain --input - --hfov 0 < /dev/null", dir_);
+  EXPECT_EQ(bad.exit_code, 2);
+}
+
 TEST_F(QueryCli, NodesListAndCountEqualTheLibrarys) {
   for (const std::string state : {"occupied", "free", "unknown"}) {
     for (const int depth : {0, 3}) {
