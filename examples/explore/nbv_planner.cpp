@@ -53,6 +53,7 @@ void PlannerConfig::validate() const {
   if (samples_per_node < 1) bad_field("samples_per_node", ">= 1", samples_per_node);
   if (!(lambda >= 0.0)) bad_field("lambda", ">= 0", lambda);
   if (!(min_gain > 0.0)) bad_field("min_gain", "> 0", min_gain);
+  if (!(final_min_gain > 0.0 && final_min_gain <= min_gain)) bad_field("final_min_gain", "in (0, min_gain]", final_min_gain);
   for (int a = 0; a < 3; ++a) {
     if (!(bounds.min[std::size_t(a)] < bounds.max[std::size_t(a)])) {
       bad_field("bounds", "a box with min < max on every axis; min on that axis", bounds.min[std::size_t(a)]);
@@ -65,7 +66,7 @@ void PlannerConfig::validate() const {
 }
 
 NbvPlanner::NbvPlanner(const PlannerConfig& config, std::uint32_t seed, const std::atomic<bool>* inserting)
-    : config_(config), rng_(seed), inserting_(inserting) {
+    : config_(config), rng_(seed), inserting_(inserting), threshold_(config.min_gain) {
   config_.validate();
 }
 
@@ -95,7 +96,10 @@ int NbvPlanner::add_node(const ExplorationMap& map, int parent, const Pose& pose
   node.parent = parent;
   node.path_length = up.path_length + (pose.position - up.pose.position).norm();
   node.gain = view_gain(map, pose);
-  node.score = up.score + node.gain * std::exp(-config_.lambda * node.path_length);
+  // Crumbs of unknown space (less than the threshold) are worth nothing: counting them kept the robot gleaning
+  // them near itself while whole rooms lay unexplored (84% coverage after 900 s in the plant).
+  const double useful = node.gain >= threshold_ ? node.gain : 0.0;
+  node.score = up.score + useful * std::exp(-config_.lambda * node.path_length);
   tree_.push_back(node);
   ++stats_.nodes;
   return int(tree_.size()) - 1;
@@ -132,14 +136,14 @@ bool NbvPlanner::grow(const ExplorationMap& map, int enough_nodes, int target_no
     const double yaw = uniform(rng_, -std::numbers::pi, std::numbers::pi);
     if (!node_free(map, to) || !edge_free(map, from, to)) continue;
     const int added = add_node(map, int(nearest), {to, yaw});
-    gain_found = gain_found || tree_[std::size_t(added)].gain >= config_.min_gain;
+    gain_found = gain_found || tree_[std::size_t(added)].gain >= threshold_;
   }
   return gain_found;
 }
 
 void NbvPlanner::remember(const std::vector<std::size_t>& branch) {
   for (std::size_t i = 1; i < tree_.size(); ++i) {
-    if (tree_[i].gain < config_.min_gain || std::find(branch.begin(), branch.end(), i) != branch.end()) continue;
+    if (tree_[i].gain < threshold_ || std::find(branch.begin(), branch.end(), i) != branch.end()) continue;
     // One pose per neighbourhood, the newest: the memory spreads over the places left behind.
     std::erase_if(memory_, [&](const Pose& old) {
       return (old.position - tree_[i].pose.position).norm() < config_.extension_range;
@@ -152,7 +156,22 @@ void NbvPlanner::remember(const std::vector<std::size_t>& branch) {
 }
 
 void NbvPlanner::refresh_memory(const ExplorationMap& map) {
-  std::erase_if(memory_, [&](const Pose& pose) { return view_gain(map, pose) < config_.min_gain; });
+  std::erase_if(memory_, [&](const Pose& pose) { return view_gain(map, pose) < threshold_; });
+}
+
+bool NbvPlanner::has_gain() const {
+  for (std::size_t i = 1; i < tree_.size(); ++i) {
+    if (tree_[i].gain >= threshold_) return true;
+  }
+  return false;
+}
+
+void NbvPlanner::rescore() {
+  for (std::size_t i = 1; i < tree_.size(); ++i) {
+    TreeNode& node = tree_[i];
+    const double useful = node.gain >= threshold_ ? node.gain : 0.0;
+    node.score = tree_[std::size_t(node.parent)].score + useful * std::exp(-config_.lambda * node.path_length);
+  }
 }
 
 PlanStep NbvPlanner::plan(const ExplorationMap& map, const Pose& robot) {
@@ -168,8 +187,7 @@ PlanStep NbvPlanner::plan(const ExplorationMap& map, const Pose& robot) {
     }
     parent = add_node(map, parent, pose);
   }
-  bool gain_found = false;
-  for (std::size_t i = 1; i < tree_.size(); ++i) gain_found = gain_found || tree_[i].gain >= config_.min_gain;
+  bool gain_found = has_gain();
 
   PlanStep step;
   gain_found = grow(map, config_.initial_nodes, config_.max_nodes, false, gain_found);
@@ -179,6 +197,13 @@ PlanStep NbvPlanner::plan(const ExplorationMap& map, const Pose& robot) {
     step.grown_on = true;
     ++stats_.grown_on;
     gain_found = grow(map, config_.max_nodes, config_.max_nodes_no_gain, true, false);
+    // Still none: what is left is crumbs; lower the threshold and score the same tree again.
+    while (!gain_found && threshold_ > config_.final_min_gain) {
+      threshold_ = std::max(config_.final_min_gain, 0.5 * threshold_);
+      ++stats_.threshold_lowered;
+      rescore();
+      gain_found = has_gain();
+    }
   }
   step.tree_nodes = int(tree_.size()) - 1;
   if (!gain_found) {

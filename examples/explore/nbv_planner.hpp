@@ -9,7 +9,8 @@
 // the nearest node is free for the ball (a capsule). Each node gets a random
 // yaw and the gain of the camera's view from it (visible unknown volume),
 // and a score: its parent's score + gain * exp(-lambda * path length from
-// the robot). The tree starts with the robot's pose and with what is left of
+// the robot), where a gain below the threshold (`min_gain`) counts as none.
+// The tree starts with the robot's pose and with what is left of
 // the previous step's best branch (re-checked against the current map), so
 // the plan stays consistent from step to step. It grows to at least
 // `initial_nodes` nodes and on until some node has a gain of at least
@@ -26,7 +27,10 @@
 // of earlier trees that had gain but were not on the chosen branch (one per
 // extension_range, the newest), whose gain is computed again before they are
 // used (those without gain now are forgotten). Only when that larger tree has no node
-// with gain either is the exploration over.
+// with gain either does the planner halve its threshold (down to
+// `final_min_gain`, for the crumbs of unknown space behind clutter that are
+// left at the end), scoring the same tree again; when nothing reaches even
+// that, the exploration is over. The threshold is never raised again.
 //
 // Every map query goes through ExplorationMap and is timed per kind (node
 // collision, edge, gain), and counted.
@@ -80,7 +84,8 @@ struct PlannerConfig {
   /// cramped map most samples give no node).
   int samples_per_node = 20;
   double lambda = 0.5;    ///< 1/m, discount of gain with path length
-  double min_gain = 0.5;  ///< m^3: less is no gain
+  double min_gain = 1.0;  ///< m^3: less is no gain (the threshold at first)
+  double final_min_gain = 0.125;  ///< m^3: the threshold at the end (see the file comment)
   Aabb bounds;            ///< where nodes may lie (the building's inside)
   CameraView camera;
 
@@ -103,6 +108,7 @@ struct PlannerStats {
   std::uint64_t nodes = 0;    ///< tree nodes made (the roots not counted)
   std::uint64_t samples = 0;  ///< samples drawn
   std::uint64_t grown_on = 0;  ///< steps whose tree grew past max_nodes (no gain near)
+  std::uint64_t threshold_lowered = 0;  ///< times the gain threshold was halved
   /// Queries that began while the mapping thread was inserting (set by the
   /// explorer): proof that mapping and planning overlapped.
   std::uint64_t queries_during_insertion = 0;
@@ -127,6 +133,8 @@ class NbvPlanner {
   PlanStep plan(const ExplorationMap& map, const Pose& robot);
 
   [[nodiscard]] const PlannerStats& stats() const { return stats_; }
+  /// The gain threshold now (min_gain until the end game lowers it).
+  [[nodiscard]] double gain_threshold() const { return threshold_; }
 
   /// A node of the tree; the root (index 0) is the robot's pose.
   struct TreeNode {
@@ -154,6 +162,10 @@ class NbvPlanner {
   void remember(const std::vector<std::size_t>& branch);
   /// Drops remembered poses that have no gain now.
   void refresh_memory(const ExplorationMap& map);
+  /// Whether some node's gain reaches the threshold.
+  [[nodiscard]] bool has_gain() const;
+  /// Scores of all nodes again (after the threshold changed).
+  void rescore();
   void count_overlap();
 
   PlannerConfig config_;
@@ -162,6 +174,7 @@ class NbvPlanner {
   std::vector<TreeNode> tree_;
   std::vector<Pose> previous_branch_;  ///< the last best branch after its first node
   std::vector<Pose> memory_;           ///< poses of earlier trees with gain, oldest first
+  double threshold_;                   ///< gain below it is none: min_gain, lowered at the end
   PlannerStats stats_;
 };
 

@@ -68,6 +68,7 @@ PlannerConfig room_config() {
   config.initial_nodes = 60;  // the tree grows to max_nodes
   config.max_nodes = 60;
   config.lambda = 0.4;
+  config.min_gain = 0.5;  // FakeMap's gains below it count as none in a score
   return config;
 }
 
@@ -94,7 +95,8 @@ void expect_tree_as_defined(const NbvPlanner& planner, const PlannerConfig& conf
     EXPECT_FALSE(test::meets(Capsule{up.pose.position, p, config.check_radius()}, FakeMap::pillar()));
     EXPECT_NEAR(node.path_length, up.path_length + edge, 1e-9);
     EXPECT_DOUBLE_EQ(node.gain, FakeMap::gain_at(p));
-    EXPECT_NEAR(node.score, up.score + FakeMap::gain_at(p) * std::exp(-config.lambda * node.path_length), 1e-9);
+    const double useful = FakeMap::gain_at(p) >= config.min_gain ? FakeMap::gain_at(p) : 0.0;
+    EXPECT_NEAR(node.score, up.score + useful * std::exp(-config.lambda * node.path_length), 1e-9);
   }
 }
 
@@ -253,10 +255,51 @@ TEST(NbvPlanner, GrowsOnWhenNoGainIsNearAndStopsAtTheFirstGain) {
 
   // With no room to grow on, the same situation ends the exploration.
   config.max_nodes_no_gain = config.max_nodes;
+  config.final_min_gain = config.min_gain;
   NbvPlanner capped(config, 9);
   const PlanStep done = capped.plan(map, robot);
   EXPECT_FALSE(done.gain_found);
   EXPECT_EQ(done.tree_nodes, config.max_nodes);
+}
+
+TEST(NbvPlanner, OnlyCrumbsLeftLowerTheThresholdAndCountThemAgain) {
+  // Every view sees 0.3 m^3: below min_gain (1), above final_min_gain
+  // (0.125). The grown-on tree finds nothing; halving the threshold twice
+  // (0.5, 0.25) makes the crumbs count, and scores follow the new threshold.
+  class Crumbs final : public ExplorationMap {
+   public:
+    [[nodiscard]] std::string name() const override { return "crumbs"; }
+    [[nodiscard]] double resolution() const override { return 0.1; }
+    void assume_free(const Sphere&) override {}
+    void insert(Vec3f, std::span<const Vec3f>, double) override {}
+    [[nodiscard]] bool is_free(const Sphere&) const override { return true; }
+    [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
+    [[nodiscard]] double gain(const Frustum&) const override { return 0.3; }
+    void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
+    [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
+  } map;
+  PlannerConfig config = room_config();
+  config.min_gain = 1.0;
+  config.final_min_gain = 0.125;
+  config.initial_nodes = 15;
+  config.max_nodes = 30;
+  config.max_nodes_no_gain = 60;
+  NbvPlanner planner(config, 4);
+  const Pose robot{{2.0, 2.0, 2.0}, 0.0};
+  const PlanStep step = planner.plan(map, robot);
+  EXPECT_TRUE(step.gain_found);
+  EXPECT_TRUE(step.grown_on);
+  EXPECT_EQ(planner.stats().threshold_lowered, 2u);
+  EXPECT_DOUBLE_EQ(planner.gain_threshold(), 0.25);
+  const auto& tree = planner.tree();
+  EXPECT_EQ(tree.size(), 61u);
+  for (std::size_t i = 1; i < tree.size(); ++i) {
+    const auto& up = tree[std::size_t(tree[i].parent)];
+    EXPECT_NEAR(tree[i].score, up.score + 0.3 * std::exp(-config.lambda * tree[i].path_length), 1e-12);
+  }
+  // The threshold stays low for the next steps.
+  EXPECT_TRUE(planner.plan(map, step.next).gain_found);
+  EXPECT_EQ(planner.stats().threshold_lowered, 2u);
 }
 
 TEST(NbvPlanner, BadConfigIsRefusedByName) {
