@@ -1,10 +1,17 @@
 // Tests of the reachable-space ground truth on rooms small enough to count
 // by hand: a closed 2 m cube, the cube split by a wall, the wall with a
-// window; counts of boxes of cells; bad arguments.
+// window; counts of boxes of cells; bad arguments. And on a 9 x 9 x 6 m part
+// of the industrial plant, cell by cell against a brute force: the scene's
+// own distance query at every cell centre and a plain flood fill.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
+#include <deque>
 #include <stdexcept>
+#include <vector>
 
+#include "umbra/sim/industrial_scene.hpp"
 #include "umbra/sim/reachable_space.hpp"
 #include "umbra/sim/scene.hpp"
 
@@ -81,6 +88,78 @@ TEST(ReachableSpace, WindowJoinsTheHalves) {
   EXPECT_EQ(space.count_in({0.9, 0, 0}, {1.1, 2, 2}), 2u * 16u);
   EXPECT_EQ(space.count_in({0.7, 0, 0}, {0.8, 2, 2}), 36u);
   EXPECT_TRUE(space.reachable({1.5, 1.0, 1.0}));
+}
+
+TEST(ReachableSpace, PartOfThePlantEqualsBruteForce) {
+  const IndustrialPlant plant = make_industrial_scene(1);
+  const double cell = 0.16;
+  const double radius = 0.3;
+  const Box region{plant.start - Vec3d{4.5, 4.5, 1.4}, plant.start + Vec3d{4.5, 4.5, 4.5}};
+  const ReachableSpace space(plant.scene, region, cell, radius, plant.start);
+
+  // Cells whose centres lie in the region, on the lattice i * cell.
+  std::array<long, 3> first{};
+  std::array<long, 3> size{};
+  for (std::size_t a = 0; a < 3; ++a) {
+    first[a] = long(std::ceil(region.min[a] / cell - 0.5));
+    size[a] = long(std::floor(region.max[a] / cell - 0.5)) - first[a] + 1;
+  }
+  auto centre = [&](long i, long j, long k) {
+    return Vec3d{(double(first[0] + i) + 0.5) * cell, (double(first[1] + j) + 0.5) * cell,
+                 (double(first[2] + k) + 0.5) * cell};
+  };
+  auto index = [&](long i, long j, long k) { return std::size_t((k * size[1] + j) * size[0] + i); };
+  std::vector<char> clear(std::size_t(size[0] * size[1] * size[2]), 0);
+  std::vector<char> borderline(clear.size(), 0);
+  for (long k = 0; k < size[2]; ++k) {
+    for (long j = 0; j < size[1]; ++j) {
+      for (long i = 0; i < size[0]; ++i) {
+        const Vec3d c = centre(i, j, k);
+        const double d = plant.scene.is_inside_solid(c) ? -1.0 : plant.scene.distance_to_nearest_surface(c);
+        clear[index(i, j, k)] = d >= radius;
+        borderline[index(i, j, k)] = std::abs(d - radius) < 1e-9;
+      }
+    }
+  }
+  std::vector<char> reached(clear.size(), 0);
+  std::deque<std::array<long, 3>> queue;
+  const long si = long(std::floor(plant.start.x / cell)) - first[0];
+  const long sj = long(std::floor(plant.start.y / cell)) - first[1];
+  const long sk = long(std::floor(plant.start.z / cell)) - first[2];
+  ASSERT_TRUE(clear[index(si, sj, sk)]);
+  reached[index(si, sj, sk)] = 1;
+  queue.push_back({si, sj, sk});
+  std::size_t count = 0;
+  while (!queue.empty()) {
+    const auto [i, j, k] = queue.front();
+    queue.pop_front();
+    ++count;
+    const long steps[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (const auto& s : steps) {
+      const long a = i + s[0], b = j + s[1], c = k + s[2];
+      if (a < 0 || b < 0 || c < 0 || a >= size[0] || b >= size[1] || c >= size[2]) continue;
+      if (!clear[index(a, b, c)] || reached[index(a, b, c)]) continue;
+      reached[index(a, b, c)] = 1;
+      queue.push_back({a, b, c});
+    }
+  }
+  std::size_t mismatches = 0;
+  std::size_t borderlines = 0;
+  for (long k = 0; k < size[2]; ++k) {
+    for (long j = 0; j < size[1]; ++j) {
+      for (long i = 0; i < size[0]; ++i) {
+        if (borderline[index(i, j, k)]) {
+          ++borderlines;
+          continue;
+        }
+        if (space.reachable(centre(i, j, k)) != bool(reached[index(i, j, k)])) ++mismatches;
+      }
+    }
+  }
+  EXPECT_EQ(mismatches, 0u);
+  EXPECT_LE(borderlines, 10u);
+  EXPECT_NEAR(double(space.cell_count()), double(count), double(borderlines));
+  EXPECT_GT(count, 10000u);  // the part holds a real piece of hall A
 }
 
 TEST(ReachableSpace, RejectsBadArguments) {
