@@ -25,10 +25,10 @@
 // nbvplanner's cutoff iterations do), stopping at the first node with gain,
 // and draws a share `memory_bias` of its samples at remembered poses: nodes
 // of earlier trees that had gain but were not on the chosen branch (one per
-// extension_range, the newest), whose gain is computed again before they are
-// used (those without gain now are forgotten). Only when that larger tree has no node
-// with gain either does the planner halve its threshold (down to
-// `final_min_gain`, for the crumbs of unknown space behind clutter that are
+// extension_range, the newest), whose gain is computed again before they
+// are used (those without gain now are forgotten). Only when that larger
+// tree has no node with gain either does the planner halve its threshold
+// (down to `final_min_gain`, for the crumbs of unknown space behind clutter
 // left at the end), scoring the same tree again; when nothing reaches even
 // that, the exploration is over. The threshold is never raised again.
 //
@@ -36,7 +36,8 @@
 // collision, edge, gain), and counted.
 //
 // Cost: per step up to max_nodes * (1 ball check + 1 capsule check + 1 gain)
-// plus rejected samples' checks; the gains dominate.
+// plus rejected samples' checks, the gains dominating; a step that grows on
+// up to max_nodes_no_gain times that, plus one gain per remembered pose.
 #pragma once
 
 #include <atomic>
