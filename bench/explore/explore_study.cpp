@@ -170,6 +170,7 @@ std::string summary_markdown(const std::vector<Run>& runs, const StudyOptions& o
   row("planner iterations", [](const Run& r) { return std::to_string(r.result.planner.steps); });
   row("iterations that grew the tree on (no gain near)", [](const Run& r) { return std::to_string(r.result.planner.grown_on); });
   row("gain threshold halvings (end game)", [](const Run& r) { return std::to_string(r.result.planner.threshold_lowered); });
+  row("steps back (trapped by a newly seen surface)", [](const Run& r) { return std::to_string(r.result.planner.backtracks); });
   row("planner iterations per second of planning", [](const Run& r) {
     return fixed(double(r.result.planner.steps) / std::max(1e-9, r.result.planning_time), 2);
   });

@@ -179,6 +179,23 @@ PlanStep NbvPlanner::plan(const ExplorationMap& map, const Pose& robot) {
   tree_.clear();
   tree_.push_back({robot, -1, 0.0, 0.0, 0.0});
 
+  // Trapped: a frame inserted since the robot got here put a surface within
+  // the check radius of it, so every edge from here fails. Fly back along
+  // the way it came (flown, so clear) until it is somewhere free again.
+  if (!node_free(map, robot.position)) {
+    ++stats_.backtracks;
+    previous_branch_.clear();
+    while (!history_.empty() && (history_.back().position - robot.position).norm() < 1e-9) history_.pop_back();
+    PlanStep step;
+    if (history_.empty()) return step;
+    step.gain_found = true;
+    step.backtracked = true;
+    step.next = history_.back();
+    history_.pop_back();
+    return step;
+  }
+  history_.push_back(robot);
+
   // What is left of the last best branch, as long as it is still free.
   int parent = 0;
   for (const Pose& pose : previous_branch_) {

@@ -32,6 +32,11 @@
 // left at the end), scoring the same tree again; when nothing reaches even
 // that, the exploration is over. The threshold is never raised again.
 //
+// A frame inserted after the robot reached a node may show a surface within
+// the check radius of it (a pipe seen from a new side): then no edge leaves
+// the robot. The step then flies back to the pose the robot planned from
+// before (the way it came, flown and so clear), as often as needed.
+//
 // Every map query goes through ExplorationMap and is timed per kind (node
 // collision, edge, gain), and counted.
 //
@@ -110,6 +115,7 @@ struct PlannerStats {
   std::uint64_t samples = 0;  ///< samples drawn
   std::uint64_t grown_on = 0;  ///< steps whose tree grew past max_nodes (no gain near)
   std::uint64_t threshold_lowered = 0;  ///< times the gain threshold was halved
+  std::uint64_t backtracks = 0;         ///< steps back along the way the robot came (trapped)
   /// Queries that began while the mapping thread was inserting (set by the
   /// explorer): proof that mapping and planning overlapped.
   std::uint64_t queries_during_insertion = 0;
@@ -118,6 +124,7 @@ struct PlannerStats {
 struct PlanStep {
   bool gain_found = false;
   bool grown_on = false;  ///< the tree grew past max_nodes to find gain
+  bool backtracked = false;  ///< the robot was trapped: `next` is where it planned from before
   Pose next;              ///< first node of the best branch (when gain_found)
   double best_gain = 0.0;  ///< m^3, the best node's own gain
   double best_score = 0.0;
@@ -176,6 +183,7 @@ class NbvPlanner {
   std::vector<Pose> previous_branch_;  ///< the last best branch after its first node
   std::vector<Pose> memory_;           ///< poses of earlier trees with gain, oldest first
   double threshold_;                   ///< gain below it is none: min_gain, lowered at the end
+  std::vector<Pose> history_;          ///< poses the robot planned from, oldest first
   PlannerStats stats_;
 };
 

@@ -302,6 +302,42 @@ TEST(NbvPlanner, OnlyCrumbsLeftLowerTheThresholdAndCountThemAgain) {
   EXPECT_EQ(planner.stats().threshold_lowered, 2u);
 }
 
+TEST(NbvPlanner, TrappedRobotFliesBackTheWayItCame) {
+  // Free everywhere except the balls around `trap` (a surface seen after the
+  // robot got there): planning from there goes back to the last pose it
+  // planned from, and from an empty history nowhere.
+  class Trap final : public ExplorationMap {
+   public:
+    Vec3d trap{50.0, 50.0, 50.0};
+    [[nodiscard]] std::string name() const override { return "trap"; }
+    [[nodiscard]] double resolution() const override { return 0.1; }
+    void assume_free(const Sphere&) override {}
+    void insert(Vec3f, std::span<const Vec3f>, double) override {}
+    [[nodiscard]] bool is_free(const Sphere& ball) const override { return (ball.center - trap).norm() > 0.2; }
+    [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
+    [[nodiscard]] double gain(const Frustum&) const override { return 2.0; }
+    void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
+    [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
+  } map;
+  const PlannerConfig config = room_config();
+  NbvPlanner planner(config, 2);
+  const Pose start{{2.0, 2.0, 2.0}, 0.0};
+  const PlanStep first = planner.plan(map, start);
+  ASSERT_TRUE(first.gain_found);
+  EXPECT_FALSE(first.backtracked);
+  map.trap = first.next.position;
+  const PlanStep back = planner.plan(map, first.next);
+  EXPECT_TRUE(back.gain_found);
+  EXPECT_TRUE(back.backtracked);
+  EXPECT_EQ(back.next.position, start.position);
+  EXPECT_EQ(planner.stats().backtracks, 1u);
+  EXPECT_EQ(planner.tree().size(), 1u);  // no tree grown from a trap
+
+  NbvPlanner fresh(config, 2);
+  map.trap = start.position;
+  EXPECT_FALSE(fresh.plan(map, start).gain_found);
+}
+
 TEST(NbvPlanner, BadConfigIsRefusedByName) {
   PlannerConfig config = room_config();
   config.max_nodes = config.initial_nodes - 1;
