@@ -5,7 +5,11 @@
 // blocking, centres drawn from the free voxels of the finished map with a
 // fixed seed) as fast as they can, or at a fixed rate each. Reported, per
 // dataset and setting:
-//   - insertion time per scan alone and with the readers, and the slow-down;
+//   - insertion time per scan alone and with the readers, and the slow-down.
+//     Each setting runs --trials times as a pair (alone, then with readers,
+//     each on a fresh map), and the slow-down is the median of the pairs'
+//     ratios, so that load from other processes that comes and goes hits
+//     both sides of a pair alike;
 //   - the share of insertion time the map was closed to readers (the apply
 //     phases: InsertStats::exclusive_seconds) and the longest such phase;
 //   - reader latency (median, p99, max) and queries per second.
@@ -13,7 +17,7 @@
 // (fine steps 0, max range 5 m) and the three 3DTK scans at 5 cm with the
 // discrete integrator (max range 30 m).
 //
-// Usage: umbra_concurrency_benchmark [--data DIR] [--loops N] [--readers 1,2]
+// Usage: umbra_concurrency_benchmark [--data DIR] [--loops N] [--trials 3] [--readers 1,2]
 //          [--rates 0,1000] [--datasets tum,3dtk]
 #include <algorithm>
 #include <atomic>
@@ -45,6 +49,7 @@ struct Dataset {
 struct Options {
   std::string data = "../shared/data";
   int loops = 3;
+  int trials = 3;
   std::vector<int> readers = {1, 2};
   std::vector<double> rates = {0.0, 1000.0};  // queries per second per reader; 0: flat out
   std::vector<std::string> datasets = {"tum", "3dtk"};
@@ -69,6 +74,8 @@ Options parse(int argc, char** argv) {
       o.data = value();
     } else if (arg == "--loops") {
       o.loops = std::stoi(value());
+    } else if (arg == "--trials") {
+      o.trials = std::stoi(value());
     } else if (arg == "--readers") {
       o.readers.clear();
       for (const std::string& v : split(value())) o.readers.push_back(std::stoi(v));
@@ -111,6 +118,11 @@ WriterResult insert_all(umbra::OccupancyMap& map, const std::vector<umbra::Scan>
   return r;
 }
 
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
 double percentile(std::vector<double>& v, double p) {
   if (v.empty()) return 0.0;
   const auto k = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1));
@@ -137,56 +149,64 @@ void run(const Dataset& d, const Options& o) {
     for (int i = 0; i < 100000; ++i) centres.push_back(free_voxels[pick(rng)]);
   }
 
-  umbra::OccupancyMap alone_map(d.resolution);
-  const WriterResult alone = insert_all(alone_map, scans, d, o.loops);
-  const double alone_ms = 1e3 * alone.seconds / static_cast<double>(alone.scans);
-  std::printf("| %s | alone | - | %.1f | - | %.1f%% | %.2f | - | - | - | - |\n", d.name.c_str(), alone_ms,
-              100.0 * alone.exclusive_seconds / alone.seconds, 1e3 * alone.longest_exclusive);
-  std::fflush(stdout);
-
   for (const int readers : o.readers) {
     for (const double rate : o.rates) {
-      umbra::OccupancyMap map(d.resolution);
-      std::atomic<bool> stop{false};
-      std::vector<std::vector<double>> latencies(static_cast<std::size_t>(readers));
-      std::vector<std::thread> threads;
-      for (int r = 0; r < readers; ++r) {
-        threads.emplace_back([&, r] {
-          std::vector<double>& mine = latencies[static_cast<std::size_t>(r)];
-          mine.reserve(1 << 22);
-          std::size_t i = static_cast<std::size_t>(r) * 7919;
-          const auto period = rate > 0 ? std::chrono::duration<double>(1.0 / rate) : std::chrono::duration<double>(0);
-          auto next = Clock::now();
-          while (!stop.load(std::memory_order_relaxed)) {
-            const umbra::Vec3d c = centres[i++ % centres.size()];
-            const auto start = Clock::now();
-            (void)map.is_free(umbra::Sphere{c, 0.25});
-            const auto end = Clock::now();
-            mine.push_back(std::chrono::duration<double, std::micro>(end - start).count());
-            if (rate > 0) {
-              next += std::chrono::duration_cast<Clock::duration>(period);
-              std::this_thread::sleep_until(next);
+      std::vector<double> ratios;
+      std::vector<double> alone_ms;
+      std::vector<double> with_ms;
+      std::vector<double> all;  // every latency of every trial, in us
+      WriterResult with_total;
+      double reader_seconds = 0.0;
+      for (int trial = 0; trial < o.trials; ++trial) {
+        umbra::OccupancyMap alone_map(d.resolution);
+        const WriterResult alone = insert_all(alone_map, scans, d, o.loops);
+        umbra::OccupancyMap map(d.resolution);
+        std::atomic<bool> stop{false};
+        std::vector<std::vector<double>> latencies(static_cast<std::size_t>(readers));
+        std::vector<std::thread> threads;
+        for (int r = 0; r < readers; ++r) {
+          threads.emplace_back([&, r] {
+            std::vector<double>& mine = latencies[static_cast<std::size_t>(r)];
+            mine.reserve(1 << 22);
+            std::size_t i = static_cast<std::size_t>(r) * 7919;
+            const auto period = rate > 0 ? std::chrono::duration<double>(1.0 / rate) : std::chrono::duration<double>(0);
+            auto next = Clock::now();
+            while (!stop.load(std::memory_order_relaxed)) {
+              const umbra::Vec3d c = centres[i++ % centres.size()];
+              const auto start = Clock::now();
+              (void)map.is_free(umbra::Sphere{c, 0.25});
+              const auto end = Clock::now();
+              mine.push_back(std::chrono::duration<double, std::micro>(end - start).count());
+              if (rate > 0) {
+                next += std::chrono::duration_cast<Clock::duration>(period);
+                std::this_thread::sleep_until(next);
+              }
             }
-          }
-        });
+          });
+        }
+        const WriterResult with = insert_all(map, scans, d, o.loops);
+        stop.store(true);
+        for (std::thread& t : threads) t.join();
+        for (const auto& v : latencies) all.insert(all.end(), v.begin(), v.end());
+        alone_ms.push_back(1e3 * alone.seconds / static_cast<double>(alone.scans));
+        with_ms.push_back(1e3 * with.seconds / static_cast<double>(with.scans));
+        ratios.push_back(with_ms.back() / alone_ms.back());
+        with_total.seconds += with.seconds;
+        with_total.exclusive_seconds += with.exclusive_seconds;
+        with_total.longest_exclusive = std::max(with_total.longest_exclusive, with.longest_exclusive);
+        reader_seconds += with.seconds;
       }
-      const WriterResult with = insert_all(map, scans, d, o.loops);
-      stop.store(true);
-      for (std::thread& t : threads) t.join();
-      std::vector<double> all;
-      for (const auto& v : latencies) all.insert(all.end(), v.begin(), v.end());
-      const double with_ms = 1e3 * with.seconds / static_cast<double>(with.scans);
-      const double qps = static_cast<double>(all.size()) / with.seconds;
+      const double qps = static_cast<double>(all.size()) / reader_seconds;
       const double p50 = percentile(all, 0.5);
       const double p99 = percentile(all, 0.99);
       const double max = all.empty() ? 0.0 : *std::max_element(all.begin(), all.end());
       char setting[64];
       std::snprintf(setting, sizeof setting, "%d reader%s, %s", readers, readers == 1 ? "" : "s",
                     rate > 0 ? (std::to_string(static_cast<int>(rate)) + " q/s each").c_str() : "flat out");
-      std::printf("| %s | %s | %.1f%% | %.1f | %.0f | %.1f%% | %.2f | %.2f | %.2f | %.0f | %.0f |\n", d.name.c_str(),
-                  setting, 100.0 * (with_ms / alone_ms - 1.0), with_ms, qps,
-                  100.0 * with.exclusive_seconds / with.seconds, 1e3 * with.longest_exclusive, p50, p99, max,
-                  static_cast<double>(all.size()));
+      std::printf("| %s | %s | %.1f%% | %.1f | %.1f | %.0f | %.1f%% | %.2f | %.2f | %.2f | %.0f | %.0f |\n",
+                  d.name.c_str(), setting, 100.0 * (median(ratios) - 1.0), median(alone_ms), median(with_ms), qps,
+                  100.0 * with_total.exclusive_seconds / with_total.seconds, 1e3 * with_total.longest_exclusive, p50,
+                  p99, max, static_cast<double>(all.size()));
       std::fflush(stdout);
     }
   }
@@ -197,8 +217,9 @@ void run(const Dataset& d, const Options& o) {
 int main(int argc, char** argv) {
   try {
     const Options o = parse(argc, argv);
-    std::printf("| dataset | readers | insertion slow-down | ms/scan | queries/s | closed to readers | longest closed (ms) "
-                "| p50 (us) | p99 (us) | max (us) | queries |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf("| dataset | readers | insertion slow-down (median of pairs) | ms/scan alone | ms/scan with readers "
+                "| queries/s | closed to readers | longest closed (ms) | p50 (us) | p99 (us) | max (us) | queries |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     const std::vector<Dataset> all = {
         {"TUM frames, 2 cm, fast n=0", "tum_fr2_pioneer_slam2", 0.02, umbra::IntegratorKind::fast, 0, 5.0},
         {"3DTK scans, 5 cm, discrete", "3dtk/3dtk_registered.graph", 0.05, umbra::IntegratorKind::discrete, 2, 30.0},

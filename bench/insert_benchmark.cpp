@@ -42,6 +42,7 @@
 
 #include <octomap/OcTree.h>
 
+#include "common/argument_cursor.hpp"
 #include "umbra/io/scan_source.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
@@ -243,15 +244,9 @@ int main(int argc, char** argv) {
   double max_range = 30.0;
   double tum_max_range = 5.0;
   bool color = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "%s needs a value\n", arg.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
+  for (umbra_bench::ArgumentCursor args{argc, argv}; args.next();) {
+    const std::string arg = args.flag();
+    auto value = [&] { return args.value(); };
     if (arg == "--data") data_dir = value();
     else if (arg == "--res") resolutions = value();
     else if (arg == "--datasets") datasets = value();

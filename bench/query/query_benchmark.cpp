@@ -40,6 +40,7 @@
 
 #include <unistd.h>
 
+#include "../common/argument_cursor.hpp"
 #include "collision_section.hpp"
 #include "datasets.hpp"
 #include "gain_section.hpp"
@@ -76,15 +77,9 @@ int main(int argc, char** argv) {
   int repeat = 3;
   bool run_fast = true;
   std::uint64_t seed = 1;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "%s needs a value\n", arg.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
+  for (umbra_bench::ArgumentCursor args{argc, argv}; args.next();) {
+    const std::string arg = args.flag();
+    auto value = [&] { return args.value(); };
     if (arg == "--data") data_dir = value();
     else if (arg == "--datasets") dataset_names = value();
     else if (arg == "--sections") sections = value();

@@ -19,9 +19,9 @@
 
 namespace ros::serialization {
 
-/// Elements of variable size (strings, nested messages with arrays): one by one.
+/// Writing and reading element by element: a count, then each element.
 template <typename T>
-struct VectorSerializer<T, std::allocator<T>, typename boost::disable_if<mt::IsFixedSize<T> >::type> {
+struct ElementwiseVector {
   template <typename Stream>
   static void write(Stream& stream, const std::vector<T>& v) {
     stream.next(static_cast<uint32_t>(v.size()));
@@ -34,6 +34,12 @@ struct VectorSerializer<T, std::allocator<T>, typename boost::disable_if<mt::IsF
     v.resize(count);
     for (T& item : v) stream.next(item);
   }
+};
+
+/// Elements of variable size (strings, nested messages with arrays): one by one.
+template <typename T>
+struct VectorSerializer<T, std::allocator<T>, typename boost::disable_if<mt::IsFixedSize<T> >::type>
+    : ElementwiseVector<T> {
   static uint32_t serializedLength(const std::vector<T>& v) {
     uint32_t bytes = 4;
     for (const T& item : v) bytes += serializationLength(item);
@@ -66,19 +72,8 @@ struct VectorSerializer<T, std::allocator<T>, typename boost::enable_if<mt::IsSi
 /// Fixed-size types that are not plain bytes (e.g. geometry_msgs/Point): one by one, all of one length.
 template <typename T>
 struct VectorSerializer<T, std::allocator<T>,
-                        typename boost::enable_if<mpl::and_<mt::IsFixedSize<T>, mpl::not_<mt::IsSimple<T> > > >::type> {
-  template <typename Stream>
-  static void write(Stream& stream, const std::vector<T>& v) {
-    stream.next(static_cast<uint32_t>(v.size()));
-    for (const T& item : v) stream.next(item);
-  }
-  template <typename Stream>
-  static void read(Stream& stream, std::vector<T>& v) {
-    uint32_t count = 0;
-    stream.next(count);
-    v.resize(count);
-    for (T& item : v) stream.next(item);
-  }
+                        typename boost::enable_if<mpl::and_<mt::IsFixedSize<T>, mpl::not_<mt::IsSimple<T> > > >::type>
+    : ElementwiseVector<T> {
   static uint32_t serializedLength(const std::vector<T>& v) {
     return 4 + (v.empty() ? 0 : static_cast<uint32_t>(v.size()) * serializationLength(v.front()));
   }
