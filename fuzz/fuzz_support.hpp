@@ -2,10 +2,12 @@
 // current input (the path-based readers need a file name), and the rule for
 // exceptions.
 //
-// The rule: a reader may refuse any input, but only with umbra::FormatError.
-// Anything else escaping it (another exception type, a failed UMBRA_ASSERT,
-// a sanitizer report, an abort) is a bug and is turned into a crash so that
-// libFuzzer records the input. Cost: one pwrite and one ftruncate of a tmpfs
+// The rule: a reader may refuse any input, but only with umbra::FormatError,
+// or with umbra::MemoryLimitError when what the input honestly describes
+// needs more than the memory limit (set to 256 MiB for the fuzzers, well
+// under libFuzzer's 2 GB). Anything else escaping it (another exception
+// type, a failed UMBRA_ASSERT, a sanitizer report, an abort) is a bug and is
+// turned into a crash so that libFuzzer records the input. Cost: one pwrite and one ftruncate of a tmpfs
 // file per input.
 #pragma once
 
@@ -20,10 +22,15 @@
 #include <string>
 
 #include "map/map_access.hpp"
+#include "umbra/core/memory_limit.hpp"
 #include "umbra/io/format_error.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra::fuzz {
+
+/// The memory limit every fuzz target runs under, set when the program starts.
+inline constexpr std::uint64_t kMemoryLimit = std::uint64_t{256} << 20;
+inline const bool kMemoryLimitSet = (set_memory_limit(kMemoryLimit), true);
 
 /// A file in /dev/shm (or the temp folder) that holds each input in turn.
 class InputFile {
@@ -70,6 +77,8 @@ void expect_only_format_errors(Read&& read) {
     read();
   } catch (const FormatError&) {
     // A refusal, as it should be.
+  } catch (const MemoryLimitError&) {
+    // An input that needs more than the limit: refused before allocating, as it should be.
   } catch (const std::exception& e) {
     std::fprintf(stderr, "reader threw something other than FormatError: %s\n", e.what());
     std::abort();

@@ -1,10 +1,11 @@
 // umbra_fuzz_seeds OUTDIR: writes the seed corpora of the fuzz targets.
 //
 // One folder per target (OUTDIR/octomap_bt, octomap_ot, umb, umb_body,
-// graph, xyz, xyz_bz2, ply, pcd, kitti) with a handful of small, valid files made by
+// graph, xyz, xyz_bz2, ply, pcd, kitti, query_lines) with a handful of small, valid files made by
 // umbra's own writers or spelled out here: empty maps, single voxels, a few
 // random voxels, colour, an unpruned tree, a coarse map of the simulated
-// office; point clouds in every encoding each reader supports. Nothing comes
+// office; point clouds in every encoding each reader supports; `umbra query`
+// input lines of every kind, good and bad. Nothing comes
 // from ../shared/data. Every file is a few bytes to ~10 KB so that the
 // fuzzers mutate quickly. Cost: well under a second.
 #include <bzlib.h>
@@ -212,6 +213,26 @@ void kitti_seeds(const fs::path& out) {
   write(out / "kitti" / "000000.bin", scan);
 }
 
+/// `umbra query` input lines: byte 0 holds the settings (fuzz_query_lines.cpp:
+/// kind in bits 0-1, unknown-is-free bit 2, depth bits 3-4, radius bits 5-7),
+/// then good lines of the kind, a comment, a blank line and a few bad ones.
+void query_line_seeds(const fs::path& out) {
+  const char* const lines[] = {
+      "0.5 0.2 0.1 0.3\n1 1 1 0.05\n# comment\n\n-2,0,0.5,1\n0.1 0.2 nan 1\n500 0 0 0.1\n",       // sphere
+      "0 0 0 0.5 0.5 0.5\n-1 -1 -1 1 1 1\n2 2 2 1 1 1\n0 0 0 1 1\n0 0 0 20 20 20\n",              // box
+      "0 0 0 2 0 0\n0.5 0.2 0.1 0.5 0.2 4\n1e308 0 0 0 0 0\n0 0 0 0 0 0\n",                        // line
+      "0.55 0.25 0.15 1 0 0 -1\n0.55 0.25 0.15 0 0 1 10\n0 0 0 0 0 0 5\n0 0 0 1 1 1 inf\n",      // raycast
+  };
+  fs::create_directories(out / "query_lines");
+  for (unsigned kind = 0; kind < 4; ++kind) {
+    for (const unsigned settings : {0u, 4u, 8u, 0x20u, 0x44u}) {
+      std::string seed(1, static_cast<char>(kind | settings));
+      seed += lines[kind];
+      write(out / "query_lines" / ("q" + std::to_string(kind) + "-" + std::to_string(settings)), seed);
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -228,6 +249,7 @@ int main(int argc, char** argv) {
     ply_seeds(out);
     pcd_seeds(out);
     kitti_seeds(out);
+    query_line_seeds(out);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "umbra_fuzz_seeds: %s\n", e.what());
     return 1;

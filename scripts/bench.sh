@@ -3,6 +3,8 @@
 # assertions in build-bench/, then one benchmark program:
 #   scripts/bench.sh [insert] ARGS...   bench/insert_benchmark.cpp (the default)
 #   scripts/bench.sh query ARGS...      bench/query/query_benchmark.cpp
+#   scripts/bench.sh python ARGS...     bench/python_batch_benchmark.py (the
+#                                       Python module against C++, same map)
 # ARGS go to the program (--help lists them); results: docs/benchmarks.md.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -10,7 +12,7 @@ root="$(umbra_root)"
 build_dir="${UMBRA_BENCH_BUILD_DIR:-$root/build-bench}"
 
 benchmark=insert
-if [[ $# -gt 0 && ( "$1" == insert || "$1" == query ) ]]; then
+if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == python ) ]]; then
   benchmark="$1"
   shift
 fi
@@ -18,5 +20,14 @@ target="umbra_${benchmark}_benchmark"
 
 umbra_install_packages
 umbra_configure "$build_dir" -DCMAKE_BUILD_TYPE=Release -DUMBRA_ENABLE_ASSERTS=OFF -DUMBRA_BUILD_TESTS=OFF
+if [[ "$benchmark" == python ]]; then
+  target=umbra_python_batch_benchmark
+  cmake --build "$build_dir" --target "$target" umbra_python -j "$(umbra_jobs)"
+  # The interpreter the module was built for (python/CMakeLists.txt picks one with numpy).
+  python="$(sed -n 's/^Python3_EXECUTABLE:FILEPATH=//p' "$build_dir/CMakeCache.txt")"
+  PYTHONPATH="$build_dir/python" "${python:-python3}" "$root/bench/python_batch_benchmark.py" \
+    --cpp "$build_dir/bench/$target" --data "$root/../shared/data" "$@"
+  exit
+fi
 cmake --build "$build_dir" --target "$target" -j "$(umbra_jobs)"
 "$build_dir/bench/$target" --data "$root/../shared/data" "$@"

@@ -1,16 +1,31 @@
 // `umbra build INPUT... -o MAP.umb`: integrate point clouds into a map.
+//
+// In three steps, so that a problem costs as little work as possible: the
+// options are checked (any problem is a usage error, exit code 2); the
+// pre-flight opens every input, checks its header and every sensor origin it
+// states, and checks that the output folder can be written (a problem is a
+// failure, exit code 1, before anything is inserted); then the scans are
+// inserted and the map saved. A failure names the input and the scan. With
+// --keep-going a bad input, or scan, is skipped with a warning, the rest is
+// saved, and the exit code is 3.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <new>
+#include <optional>
+#include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
+#include "options.hpp"
 #include "progress_bar.hpp"
 #include "report.hpp"
+#include "umbra/io/file_saving.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/scan_source.hpp"
 #ifdef UMBRA_WITH_ROS
@@ -38,6 +53,7 @@ struct BuildOptions {
   std::string calibration;
   std::string association;
   std::string camera;
+  bool keep_going = false;
   std::vector<std::string> topics;
   std::string frame = "map";
 };
@@ -104,54 +120,162 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-void check_output_path(const std::filesystem::path& output) {
-  if (output.extension() != ".umb") {
-    throw std::invalid_argument("output " + output.string() + ": unknown map format (expected a .umb file)");
+/// What the options decide, checked: any problem is a UsageError (exit code 2).
+struct BuildPlan {
+  ScanSourceOptions sources;
+  MapConfig config;
+  std::optional<Aabb> box;
+  InsertOptions insert;
+};
+
+BuildPlan plan_build(const BuildOptions& options) {
+  return as_usage([&] {
+    const std::filesystem::path output = options.output;
+    if (output.extension() != ".umb") {
+      throw std::invalid_argument("output " + output.string() + ": unknown map format (expected a .umb file)");
+    }
+    const std::filesystem::path folder = output.parent_path().empty() ? "." : output.parent_path();
+    if (!std::filesystem::is_directory(folder)) {
+      throw std::invalid_argument("output folder " + folder.string() + " does not exist");
+    }
+    BuildPlan plan;
+    plan.sources.format = options.format;
+    const std::vector<double> origin = parse_numbers(options.origin, 3, "--origin");
+    plan.sources.origin = {static_cast<float>(origin[0]), static_cast<float>(origin[1]), static_cast<float>(origin[2])};
+    plan.sources.poses = options.poses;
+    plan.sources.calibration = options.calibration;
+    plan.sources.association = options.association;
+    plan.sources.topics = options.topics;
+    plan.sources.frame = options.frame;
+    if (!options.camera.empty()) {
+      const std::vector<double> c = parse_numbers(options.camera, 5, "--camera");
+      if (!(c[0] > 0 && c[1] > 0 && c[4] > 0)) {
+        throw std::invalid_argument("--camera: fx, fy and depth_scale must be > 0, got '" + options.camera + "'");
+      }
+      plan.sources.depth_camera = {c[0], c[1], c[2], c[3], c[4]};
+    }
+    for (const std::string& input : options.inputs) (void)scan_format_for(input, options.format);
+    plan.config.resolution = options.resolution;
+    plan.config.depth_levels = options.depth_levels;
+    plan.config.color = options.color;
+    plan.config.validate();
+    if (!options.bbox.empty()) {
+      const std::vector<double> b = parse_numbers(options.bbox, 6, "--bbox");
+      plan.box = Aabb{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}};
+      plan.box->validate();
+    }
+    plan.insert.integrator = parse_integrator_kind(options.integrator);
+    plan.insert.max_range = options.max_range;
+    plan.insert.clear_depth = options.clear_depth;
+    plan.insert.fine_steps = options.fine_steps;
+    plan.insert.threads = options.threads;
+    plan.insert.validate(plan.config.depth_levels);
+    return plan;
+  });
+}
+
+/// "input 2 of 3 (path)"
+std::string input_text(const BuildOptions& options, std::size_t input) {
+  return "input " + std::to_string(input + 1) + " of " + std::to_string(options.inputs.size()) + " (" +
+         options.inputs[input] + ")";
+}
+
+/// "(x, y, z)"
+std::string point_text(Vec3f p) {
+  char text[96];
+  std::snprintf(text, sizeof text, "(%g, %g, %g)", p.x, p.y, p.z);
+  return text;
+}
+
+/// What the pre-flight found out about one input.
+struct CheckedInput {
+  bool skipped = false;              // --keep-going: the input cannot be read
+  std::size_t scans = 0;             // as the input says (0: it does not say)
+  std::set<std::size_t> bad_scans;   // --keep-going: scans whose sensor lies outside the map
+};
+
+/// Problems met while building: fatal without --keep-going, warnings with it.
+class Problems {
+ public:
+  explicit Problems(bool keep_going) : keep_going_(keep_going) {}
+  /// Throws std::runtime_error(`where` + ": " + what) without --keep-going;
+  /// with it, prints a warning saying what is skipped.
+  void report(const std::string& where, const std::string& what, const std::string& skipped) {
+    if (!keep_going_) throw std::runtime_error(where + ": " + what);
+    std::fprintf(stderr, "umbra: warning: %s: %s; skipping %s (--keep-going)\n", where.c_str(), what.c_str(),
+                 skipped.c_str());
+    ++count_;
   }
-  const std::filesystem::path folder = output.parent_path().empty() ? "." : output.parent_path();
-  if (!std::filesystem::is_directory(folder)) {
-    throw std::invalid_argument("output folder " + folder.string() + " does not exist");
+  [[nodiscard]] std::size_t count() const { return count_; }
+
+ private:
+  bool keep_going_;
+  std::size_t count_ = 0;
+};
+
+/// The message of the exception in flight, with a sentence for a bare std::bad_alloc.
+std::string current_error(const std::string& while_doing) {
+  try {
+    throw;
+  } catch (const MemoryLimitError& e) {
+    return e.what();
+  } catch (const std::bad_alloc&) {
+    return "out of memory while " + while_doing;
+  } catch (const std::exception& e) {
+    return e.what();
   }
 }
 
-int run_build(const BuildOptions& options) {
-  check_output_path(options.output);
-  ScanSourceOptions source_options;
-  source_options.format = options.format;
-  const std::vector<double> origin = parse_numbers(options.origin, 3, "--origin");
-  source_options.origin = {static_cast<float>(origin[0]), static_cast<float>(origin[1]), static_cast<float>(origin[2])};
-  source_options.poses = options.poses;
-  source_options.calibration = options.calibration;
-  source_options.association = options.association;
-  if (!options.camera.empty()) {
-    const std::vector<double> c = parse_numbers(options.camera, 5, "--camera");
-    source_options.depth_camera = {c[0], c[1], c[2], c[3], c[4]};
+/// Before anything is inserted: the output can be written, every input opens
+/// and its header (and, for the formats that state them, every sensor origin)
+/// is checked, so that a bad later input does not throw away the work on the
+/// earlier ones.
+std::vector<CheckedInput> preflight(const BuildOptions& options, const BuildPlan& plan, const Grid& grid,
+                                    Problems& problems) {
+  check_can_save(options.output);
+  std::vector<CheckedInput> checked(options.inputs.size());
+  std::size_t scans = 0;
+  for (std::size_t input = 0; input < options.inputs.size(); ++input) {
+    CheckedInput& entry = checked[input];
+    std::vector<Vec3f> origins;
+    try {
+      const std::unique_ptr<ScanSource> source = open_input(options.inputs[input], options, plan.sources);
+      for (const std::string& warning : source->warnings()) std::fprintf(stderr, "umbra: warning: %s\n", warning.c_str());
+      entry.scans = source->scan_count();
+      origins = source->origins();
+    } catch (const std::exception&) {
+      problems.report(input_text(options, input), current_error("opening it"), "that input");
+      entry.skipped = true;
+      continue;
+    }
+    for (std::size_t scan = 0; scan < origins.size(); ++scan) {
+      if (grid.key_checked(origins[scan])) continue;
+      std::ostringstream extent;
+      extent << "the sensor origin " << point_text(origins[scan]) << " lies outside the map, which spans ["
+             << -grid.half_extent() << ", " << grid.half_extent() << ") on every axis; raise --depth-levels or --res";
+      problems.report(input_text(options, input) + ", scan " + std::to_string(scan + 1) + " of " +
+                          std::to_string(origins.size()),
+                      extent.str(), "that scan");
+      entry.bad_scans.insert(scan);
+    }
+    scans += entry.scans;
   }
-  source_options.topics = options.topics;
-  source_options.frame = options.frame;
-  for (const std::string& input : options.inputs) {  // fail early
-    const std::string format = scan_format_for(input, options.format);
-#ifndef UMBRA_WITH_ROS
-    if (format == "rosbag") (void)open_scan_source(input, source_options);  // says that .bag needs the ROS build
-#endif
-  }
+  std::size_t usable = 0;
+  for (const CheckedInput& entry : checked) usable += entry.skipped ? 0 : 1;
+  if (usable == 0) throw std::runtime_error("every input was skipped: nothing to build");
+  std::printf("checked %zu of %zu inputs (%zu scans); every sensor origin they state lies inside the map; the output "
+              "folder is writable\n",
+              usable, options.inputs.size(), scans);
+  return checked;
+}
 
-  MapConfig config;
-  config.resolution = options.resolution;
-  config.depth_levels = options.depth_levels;
-  config.color = options.color;
-  OccupancyMap map(config);
-  if (!options.bbox.empty()) {
-    const std::vector<double> b = parse_numbers(options.bbox, 6, "--bbox");
-    map.set_bounding_box(Aabb{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}});
-  }
-  InsertOptions insert;
-  insert.integrator = parse_integrator_kind(options.integrator);
-  insert.max_range = options.max_range;
-  insert.clear_depth = options.clear_depth;
-  insert.fine_steps = options.fine_steps;
-  insert.threads = options.threads;
-  insert.validate(map.depth_levels());
+int run_build(const BuildOptions& options) {
+  const BuildPlan plan = plan_build(options);
+  OccupancyMap map(plan.config);
+  if (plan.box) map.set_bounding_box(plan.box);
+  const InsertOptions& insert = plan.insert;
+  Problems problems(options.keep_going);
+  const std::vector<CheckedInput> checked = preflight(options, plan, map.grid(), problems);
 
   std::vector<ScanRow> rows;
   InsertStats total;
@@ -159,20 +283,43 @@ int run_build(const BuildOptions& options) {
   ProgressBar bar("building");
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t file = 0; file < options.inputs.size(); ++file) {
-    const std::unique_ptr<ScanSource> source = open_input(options.inputs[file], options, source_options);
+    if (checked[file].skipped) continue;
+    const std::string where = input_text(options, file);
+    std::printf("inserting %s\n", where.c_str());
+    std::fflush(stdout);
+    std::unique_ptr<ScanSource> source;
+    try {
+      source = open_input(options.inputs[file], options, plan.sources);
+    } catch (const std::exception&) {
+      problems.report(where, current_error("opening it"), "that input");
+      continue;
+    }
     Scan scan;
-    for (;;) {
+    for (std::size_t index = 0;; ++index) {
+      const std::string scan_where = where + ", scan " + std::to_string(index + 1);
       const auto read_start = std::chrono::steady_clock::now();
-      if (!source->next(scan)) break;
+      try {
+        if (!source->next(scan)) break;
+      } catch (const std::exception&) {
+        problems.report(scan_where, current_error("reading it"), "the rest of that input");
+        break;
+      }
+      if (checked[file].bad_scans.count(index) != 0) continue;  // reported by the pre-flight
       ScanRow row;
       row.name = scan.name;
       row.read_seconds = seconds_since(read_start);
       const auto insert_start = std::chrono::steady_clock::now();
-      if (options.color && !scan.colors.empty()) {
-        row.stats = map.insert_point_cloud(scan.origin, scan.points, scan.colors, insert);
-      } else {
-        uncoloured += options.color ? 1 : 0;
-        row.stats = map.insert_point_cloud(scan.origin, scan.points, insert);
+      try {
+        if (options.color && !scan.colors.empty()) {
+          row.stats = map.insert_point_cloud(scan.origin, scan.points, scan.colors, insert);
+        } else {
+          uncoloured += options.color ? 1 : 0;
+          row.stats = map.insert_point_cloud(scan.origin, scan.points, insert);
+        }
+      } catch (const std::exception&) {
+        problems.report(scan_where + " (" + scan.name + ")",
+                        current_error("inserting its " + std::to_string(scan.points.size()) + " points"), "that scan");
+        continue;
       }
       row.insert_seconds = seconds_since(insert_start);
       total += row.stats;
@@ -205,7 +352,14 @@ int run_build(const BuildOptions& options) {
     std::printf(" (clear depth %d = %.3g m nodes, %d fine steps)", insert.resolved_clear_depth(map.grid()),
                 map.grid().node_size(insert.resolved_clear_depth(map.grid())), insert.fine_steps);
   }
-  std::printf(", %u threads\n", insert.threads == 0 ? hardware_threads() : insert.threads);
+  const unsigned asked = insert.threads == 0 ? hardware_threads() : insert.threads;
+  std::printf(", %u threads\n", total.threads != 0 ? total.threads : asked);
+  if (total.threads != 0 && total.threads < asked) {
+    std::fprintf(stderr,
+                 "umbra: warning: only %u of the %u threads asked for could be started (the system refused more: a "
+                 "process limit such as ulimit -u?); the scans were inserted with %u\n",
+                 total.threads, asked, total.threads);
+  }
   if (total.non_finite > 0) std::printf("warning: %zu points were NaN or infinite and were skipped\n", total.non_finite);
   if (total.out_of_bounds > 0) {
     std::printf("warning: %zu points lie outside the map (half extent %.1f m) and were skipped; "
@@ -220,7 +374,12 @@ int run_build(const BuildOptions& options) {
   save_map(map, options.output);
   std::printf("wrote %s in %.3f s\n", options.output.c_str(), seconds_since(save_start));
   print_statistics(stdout, compute_statistics(map));
-  return 0;
+  if (problems.count() > 0) {
+    std::fprintf(stderr, "umbra: warning: %zu problems were skipped (--keep-going); the map holds the rest\n",
+                 problems.count());
+    return kSavedWithSkips;
+  }
+  return kSuccess;
 }
 
 }  // namespace
@@ -236,9 +395,9 @@ Command add_build_command(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingPath);
   command->add_option("-o,--output", options->output, "map file to write (.umb)")->required();
-  command->add_option("--res", options->resolution, "voxel edge in metres")
+  command->add_option("--res", options->resolution, "voxel edge in metres (0.0001 to 1000)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(number_in(kMinResolution, kMaxResolution, "the voxel edge in metres"));
   command->add_option("--depth-levels", options->depth_levels, "tree depth levels (1-21; 16 like OctoMap)")
       ->capture_default_str()
       ->check(CLI::Range(1, 21));
@@ -254,9 +413,14 @@ Command add_build_command(CLI::App& app) {
                       "fast: coarse nodes before each end point traced voxel by voxel (0: none)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  command->add_option("--threads", options->threads, "threads that discretise, trace and apply each scan (0: all cores)")->capture_default_str();
+  command->add_option("--threads", options->threads,
+                      "threads that discretise, trace and apply each scan (0: all cores; at most " +
+                          std::to_string(max_threads()) + ", 4 per core)")
+      ->capture_default_str()
+      ->check(number_in(0, max_threads(), "the number of threads (4 per core at most)"));
   command->add_option("--max-range", options->max_range, "metres; longer rays are cut there without a hit (<= 0: unlimited)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(not_nan());
   command->add_option("--bbox", options->bbox, "only map inside minx,miny,minz,maxx,maxy,maxz (rays are clipped)");
   command->add_flag("--color", options->color, "keep an RGB colour per voxel (inputs with colours: xyz rgb, PLY, PCD, TUM)");
   command->add_option("--origin", options->origin, "sensor origin x,y,z for files without poses (.xyz, .ply, .pcd, lone .bin)")
@@ -267,6 +431,10 @@ Command add_build_command(CLI::App& app) {
   command->add_option("--calibration", options->calibration, "kitti: calib.txt with the velodyne-to-camera Tr");
   command->add_option("--association", options->association, "tum: association file (default: the folder's *assoc*.txt)");
   command->add_option("--camera", options->camera, "tum: fx,fy,cx,cy,depth_scale (default: TUM fr2 Kinect, 5000)");
+  command->add_flag("--keep-going", options->keep_going,
+                    "skip an input that cannot be read, or a scan that cannot be inserted, with a warning, and save the "
+                    "rest (exit code 3)");
+  add_memory_option(*command);
   command->add_option("--topic", options->topics, "rosbag: a PointCloud2 topic to read (repeatable; default: all)");
   command->add_option("--frame", options->frame, "rosbag: the map frame, clouds are moved into it with the bag's TF")
       ->capture_default_str();

@@ -3,12 +3,26 @@
 #pragma once
 
 #include <functional>
+#include <stdexcept>
 
 #include <CLI/CLI.hpp>
 
 namespace umbra::cli {
 
 using Command = std::function<int()>;
+
+/// Exit codes (README, "Errors and limits").
+enum ExitCode : int {
+  kSuccess = 0,
+  kFailure = 1,        ///< bad input, I/O error, memory limit: the message says what and where; nothing saved
+  kBadUsage = 2,       ///< an option or argument is wrong: nothing read
+  kSavedWithSkips = 3  ///< build --keep-going skipped an input or scan, and saved the rest
+};
+
+/// A wrong option or argument: main() prints it and exits with kBadUsage.
+struct UsageError : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
 
 Command add_demo_command(CLI::App& app);
 Command add_build_command(CLI::App& app);

@@ -10,6 +10,8 @@
 #include <string>
 
 #include "commands.hpp"
+#include "options.hpp"
+#include "umbra/io/file_saving.hpp"
 #include "umbra/io/map_formats.hpp"
 #include "umbra/io/octomap_files.hpp"
 
@@ -52,6 +54,7 @@ void print_notes(const OccupancyMap& map, MapFileFormat input, MapFileFormat out
 int run_convert(const ConvertOptions& options) {
   const MapFileFormat input = map_file_format_for(options.input);
   const MapFileFormat output = map_file_format_for(options.output);
+  check_can_save(options.output);  // before the (maybe long) load
   const OccupancyMap map = load_any_map(options.input);
   print_notes(map, input, output);
   save_any_map(map, options.output);
@@ -73,6 +76,7 @@ Command add_convert_command(CLI::App& app) {
   command->add_option("output", options->output, "map to write (.umb, .bt, .ot); replaced atomically")
       ->required()
       ->check(map_extension());
+  add_memory_option(*command);
   return [options] { return run_convert(*options); };
 }
 

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "options.hpp"
 #include "report.hpp"
 #include "umbra/io/map_formats.hpp"
 
@@ -36,6 +37,7 @@ Command add_info_command(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   command->add_flag("--json", options->json, "print one JSON object instead of text");
+  add_memory_option(*command);
   return [options] { return run_info(*options); };
 }
 

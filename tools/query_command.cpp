@@ -14,10 +14,9 @@
 // is the answering alone. A bad line (not the right count of numbers, a
 // number that is not finite, a shape outside the map) is reported on stderr
 // with its line number and gets no answer; the exit code is then 1. Blank
-// lines and lines starting with '#' are skipped.
-#include <charconv>
+// lines and lines starting with '#' are skipped. The lines' parser and the
+// answering are query_lines.cpp (fuzzed by fuzz/fuzz_query_lines.cpp).
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -25,10 +24,11 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "commands.hpp"
+#include "options.hpp"
+#include "query_lines.hpp"
 #include "umbra/io/map_formats.hpp"
 
 namespace umbra::cli {
@@ -53,119 +53,6 @@ struct QueryOptions {
   std::vector<double> sphere;
   bool count = false;
 };
-
-/// One input line: its number and its values.
-struct Line {
-  std::size_t number;
-  std::vector<double> values;
-};
-
-/// The values of `text`, or a message saying what is wrong with them.
-std::optional<std::string> parse_numbers(std::string_view text, std::size_t expected, const char* layout,
-                                         std::vector<double>& values) {
-  values.clear();
-  std::size_t at = 0;
-  while (at < text.size()) {
-    while (at < text.size() && (text[at] == ' ' || text[at] == '\t' || text[at] == '\r' || text[at] == ',')) ++at;
-    if (at == text.size()) break;
-    std::size_t end = at;
-    while (end < text.size() && text[end] != ' ' && text[end] != '\t' && text[end] != '\r' && text[end] != ',') ++end;
-    const std::string_view word = text.substr(at, end - at);
-    double value = 0.0;
-    const auto [ptr, error] = std::from_chars(word.data(), word.data() + word.size(), value);
-    if (error != std::errc() || ptr != word.data() + word.size() || !std::isfinite(value)) {
-      return "'" + std::string(word) + "' is not a finite number";
-    }
-    values.push_back(value);
-    at = end;
-  }
-  if (values.size() != expected) {
-    return "expected " + std::to_string(expected) + " numbers (" + layout + "), found " +
-           std::to_string(values.size());
-  }
-  return std::nullopt;
-}
-
-struct Kind {
-  std::size_t numbers;
-  const char* layout;
-};
-
-Kind kind_of(const std::string& kind) {
-  if (kind == "sphere") return {4, "x y z r"};
-  if (kind == "box") return {6, "minx miny minz maxx maxy maxz"};
-  if (kind == "line") return {6, "x1 y1 z1 x2 y2 z2"};
-  if (kind == "raycast") return {7, "x y z dx dy dz max_range"};
-  if (kind == "gain") return {5, "x y z yaw_deg pitch_deg"};
-  throw std::logic_error("unknown query kind " + kind);
-}
-
-/// Reads every line of the input; bad lines are reported and dropped.
-std::vector<Line> read_lines(std::istream& in, const std::string& name, const Kind& kind, std::size_t& bad) {
-  std::vector<Line> lines;
-  std::string text;
-  std::size_t number = 0;
-  std::vector<double> values;
-  while (std::getline(in, text)) {
-    ++number;
-    const std::size_t first = text.find_first_not_of(" \t\r");
-    if (first == std::string::npos || text[first] == '#') continue;
-    if (const auto problem = parse_numbers(text, kind.numbers, kind.layout, values)) {
-      std::fprintf(stderr, "umbra: %s line %zu: %s\n", name.c_str(), number, problem->c_str());
-      ++bad;
-      continue;
-    }
-    lines.push_back({number, values});
-  }
-  if (in.bad()) throw std::runtime_error("cannot read " + name);
-  return lines;
-}
-
-/// One answer: a line of output, or the reason there is none.
-struct Answer {
-  bool ok = false;
-  bool yes = false;     // collides / hit
-  Vec3d point;          // raycast: the centre of the voxel hit
-  GainResult gain{};    // gain
-  std::string problem;  // when !ok
-};
-
-Answer answer(const OccupancyMap& map, const QueryOptions& options, const std::vector<double>& v,
-              const CollisionOptions& collision) {
-  const std::string& kind = options.kind;
-  const double radius = options.radius;
-  Answer a;
-  try {
-    if (kind == "gain") {
-      const Frustum view = Frustum::from_degrees({v[0], v[1], v[2]}, v[3], v[4], options.hfov, options.vfov,
-                                                 options.min_range, options.max_range);
-      GainOptions gain_options;
-      gain_options.method = options.method == "fast" ? GainMethod::fast : GainMethod::exact;
-      a.gain = map.information_gain(view, gain_options);
-    } else if (kind == "sphere") {
-      a.yes = !map.is_free(Sphere{{v[0], v[1], v[2]}, v[3]}, collision).free;
-    } else if (kind == "box") {
-      const Aabb box{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}};
-      a.yes = !map.is_free(box, collision).free;
-    } else if (kind == "line") {
-      if (radius > 0.0) {
-        a.yes = !map.is_free(Capsule{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}, radius}, collision).free;
-      } else {
-        a.yes = !map.is_free(Segment{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}}, collision).free;
-      }
-    } else {  // raycast: the first occupied voxel; unknown space is passed through
-      const RayHit hit = map.cast_ray({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], false, collision.depth});
-      a.yes = hit.hit;
-      a.point = hit.node.center;
-    }
-    a.ok = true;
-  } catch (const std::invalid_argument& e) {
-    a.problem = e.what();
-  } catch (const std::out_of_range& e) {
-    a.problem = e.what();
-  }
-  return a;
-}
 
 void print_timing(const std::string& kind, std::size_t queries, double seconds) {
   const double per_query = queries > 0 ? seconds * 1e6 / static_cast<double>(queries) : 0.0;
@@ -237,33 +124,50 @@ int run_query(const QueryOptions& options) {
       return 2;
     }
   }
-  const Kind kind = kind_of(options.kind);
-  std::size_t bad = 0;
-  std::vector<Line> lines;
-  if (options.input == "-") {
-    lines = read_lines(std::cin, "standard input", kind, bad);
-  } else {
-    std::ifstream in(options.input);
-    if (!in) throw std::runtime_error("cannot open " + options.input + " for reading");
-    lines = read_lines(in, options.input, kind, bad);
+  const std::optional<LineQuery> kind = line_query_named(options.kind);
+  if (!kind) throw std::logic_error("unknown query kind " + options.kind);  // CLI11 checked the name
+  const std::string name = options.input == "-" ? "standard input" : options.input;
+  QueryLines lines;
+  try {
+    if (options.input == "-") {
+      lines = read_query_lines(std::cin, *kind);
+    } else {
+      std::ifstream in(options.input);
+      if (!in) throw std::runtime_error("cannot be opened for reading");
+      lines = read_query_lines(in, *kind);
+    }
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(name + ": " + e.what());
   }
-  const CollisionOptions collision{options.unknown == "free", options.depth};
+  for (const BadQueryLine& line : lines.bad) {
+    std::fprintf(stderr, "umbra: %s line %zu: %s\n", name.c_str(), line.number, line.problem.c_str());
+  }
+  std::size_t bad = lines.bad.size();
+  LineQuerySettings settings;
+  settings.collision = {options.unknown == "free", options.depth};
+  settings.radius = options.radius;
+  settings.hfov = options.hfov;
+  settings.vfov = options.vfov;
+  settings.min_range = options.min_range;
+  settings.max_range = options.max_range;
+  settings.method = options.method == "fast" ? GainMethod::fast : GainMethod::exact;
 
-  std::vector<Answer> answers;
-  answers.reserve(lines.size());
+  std::vector<QueryAnswer> answers;
+  answers.reserve(lines.good.size());
   const auto start = std::chrono::steady_clock::now();
-  for (const Line& line : lines) answers.push_back(answer(map, options, line.values, collision));
+  for (const QueryLine& line : lines.good) {
+    answers.push_back(answer_query_line(map, *kind, line.values, settings));
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   for (std::size_t i = 0; i < answers.size(); ++i) {
-    const Answer& a = answers[i];
+    const QueryAnswer& a = answers[i];
     if (!a.ok) {
-      std::fprintf(stderr, "umbra: %s line %zu: %s\n", options.input == "-" ? "standard input" : options.input.c_str(),
-                   lines[i].number, a.problem.c_str());
+      std::fprintf(stderr, "umbra: %s line %zu: %s\n", name.c_str(), lines.good[i].number, a.problem.c_str());
       ++bad;
-    } else if (options.kind == "gain") {
+    } else if (*kind == LineQuery::gain) {
       std::printf("%llu %.10g\n", static_cast<unsigned long long>(a.gain.unknown_voxels), a.gain.volume);
-    } else if (options.kind == "raycast" && a.yes) {
+    } else if (*kind == LineQuery::raycast && a.yes) {
       std::printf("1 %.10g %.10g %.10g\n", a.point.x, a.point.y, a.point.z);
     } else {
       std::printf("%d\n", a.yes ? 1 : 0);
@@ -292,7 +196,7 @@ Command add_query_command(CLI::App& app) {
   command->add_option("--depth", options->depth, "answer at this depth (0: finest voxels; coarser is conservative)")
       ->check(CLI::NonNegativeNumber);
   command->add_option("--radius", options->radius, "line: check the capsule of this radius (m) around each segment")
-      ->check(CLI::NonNegativeNumber);
+      ->check(number_in(0.0, 1e6, "the capsule radius in metres"));
   command->add_option("--hfov", options->hfov, "gain: horizontal field of view (degrees)")
       ->check(CLI::Range(0.0, 180.0, "in (0, 180)"));
   command->add_option("--vfov", options->vfov, "gain: vertical field of view (degrees)")
@@ -310,6 +214,7 @@ Command add_query_command(CLI::App& app) {
       ->delimiter(',')
       ->expected(4);
   command->add_flag("--count", options->count, "nodes: print only how many there are");
+  add_memory_option(*command);
   return [options] { return run_query(*options); };
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "options.hpp"
 #include "umbra/io/map_formats.hpp"
 #include "umbra/io/map_render.hpp"
 #include "umbra/io/png_writer.hpp"
@@ -148,6 +149,7 @@ Command add_render_command(CLI::App& app) {
   command->add_option("--width", options->width, "picture width in pixels")
       ->capture_default_str()
       ->check(CLI::Range(17, kMaxRenderPixels));
+  add_memory_option(*command);
   return [options] { return run_render(*options); };
 }
 

@@ -1,6 +1,8 @@
 #include "report.hpp"
 
 #include <cinttypes>
+#include <cmath>
+#include <ostream>
 #include <sstream>
 
 namespace umbra::cli {
@@ -33,18 +35,33 @@ void print_statistics(std::FILE* out, const MapStatistics& s) {
   }
 }
 
+namespace {
+
+/// A JSON number: JSON has no inf or NaN, so those are written as null
+/// (resolutions are bounded, so no map of umbra's makes them; this keeps
+/// the output valid whatever happens).
+struct JsonNumber {
+  double value;
+  friend std::ostream& operator<<(std::ostream& out, JsonNumber n) {
+    return std::isfinite(n.value) ? out << n.value : out << "null";
+  }
+};
+
+}  // namespace
+
 std::string statistics_json(const MapStatistics& s) {
   std::ostringstream json;
   json.precision(17);
-  json << "{\"resolution\": " << s.resolution << ", \"depth_levels\": " << s.depth_levels
+  json << "{\"resolution\": " << JsonNumber{s.resolution} << ", \"depth_levels\": " << s.depth_levels
        << ", \"nodes\": " << s.nodes.total() << ", \"inner_nodes\": " << s.nodes.inner
        << ", \"inner_leaf_nodes\": " << s.nodes.inner_leaf << ", \"leaf_nodes\": " << s.nodes.leaf
        << ", \"memory_bytes\": " << s.memory_bytes << ", \"occupied_voxels\": " << s.occupied_voxels
-       << ", \"free_voxels\": " << s.free_voxels << ", \"occupied_volume_m3\": " << s.occupied_volume_m3
-       << ", \"free_volume_m3\": " << s.free_volume_m3;
+       << ", \"free_voxels\": " << s.free_voxels << ", \"occupied_volume_m3\": " << JsonNumber{s.occupied_volume_m3}
+       << ", \"free_volume_m3\": " << JsonNumber{s.free_volume_m3};
   if (s.has_known_space) {
-    json << ", \"known_min\": [" << s.known_min.x << ", " << s.known_min.y << ", " << s.known_min.z
-         << "], \"known_max\": [" << s.known_max.x << ", " << s.known_max.y << ", " << s.known_max.z << "]";
+    json << ", \"known_min\": [" << JsonNumber{s.known_min.x} << ", " << JsonNumber{s.known_min.y} << ", "
+         << JsonNumber{s.known_min.z} << "], \"known_max\": [" << JsonNumber{s.known_max.x} << ", "
+         << JsonNumber{s.known_max.y} << ", " << JsonNumber{s.known_max.z} << "]";
   } else {
     json << ", \"known_min\": null, \"known_max\": null";
   }

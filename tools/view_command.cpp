@@ -13,6 +13,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "options.hpp"
 #include "io/atomic_file.hpp"
 #include "local_http_server.hpp"
 #include "report.hpp"
@@ -104,6 +105,7 @@ Command add_view_command(CLI::App& app) {
   command->add_option("--port", options->port, "port for --serve (0: any free port)")
       ->capture_default_str()
       ->check(CLI::Range(0, 65535));
+  add_memory_option(*command);
   return [options] { return run_view(*options); };
 }
 

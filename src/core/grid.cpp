@@ -1,19 +1,25 @@
 #include "umbra/core/grid.hpp"
 
+#include <charconv>
 #include <sstream>
 #include <stdexcept>
 
 namespace umbra {
+
+void Grid::validate_resolution(double resolution) {
+  if (resolution >= kMinResolution && resolution <= kMaxResolution) return;  // NaN fails this
+  char text[32];
+  const auto written = std::to_chars(text, text + sizeof text, resolution);  // shortest exact form: 1e-300, nan
+  throw std::invalid_argument("resolution must be a number of metres in [0.0001, 1000] (0.1 mm to 1 km), got " +
+                              std::string(text, written.ptr));
+}
 
 Grid::Grid(double resolution, int depth_levels)
     : resolution_(resolution),
       inverse_resolution_(1.0 / resolution),
       depth_levels_(depth_levels),
       key_offset_(0) {
-  if (!(std::isfinite(resolution) && resolution > 0.0)) {
-    throw std::invalid_argument("resolution must be a finite number > 0, got " +
-                                std::to_string(resolution));
-  }
+  validate_resolution(resolution);
   if (depth_levels < 1 || depth_levels > kMaxDepthLevels) {
     throw std::invalid_argument("depth_levels must be in [1, " + std::to_string(kMaxDepthLevels) +
                                 "], got " + std::to_string(depth_levels));
@@ -42,6 +48,10 @@ Vec3d Grid::min_corner(Key key, int depth) const {
 }
 
 Vec3d Grid::center(Key key, int depth) const {
+  // A voxel's centre is OctoMap's keyToCoord to the bit (the corner plus a
+  // half voxel can round differently, which decides ties such as a centre
+  // exactly max_range from a sensor).
+  if (depth == 0) return {axis_center(key.x), axis_center(key.y), axis_center(key.z)};
   const double half = 0.5 * node_size(depth);
   return min_corner(key, depth) + Vec3d{half, half, half};
 }

@@ -1,4 +1,11 @@
+// ThreadPool (thread_pool.hpp): workers sleep on a condition variable until
+// run() publishes a job, take task numbers from a counter under the pool's
+// mutex, and the last one to finish wakes the caller. Cost: one lock per
+// task; run() itself allocates nothing.
 #include "core/thread_pool.hpp"
+
+#include <algorithm>
+#include <system_error>
 
 namespace umbra {
 
@@ -7,10 +14,17 @@ unsigned ThreadPool::hardware_threads() {
   return n == 0 ? 1 : n;
 }
 
-ThreadPool::ThreadPool(unsigned threads) {
-  const unsigned total = threads == 0 ? hardware_threads() : threads;
-  workers_.reserve(total - 1);
-  for (unsigned w = 1; w < total; ++w) workers_.emplace_back([this, w] { worker_loop(w); });
+unsigned ThreadPool::max_threads() { return std::max(kMinThreadLimit, kThreadsPerCore * hardware_threads()); }
+
+ThreadPool::ThreadPool(unsigned threads) : requested_(threads == 0 ? hardware_threads() : threads) {
+  workers_.reserve(requested_ - 1);
+  for (unsigned w = 1; w < requested_; ++w) {
+    try {
+      workers_.emplace_back([this, w] { worker_loop(w); });
+    } catch (const std::system_error&) {
+      break;  // the system refused (EAGAIN: a process limit): keep the workers that started
+    }
+  }
 }
 
 ThreadPool::~ThreadPool() {

@@ -6,6 +6,12 @@
 // atomic counter, so uneven tasks balance themselves. An exception thrown by
 // a task is rethrown from run() (the first one; remaining tasks are skipped).
 // One job at a time: run() is not reentrant and not for concurrent callers.
+//
+// Threads the system refuses to start (std::thread throws, e.g. under a low
+// process limit) are not an error: the pool keeps the workers that did
+// start, size() says how many there are with the caller, and started_all()
+// is false. The jobs run on those, so a pool never waits for a worker that
+// does not exist.
 #pragma once
 
 #include <condition_variable>
@@ -20,22 +26,33 @@ namespace umbra {
 
 class ThreadPool {
  public:
-  /// `threads` workers including the caller; 0 means std::thread::hardware_concurrency().
+  /// `threads` workers including the caller (0 means hardware_threads()), or
+  /// as many of them as the system lets start.
   explicit ThreadPool(unsigned threads = 0);
   ~ThreadPool();
   ThreadPool(const ThreadPool&) = delete;
   ThreadPool& operator=(const ThreadPool&) = delete;
 
+  /// Workers that run jobs, the caller included.
   [[nodiscard]] unsigned size() const { return static_cast<unsigned>(workers_.size()) + 1; }
+  /// The number asked for (0 resolved).
+  [[nodiscard]] unsigned requested() const { return requested_; }
+  [[nodiscard]] bool started_all() const { return size() == requested_; }
   void run(std::size_t tasks, const std::function<void(std::size_t task, unsigned worker)>& work);
 
   /// hardware_concurrency(), at least 1.
   static unsigned hardware_threads();
+  /// The most threads a pool may be asked for: kThreadsPerCore per hardware
+  /// thread, at least kMinThreadLimit (more only oversubscribe the cores).
+  static unsigned max_threads();
+  static constexpr unsigned kThreadsPerCore = 4;
+  static constexpr unsigned kMinThreadLimit = 16;
 
  private:
   void worker_loop(unsigned worker);
   void work_on_job(unsigned worker);
 
+  unsigned requested_ = 1;
   std::vector<std::thread> workers_;
   std::mutex mutex_;
   std::condition_variable wake_;

@@ -10,6 +10,7 @@
 namespace umbra {
 
 unsigned hardware_threads() { return ThreadPool::hardware_threads(); }
+unsigned max_threads() { return ThreadPool::max_threads(); }
 
 IntegratorKind parse_integrator_kind(const std::string& name) {
   if (name == "simple") return IntegratorKind::simple;
@@ -34,6 +35,11 @@ void InsertOptions::validate(int depth_levels) const {
                                 "], got " + std::to_string(clear_depth));
   }
   if (fine_steps < 0) throw std::invalid_argument("fine_steps must be >= 0, got " + std::to_string(fine_steps));
+  if (threads > max_threads()) {
+    throw std::invalid_argument("threads must be at most " + std::to_string(max_threads()) + " (4 per hardware thread, " +
+                                std::to_string(hardware_threads()) + " here; at least 16), got " +
+                                std::to_string(threads));
+  }
 }
 
 int InsertOptions::resolved_clear_depth(const Grid& grid) const {
@@ -52,6 +58,7 @@ InsertStats& InsertStats::operator+=(const InsertStats& other) {
   non_finite += other.non_finite;
   out_of_bounds += other.out_of_bounds;
   outside_box += other.outside_box;
+  threads = std::max(threads, other.threads);
   exclusive_seconds += other.exclusive_seconds;
   return *this;
 }
@@ -119,7 +126,7 @@ Integrator::Integrator(Integrator&&) noexcept = default;
 Integrator& Integrator::operator=(Integrator&&) noexcept = default;
 
 void Integrator::ensure_workers(unsigned threads) {
-  if (threads > 1 && (!pool_ || pool_->size() != threads)) pool_ = std::make_unique<ThreadPool>(threads);
+  if (threads > 1 && (!pool_ || pool_->requested() != threads)) pool_ = std::make_unique<ThreadPool>(threads);
   while (tracers_.size() < threads) tracers_.push_back(std::make_unique<RayTracer>());
 }
 
@@ -166,6 +173,7 @@ InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f
   stats.points = points.size();
   const unsigned threads = options.threads == 0 ? ThreadPool::hardware_threads() : options.threads;
   ensure_workers(threads);
+  stats.threads = threads > 1 ? pool_->size() : 1;  // fewer when the system refused to start some
   for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
   std::vector<InsertStats> worker_stats(threads);
   // Runs `work(begin, end, worker, chunk)` over [0, count) in `chunks`

@@ -5,7 +5,12 @@
 // clash), flushes it to disk, gives it the permissions of the file it
 // replaces, renames it over the target and flushes the folder (best effort).
 // On any failure the temporary file is removed and the target is untouched.
-// Cost: one write per part, two fsyncs. Private to umbra_io.
+// A target that is a symbolic link is written through (the file it points to
+// is replaced). While it is written the temporary file is locked (flock) and
+// listed for remove_unfinished_saves() (a signal handler's cleanup), and
+// before it is created the stale temporary files of the same target that
+// dead processes left are removed (umbra/io/file_saving.hpp).
+// Cost: one folder listing, one write per part, two fsyncs. Private to umbra_io.
 #pragma once
 
 #include <cstdint>

@@ -13,6 +13,7 @@
 #include <bit>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -66,6 +67,22 @@ Pose pose_from_row(const double (&values)[12]) {
   return pose;
 }
 
+/// Below this |determinant| a pose's 3x3 part is refused: it would squash the scan onto a plane,
+/// a line or a point (an all-zero row). A rotation has 1; an affine pose scaling by 1% has 1e-6.
+constexpr double kMinPoseDeterminant = 1e-6;
+
+/// Throws FormatError at `line` unless the pose keeps the scan three-dimensional.
+void require_rotation(const Pose& pose, const std::string& file, std::uint64_t line, std::string_view text) {
+  const double determinant = pose.determinant();
+  if (std::abs(determinant) >= kMinPoseDeterminant) return;
+  char value[32];
+  std::snprintf(value, sizeof value, "%g", determinant);
+  throw FormatError::at_line(file, line,
+                             std::string("the 3x3 rotation part has determinant ") + value +
+                                 " (a rotation has 1): every point would collapse onto a plane, a line or the "
+                                 "translation; found " + quote(text));
+}
+
 /// Fills `values` from `tokens`; false if there are fewer or more numbers,
 /// or one is not a finite number.
 bool read_numbers(Tokens& tokens, std::span<double> values) {
@@ -98,6 +115,7 @@ std::vector<Pose> read_poses(const fs::path& path) {
                                  "expected 12 finite numbers (a row-major 3x4 pose), found " + quote(line));
     }
     poses.push_back(pose_from_row(values));
+    require_rotation(poses.back(), file.name(), lines.line_number(), line);
   }
   if (poses.empty()) throw FormatError(file.name(), "the poses file holds no poses");
   return poses;
@@ -122,11 +140,15 @@ Pose read_calibration(const fs::path& path) {
       double values[12];
       if (!read_numbers(tokens, values)) bad("12 finite numbers after the key (the 3x4 velodyne-to-camera transform)");
       transform = pose_from_row(values);
+      require_rotation(*transform, file.name(), lines.line_number(), line);
     } else if (key == "R:") {
       double values[9];
       if (!read_numbers(tokens, values)) bad("9 finite numbers after R: (row-major rotation)");
       rotation.emplace();
       std::copy(std::begin(values), std::end(values), rotation->begin());
+      Pose check;
+      for (std::size_t i = 0; i < 9; ++i) check.m[i / 3][i % 3] = values[i];
+      require_rotation(check, file.name(), lines.line_number(), line);
     } else if (key == "T:") {
       double values[3];
       if (!read_numbers(tokens, values)) bad("3 finite numbers after T: (translation)");
@@ -199,6 +221,8 @@ class KittiReader final : public ScanSource {
                                      " bytes, not a multiple of 16 (float32 x y z reflectance per point): truncated?");
     }
     const std::uint64_t point_count = size / kPointBytes;
+    io_detail::require_point_memory(file.name(), "reading its " + std::to_string(point_count) + " points", point_count,
+                                    false);
     scan.points.clear();
     scan.colors.clear();
     scan.points.reserve(static_cast<std::size_t>(point_count));
@@ -224,6 +248,13 @@ class KittiReader final : public ScanSource {
   }
 
   [[nodiscard]] std::size_t scan_count() const override { return scans_.size(); }
+
+  [[nodiscard]] std::vector<Vec3f> origins() const override {
+    std::vector<Vec3f> result;
+    result.reserve(scans_.size());
+    for (const ScanEntry& entry : scans_) result.push_back(entry.pose_line ? entry.pose.translation() : origin_);
+    return result;
+  }
 
   [[nodiscard]] double progress() const override {
     return static_cast<double>(done_.load(std::memory_order_relaxed)) / static_cast<double>(scans_.size());
@@ -259,7 +290,8 @@ std::unique_ptr<ScanSource> open_kitti_velodyne(const fs::path& folder_or_file, 
 }
 
 std::unique_ptr<ScanSource> open_kitti_scans(std::vector<fs::path> scan_files, const KittiOptions& options) {
-  return std::make_unique<KittiReader>(std::move(scan_files), options);
+  const fs::path first = scan_files.empty() ? fs::path() : scan_files.front();
+  return io_detail::naming_bad_alloc(first, [&] { return std::make_unique<KittiReader>(std::move(scan_files), options); });
 }
 
 }  // namespace umbra

@@ -12,6 +12,7 @@
 #include "umbra/io/map_file.hpp"
 
 #include "atomic_file.hpp"
+#include "core/memory_budget.hpp"
 #include "map/map_access.hpp"
 
 #include <fcntl.h>
@@ -19,6 +20,7 @@
 #include <unistd.h>
 #include <zlib.h>
 #include <zstd.h>
+#include <zstd_errors.h>
 
 #include <algorithm>
 #include <array>
@@ -113,13 +115,6 @@ std::string hex32(std::uint32_t v) {
   char text[16];
   std::snprintf(text, sizeof text, "0x%08x", v);
   return text;
-}
-
-std::string number(double v) {
-  std::ostringstream out;
-  out.precision(17);
-  out << v;
-  return out.str();
 }
 
 std::string number(float v) {
@@ -242,8 +237,10 @@ MapFileInfo decode_header(const std::string& file, std::span<const std::uint8_t>
 
   MapConfig& config = info.config;
   config.resolution = get_f64(&head[at::resolution]);
-  if (!(std::isfinite(config.resolution) && config.resolution > 0.0)) {
-    throw fail(at::resolution, "resolution must be a finite number > 0, found " + number(config.resolution));
+  try {
+    Grid::validate_resolution(config.resolution);
+  } catch (const std::invalid_argument& e) {
+    throw fail(at::resolution, e.what());
   }
   const std::uint32_t depth_levels = get_u32(&head[at::depth_levels]);
   if (depth_levels < 1 || depth_levels > static_cast<std::uint32_t>(kMaxDepthLevels)) {
@@ -553,7 +550,11 @@ class FrameReader {
     while (out.pos == 0) {
       const std::size_t before = in_.pos;
       const std::size_t result = ZSTD_decompressStream(ctx_.get(), &out, &in_);
-      if (ZSTD_isError(result)) fail(std::string("zstd error: ") + ZSTD_getErrorName(result));
+      if (ZSTD_isError(result)) {
+        // Running out of memory is not a fault of the file: load_map names it as such.
+        if (ZSTD_getErrorCode(result) == ZSTD_error_memory_allocation) throw std::bad_alloc();
+        fail(std::string("zstd error: ") + ZSTD_getErrorName(result));
+      }
       if (result == 0) {
         done_ = true;  // the frame is complete and flushed
         break;
@@ -807,6 +808,28 @@ class TreeDecoder {
   FrameReader* colors_;
 };
 
+/// a * b, or UINT64_MAX when that overflows.
+std::uint64_t saturating_product(std::uint64_t a, std::uint64_t b) {
+  return b != 0 && a > UINT64_MAX / b ? UINT64_MAX : a * b;
+}
+
+/// What load_map allocates for a file, from its validated header: the whole
+/// file, and one group of eight children per inner node (an InnerGroup above
+/// the finest depth, a LeafGroup at it, and a ColorGroup each with colour).
+/// The structure stream holds one byte per inner node at depth >= 2, plus
+/// the root's, so that many inner nodes have InnerGroup children.
+std::uint64_t bytes_to_load(const MapFileInfo& info) {
+  const std::uint64_t above_finest = info.structure_bytes - 1;
+  const std::uint64_t at_finest = info.inner_nodes - std::min(above_finest, info.inner_nodes);
+  const std::uint64_t color = info.config.color ? sizeof(OccupancyTree::ColorGroup) : 0;
+  const std::uint64_t upper = saturating_product(above_finest, sizeof(OccupancyTree::InnerGroup) + color);
+  const std::uint64_t lower = saturating_product(at_finest, sizeof(OccupancyTree::LeafGroup) + color);
+  const std::uint64_t groups = upper > UINT64_MAX - lower ? UINT64_MAX : upper + lower;
+  return groups > UINT64_MAX - info.file_bytes ? UINT64_MAX : groups + info.file_bytes;
+}
+
+OccupancyMap load_body(const OpenedFile& file, const std::filesystem::path& path, const MapFileInfo& info);
+
 }  // namespace
 
 // --- public functions ---------------------------------------------------------
@@ -871,6 +894,15 @@ OccupancyMap load_map(const std::filesystem::path& path) {
   const std::size_t head_size =
       read_at(file, path, 0, head.data(), static_cast<std::size_t>(std::min<std::uint64_t>(file.size, kHeaderBytes)));
   const MapFileInfo info = decode_header(name, std::span(head).first(head_size), file.size);
+  const std::uint64_t need = bytes_to_load(info);
+  detail::require_memory(name, "loading this map (" + std::to_string(info.inner_nodes) + " nodes with children)", need);
+  return detail::naming_bad_alloc(name, "loading the map", need, [&] { return load_body(file, path, info); });
+}
+
+namespace {
+
+OccupancyMap load_body(const OpenedFile& file, const std::filesystem::path& path, const MapFileInfo& info) {
+  const std::string name = path.string();
 
   // 2. The whole file (its size is now known to be what the header declares), and its checksum.
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(info.file_bytes));
@@ -912,4 +944,5 @@ OccupancyMap load_map(const std::filesystem::path& path) {
   return map;
 }
 
+}  // namespace
 }  // namespace umbra

@@ -209,6 +209,8 @@ class BtEncoder {
 
 OccupancyMap decode_bt(ByteInput& in, const Header& header, const std::string& name, const SensorModel& sensor) {
   check_declared_size(header, name);
+  // Every node with children is 2 bytes of the data, and gets a group of eight children.
+  require_tree_memory(header, name, (header.file_bytes - header.data_offset) / 2);
   OccupancyMap map = new_map(header, name, sensor, false);
   bool mergeable = false;
   detail::MapAccess::build(map, [&](detail::TreeBuilder& builder) {

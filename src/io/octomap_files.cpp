@@ -27,6 +27,8 @@
 #include <system_error>
 
 #include "atomic_file.hpp"
+#include "core/memory_budget.hpp"
+#include "map/map_access.hpp"
 #include "octomap_format.hpp"
 
 namespace umbra {
@@ -138,9 +140,8 @@ double parse_resolution(HeaderLexer& lexer, const std::string& text) {
   if (error != std::errc() || end != digits.data() + digits.size()) {
     lexer.fail("res must be a number (the voxel edge in metres), found " + quote_text(text));
   }
-  // 1/res must be finite too: keys are computed with it.
-  if (!(std::isfinite(value) && value > 0.0 && std::isfinite(1.0 / value))) {
-    lexer.fail("res must be a finite number > 0 (the voxel edge in metres), found " + quote_text(text));
+  if (!(value >= kMinResolution && value <= kMaxResolution)) {  // NaN fails this
+    lexer.fail("res must be the voxel edge in metres, in [0.0001, 1000] (0.1 mm to 1 km), found " + quote_text(text));
   }
   return value;
 }
@@ -178,6 +179,20 @@ ByteInput::ByteInput(const fs::path& path) : path_(path) {
   size_ = static_cast<std::uint64_t>(st.st_size);
   buffer_.resize(static_cast<std::size_t>(std::min<std::uint64_t>(size_, kBufferBytes)));
   data_ = buffer_.data();
+}
+
+ByteInput::ByteInput(const ByteInput& source, std::uint64_t offset) : size_(source.size_), path_(source.path_) {
+  if (source.fd_ < 0) {
+    data_ = source.data_;
+    end_ = static_cast<std::size_t>(size_);
+    pos_ = static_cast<std::size_t>(std::min(offset, size_));
+    return;
+  }
+  fd_ = ::fcntl(source.fd_, F_DUPFD_CLOEXEC, 0);
+  if (fd_ < 0) throw_io("cannot read map file", path_, errno);
+  buffer_.resize(source.buffer_.size());
+  data_ = buffer_.data();
+  window_offset_ = offset;  // refill() reads from here
 }
 
 ByteInput::~ByteInput() {
@@ -360,6 +375,20 @@ void check_declared_size(const Header& header, const std::string& name) {
   }
 }
 
+// --- memory ---------------------------------------------------------------------------
+
+std::uint64_t tree_bytes(const Header& header, std::uint64_t parents) {
+  const std::uint64_t group = sizeof(OccupancyTree::InnerGroup) + (header.color ? sizeof(OccupancyTree::ColorGroup) : 0);
+  return parents > UINT64_MAX / group ? UINT64_MAX : parents * group;
+}
+
+void require_tree_memory(const Header& header, const std::string& name, std::uint64_t parents) {
+  detail::require_memory(name,
+                         "loading this OctoMap tree (" + std::to_string(header.nodes) + " nodes, " +
+                             std::to_string(parents) + " with children)",
+                         tree_bytes(header, parents));
+}
+
 // --- helpers --------------------------------------------------------------------
 
 void require_octomap_depth(const OccupancyMap& map, const std::string& what) {
@@ -422,8 +451,11 @@ namespace {
 OccupancyMap decode(octomap_io::ByteInput& in, const std::string& name, const SensorModel& sensor) {
   sensor.validate();
   const octomap_io::Header header = octomap_io::parse_header(in, name);
-  return header.format == OctoMapFormat::bt ? octomap_io::decode_bt(in, header, name, sensor)
-                                            : octomap_io::decode_ot(in, header, name, sensor);
+  // The decoders check the tree's need against the memory limit first; this names an allocation that fails anyway.
+  return detail::naming_bad_alloc(name, "loading the OctoMap tree (" + std::to_string(header.nodes) + " nodes)", 0, [&] {
+    return header.format == OctoMapFormat::bt ? octomap_io::decode_bt(in, header, name, sensor)
+                                              : octomap_io::decode_ot(in, header, name, sensor);
+  });
 }
 
 struct EncodedFile {

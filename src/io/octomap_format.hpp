@@ -27,6 +27,8 @@ class ByteInput {
   explicit ByteInput(std::span<const std::uint8_t> bytes);
   /// A regular file. Throws std::runtime_error naming the path when it cannot be opened or read.
   explicit ByteInput(const std::filesystem::path& path);
+  /// A second, independent input over the same bytes (the same open file) from `offset` on.
+  ByteInput(const ByteInput& source, std::uint64_t offset);
   ByteInput(const ByteInput&) = delete;
   ByteInput& operator=(const ByteInput&) = delete;
   ~ByteInput();
@@ -93,6 +95,13 @@ std::uint64_t count_tree_nodes(const Header& header, std::span<const std::uint8_
 /// Throws FormatError (at the size line) unless the header's `size` is
 /// possible for the number of bytes after the header; nothing is read.
 void check_declared_size(const Header& header, const std::string& name);
+
+/// Throws MemoryLimitError (umbra/core/memory_limit.hpp) when building the
+/// tree needs more than the memory limit: one group of eight children per
+/// node with children (`parents`), 68 bytes each, 32 more with colour.
+void require_tree_memory(const Header& header, const std::string& name, std::uint64_t parents);
+/// What require_tree_memory compares with the limit.
+std::uint64_t tree_bytes(const Header& header, std::uint64_t parents);
 
 /// The header liboctomap writes: first line, the comment lines, id, size, res, data.
 std::string header_text(OctoMapFormat format, std::string_view id, std::uint64_t size, double resolution);

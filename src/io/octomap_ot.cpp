@@ -28,6 +28,7 @@
 
 #include "map/map_access.hpp"
 #include "octomap_format.hpp"
+#include "umbra/core/memory_limit.hpp"
 
 namespace umbra::octomap_io {
 namespace {
@@ -61,6 +62,18 @@ std::optional<double> clamp_probability_covering(float value, bool upper) {
     p = std::nextafter(p, upper ? 1.0 : 0.0);
   }
   return std::nullopt;
+}
+
+/// The nodes whose child mask (the last byte of each fixed-size record) is not 0, counted
+/// on an input of its own from where `in` is.
+std::uint64_t count_parents(const ByteInput& in, std::uint64_t nodes, std::size_t record_bytes) {
+  ByteInput records(in, in.offset());
+  std::array<std::uint8_t, 8> record{};
+  std::uint64_t parents = 0;
+  for (std::uint64_t node = 0; node < nodes && records.read(record.data(), record_bytes); ++node) {
+    parents += record[record_bytes - 1] != 0 ? 1 : 0;
+  }
+  return parents;
 }
 
 class OtDecoder {
@@ -244,6 +257,11 @@ class OtEncoder {
 
 OccupancyMap decode_ot(ByteInput& in, const Header& header, const std::string& name, const SensorModel& sensor) {
   check_declared_size(header, name);
+  // A node with children gets a group of eight. Every node may have children as far as the size says; when
+  // that bound is above the limit, count them (the records have a fixed size and end with the child mask).
+  if (const std::uint64_t bound = header.nodes > 0 ? header.nodes - 1 : 0; tree_bytes(header, bound) > memory_limit()) {
+    require_tree_memory(header, name, count_parents(in, header.nodes, node_bytes(header.color)));
+  }
   OccupancyMap map = new_map(header, name, sensor, header.color);
   std::optional<OtDecoder> decoder;
   detail::MapAccess::build(map, [&](detail::TreeBuilder& builder) {

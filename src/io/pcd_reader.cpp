@@ -76,6 +76,15 @@ class PcdReader final : public io_detail::SingleScanSource {
     lines_ = std::make_unique<LineReader>(file_, 0);
     parse_header();
     check_sizes();
+    // binary_compressed holds the compressed and the decompressed data besides the points.
+    const std::uint64_t buffers =
+        encoding_ == PcdEncoding::binary_compressed ? compressed_bytes_ + point_count_ * record_bytes_ : 0;
+    io_detail::require_point_memory(file_.name(), "reading its " + std::to_string(point_count_) + " points",
+                                    point_count_, roles_.colour.has_value(), buffers);
+  }
+
+  [[nodiscard]] std::vector<Vec3f> origins() const override {
+    return {viewpoint_.is_identity() ? origin_ : viewpoint_.translation()};
   }
 
  private:
@@ -567,7 +576,7 @@ class PcdReader final : public io_detail::SingleScanSource {
 }  // namespace
 
 std::unique_ptr<ScanSource> open_pcd_file(const std::filesystem::path& path, Vec3f origin) {
-  return std::make_unique<PcdReader>(path, origin);
+  return io_detail::naming_bad_alloc(path, [&] { return std::make_unique<PcdReader>(path, origin); });
 }
 
 }  // namespace umbra

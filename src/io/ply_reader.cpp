@@ -118,7 +118,12 @@ class PlyReader final : public io_detail::SingleScanSource {
     }
     lines_ = std::make_unique<LineReader>(file_, 0);
     parse_header();
+    const std::uint64_t count = elements_[vertex_element_].count;
+    io_detail::require_point_memory(file_.name(), "reading its " + std::to_string(count) + " vertices", count,
+                                    has_colours_);
   }
+
+  [[nodiscard]] std::vector<Vec3f> origins() const override { return {origin_}; }
 
  private:
   [[nodiscard]] std::uint64_t input_bytes() const override { return file_.size(); }
@@ -524,7 +529,7 @@ class PlyReader final : public io_detail::SingleScanSource {
 }  // namespace
 
 std::unique_ptr<ScanSource> open_ply_file(const std::filesystem::path& path, Vec3f origin) {
-  return std::make_unique<PlyReader>(path, origin);
+  return io_detail::naming_bad_alloc(path, [&] { return std::make_unique<PlyReader>(path, origin); });
 }
 
 }  // namespace umbra

@@ -1,6 +1,7 @@
 #include "umbra/io/png_writer.hpp"
 
 #include "atomic_file.hpp"
+#include "core/memory_budget.hpp"
 
 #include <png.h>
 
@@ -127,6 +128,14 @@ Image read_png(const std::filesystem::path& path) {
     throw std::runtime_error("read_png: " + quoted(path) + " is " + size +
                              " pixels, more than read_png accepts (" +
                              std::to_string(kMaxReadPixels) + " pixels)");
+  }
+  try {
+    detail::require_memory(path.string(), "decoding this picture (" + std::to_string(png.width) + " x " +
+                                              std::to_string(png.height) + " pixels, 3 bytes each)",
+                           pixels * 3);
+  } catch (...) {
+    png_image_free(&png);
+    throw;
   }
   png.format = PNG_FORMAT_RGB;
   Image image(static_cast<int>(png.width),

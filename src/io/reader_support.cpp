@@ -24,6 +24,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/memory_budget.hpp"
 #include "umbra/io/format_error.hpp"
 
 namespace umbra::io_detail {
@@ -333,6 +334,11 @@ bool Pose::is_identity() const {
   return true;
 }
 
+double Pose::determinant() const {
+  return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+         m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
 Pose Pose::operator*(const Pose& other) const {
   Pose product;
   for (std::size_t row = 0; row < 3; ++row) {
@@ -346,6 +352,62 @@ Pose Pose::operator*(const Pose& other) const {
 }
 
 // --- SingleScanSource --------------------------------------------------------
+
+std::uint64_t point_bytes(std::uint64_t points, bool colour) {
+  const std::uint64_t each = sizeof(Vec3f) + (colour ? sizeof(Rgb) : 0);
+  return points > UINT64_MAX / each ? UINT64_MAX : points * each;
+}
+
+void require_point_memory(const std::string& file, const std::string& what, std::uint64_t points, bool colour,
+                          std::uint64_t extra_bytes) {
+  const std::uint64_t bytes = point_bytes(points, colour);
+  detail::require_memory(file, what, bytes > UINT64_MAX - extra_bytes ? UINT64_MAX : bytes + extra_bytes);
+}
+
+void grow_points(Scan& scan, bool colour, const std::string& file) {
+  const std::size_t capacity = std::max<std::size_t>(std::size_t{1} << 16, 2 * scan.points.capacity());
+  require_point_memory(file,
+                       "making room for " + std::to_string(capacity) + " points (" +
+                           std::to_string(scan.points.size()) + " read so far; the file does not say how many follow)",
+                       capacity, colour);
+  scan.points.reserve(capacity);
+  if (colour) scan.colors.reserve(capacity);
+}
+
+namespace {
+
+/// Passes everything on to the reader it holds, naming the file when memory runs out.
+class MemoryNamingSource final : public ScanSource {
+ public:
+  MemoryNamingSource(std::string file, std::unique_ptr<ScanSource> reader)
+      : file_(std::move(file)), reader_(std::move(reader)) {}
+  bool next(Scan& scan) override {
+    try {
+      return reader_->next(scan);
+    } catch (const MemoryLimitError&) {
+      throw;
+    } catch (const std::bad_alloc&) {
+      detail::throw_out_of_memory(file_, "reading a scan (" + std::to_string(scan.points.size()) + " points so far)",
+                                  point_bytes(scan.points.capacity(), !scan.colors.empty()));
+    }
+  }
+  [[nodiscard]] std::size_t scan_count() const override { return reader_->scan_count(); }
+  [[nodiscard]] double progress() const override { return reader_->progress(); }
+  [[nodiscard]] std::vector<Vec3f> origins() const override { return reader_->origins(); }
+  [[nodiscard]] std::vector<std::string> warnings() const override { return reader_->warnings(); }
+
+ private:
+  std::string file_;
+  std::unique_ptr<ScanSource> reader_;
+};
+
+}  // namespace
+
+std::unique_ptr<ScanSource> naming_bad_alloc(const std::filesystem::path& file,
+                                             const std::function<std::unique_ptr<ScanSource>()>& make) {
+  const std::string name = file.string();
+  return std::make_unique<MemoryNamingSource>(name, detail::naming_bad_alloc(name, "opening it", 0, make));
+}
 
 bool SingleScanSource::next(Scan& scan) {
   if (error_) std::rethrow_exception(error_);

@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -223,6 +224,8 @@ struct Pose {
     return {static_cast<float>(m[0][3]), static_cast<float>(m[1][3]), static_cast<float>(m[2][3])};
   }
   [[nodiscard]] bool is_identity() const;
+  /// Determinant of the 3x3 part: 1 for a rotation, 0 when it flattens space.
+  [[nodiscard]] double determinant() const;
 
   [[nodiscard]] Vec3f apply(Vec3f p) const {
     const double x = p.x;
@@ -242,6 +245,25 @@ struct Pose {
   /// this * other (apply `other` first).
   [[nodiscard]] Pose operator*(const Pose& other) const;
 };
+
+/// Bytes the points of a scan take in a Scan: 12 a point, 15 with colour.
+std::uint64_t point_bytes(std::uint64_t points, bool colour);
+
+/// Throws MemoryLimitError "FILE: WHAT needs ..." unless `points` points
+/// (with colours when `colour`) plus `extra_bytes` fit the memory limit.
+void require_point_memory(const std::string& file, const std::string& what, std::uint64_t points, bool colour,
+                          std::uint64_t extra_bytes = 0);
+
+/// Makes room for more points in a scan whose count is not known in advance
+/// (capacity doubled, at least 64 Ki points), after checking the new
+/// capacity against the memory limit.
+void grow_points(Scan& scan, bool colour, const std::string& file);
+
+/// Wraps a reader so that a std::bad_alloc from its next() comes out as a
+/// MemoryLimitError naming `file` and the points read; `make()` constructs
+/// the reader, with the same treatment.
+std::unique_ptr<ScanSource> naming_bad_alloc(const std::filesystem::path& file,
+                                             const std::function<std::unique_ptr<ScanSource>()>& make);
 
 /// The ScanSource side of a reader whose file holds exactly one scan (xyz,
 /// PLY, PCD): next() calls read_scan() once and then returns false; an

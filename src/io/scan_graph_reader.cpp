@@ -100,6 +100,24 @@ class ScanGraphReader final : public ScanSource {
     }
     index_nodes();
     chunk_.resize(static_cast<std::size_t>(kPointsPerChunk * kPointBytes));
+    // The largest scan decides: scans are read one at a time into the same buffers.
+    std::size_t largest = 0;
+    for (std::size_t index = 1; index < nodes_.size(); ++index) {
+      if (nodes_[index].point_count > nodes_[largest].point_count) largest = index;
+    }
+    if (!nodes_.empty()) {
+      io_detail::require_point_memory(file_.name(),
+                                      "reading scan " + std::to_string(largest) + " (" +
+                                          std::to_string(nodes_[largest].point_count) + " points)",
+                                      nodes_[largest].point_count, false);
+    }
+  }
+
+  [[nodiscard]] std::vector<Vec3f> origins() const override {
+    std::vector<Vec3f> result;
+    result.reserve(nodes_.size());
+    for (const NodeEntry& node : nodes_) result.push_back(node.pose.translation());
+    return result;
   }
 
   bool next(Scan& scan) override {
@@ -294,7 +312,7 @@ class ScanGraphReader final : public ScanSource {
 
 std::unique_ptr<ScanSource> open_scan_graph(const std::filesystem::path& path) {
   io_detail::reject_directory(path);  // before opening, so an unreadable folder is named as a folder
-  return std::make_unique<ScanGraphReader>(path);
+  return io_detail::naming_bad_alloc(path, [&] { return std::make_unique<ScanGraphReader>(path); });
 }
 
 void write_scan_graph(const std::filesystem::path& path, const std::vector<Scan>& scans) {

@@ -43,6 +43,7 @@ using io_detail::quote;
 using io_detail::Tokens;
 
 constexpr std::uint64_t kMaxDepthPixels = std::uint64_t{1} << 26;  // 64 Mpixel: no depth camera is larger
+constexpr std::uint64_t kImageBytesPerPixel = 2 + 3;                // the 16-bit depth and the RGB colour image
 
 // --- 16-bit greyscale PNG decoding --------------------------------------------
 
@@ -149,6 +150,10 @@ void read_depth_png(const fs::path& path, DepthImage& image) {
     throw FormatError(path.string(), "a depth image of " + std::to_string(header.width) + " x " +
                                          std::to_string(header.height) + " pixels is implausible");
   }
+  io_detail::require_point_memory(path.string(),
+                                  "a frame of " + std::to_string(header.width) + " x " +
+                                      std::to_string(header.height) + " pixels (both images and its points)",
+                                  pixels, true, pixels * kImageBytesPerPixel);
   image.width = header.width;
   image.height = header.height;
   image.samples.resize(static_cast<std::size_t>(pixels * 2));
@@ -227,8 +232,33 @@ class TumReader final : public ScanSource {
       } catch (const std::invalid_argument& error) {
         throw FormatError::at_line(file.name(), lines.line_number(), std::string("bad pose: ") + error.what());
       }
-      if (file_exists(frame.depth) && file_exists(frame.colour)) frames_.push_back(std::move(frame));
+      if (file_exists(frame.depth) && file_exists(frame.colour)) {
+        frames_.push_back(std::move(frame));
+      } else {
+        note_missing(frame, file.name());
+      }
     }
+    if (frames_.empty()) {
+      throw FormatError(file.name(), missing_rows_ == 0
+                                         ? "the association file lists no frames (rows 'rgb_path depth_path tx ty "
+                                           "tz qx qy qz qw')"
+                                         : "none of its " + std::to_string(missing_rows_) +
+                                               " rows has both images on disk (" + first_missing_ + ")");
+    }
+  }
+
+  [[nodiscard]] std::vector<std::string> warnings() const override {
+    if (missing_rows_ == 0) return {};
+    return {association_name_ + ": " + std::to_string(missing_rows_) + " of its " +
+            std::to_string(missing_rows_ + frames_.size()) + " rows were skipped because their images are missing (" +
+            first_missing_ + ")"};
+  }
+
+  [[nodiscard]] std::vector<Vec3f> origins() const override {
+    std::vector<Vec3f> result;
+    result.reserve(frames_.size());
+    for (const Frame& frame : frames_) result.push_back(frame.pose.translation());
+    return result;
   }
 
   bool next(Scan& scan) override {
@@ -293,8 +323,18 @@ class TumReader final : public ScanSource {
     for (std::uint32_t v = 0; v < depth_.height; ++v) row_factor_[v] = (v - camera_.cy) / camera_.fy;
   }
 
+  /// Counts a row whose images are not both on disk; the first one is named in messages.
+  void note_missing(const Frame& frame, const std::string& file) {
+    if (missing_rows_++ > 0) return;
+    const fs::path& missing = file_exists(frame.depth) ? frame.colour : frame.depth;
+    first_missing_ = "the first is line " + std::to_string(frame.line) + " of " + file + ": " + missing.string() +
+                     " does not exist";
+  }
+
   DepthCamera camera_;
   std::string association_name_;
+  std::size_t missing_rows_ = 0;
+  std::string first_missing_;
   std::vector<Frame> frames_;
   std::size_t next_frame_ = 0;
   std::atomic<std::size_t> done_{0};
@@ -306,7 +346,8 @@ class TumReader final : public ScanSource {
 }  // namespace
 
 std::unique_ptr<ScanSource> open_tum_sequence(const fs::path& association_file, const DepthCamera& camera) {
-  return std::make_unique<TumReader>(association_file, camera);
+  return io_detail::naming_bad_alloc(association_file,
+                                     [&] { return std::make_unique<TumReader>(association_file, camera); });
 }
 
 fs::path find_tum_association(const fs::path& folder, const fs::path& association) {

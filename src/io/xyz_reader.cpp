@@ -24,6 +24,7 @@
 
 #include <bzlib.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "reader_support.hpp"
 #include "umbra/io/format_error.hpp"
@@ -133,7 +134,7 @@ class TextInput {
       } else if (status == BZ_DATA_ERROR) {
         throw FormatError(file_name_, "corrupt bz2 data (integrity check failed) " + where());
       } else if (status == BZ_MEM_ERROR) {
-        throw std::runtime_error("cannot decompress " + file_name_ + ": out of memory");
+        throw std::bad_alloc();  // named with the file by the reader's wrapper
       } else if (status != BZ_OK) {
         throw std::runtime_error("cannot decompress " + file_name_ + ": libbz2 error " + std::to_string(status));
       } else if (produced == 0 && stream_.avail_in == avail_in_before) {
@@ -198,10 +199,28 @@ class XyzReader final : public io_detail::SingleScanSource {
     if (::fstat(::fileno(file.get()), &info) == 0 && S_ISREG(info.st_mode)) {
       file_size_ = static_cast<std::uint64_t>(info.st_size);
     }
-    input_ = std::make_unique<TextInput>(std::move(file), io_detail::has_bz2_suffix(path), file_name_);
+    const bool compressed = io_detail::has_bz2_suffix(path);
+    if (compressed) check_bz2_signature(file.get());
+    input_ = std::make_unique<TextInput>(std::move(file), compressed, file_name_);
   }
 
+  [[nodiscard]] std::vector<Vec3f> origins() const override { return {origin_}; }
+
  private:
+  /// A .bz2 name on a regular file that is not bz2 data is refused at open
+  /// (so a build checks it before inserting anything), not after reading;
+  /// for a pipe the decompressor says so when reading.
+  void check_bz2_signature(std::FILE* file) const {
+    struct stat info {};
+    if (::fstat(::fileno(file), &info) != 0 || !S_ISREG(info.st_mode)) return;
+    char signature[3] = {};
+    const ssize_t got = ::pread(::fileno(file), signature, sizeof signature, 0);  // leaves the stream where it is
+    if (got == 0) throw FormatError(file_name_, "empty file, not bz2 data");
+    if (got == static_cast<ssize_t>(sizeof signature) && std::memcmp(signature, "BZh", 3) != 0) {
+      throw FormatError(file_name_, "not bz2 data (the file does not start with the bz2 signature \"BZh\")");
+    }
+  }
+
   [[nodiscard]] std::uint64_t input_bytes() const override { return file_size_; }
   // Capped: a file that grows while being read still ends at 1.
   [[nodiscard]] std::uint64_t bytes_consumed() const override {
@@ -290,6 +309,8 @@ class XyzReader final : public io_detail::SingleScanSource {
                                    quote(tokens[axis]) + " is not a number, in " + quote(line));
       }
     }
+    // Grown here, checked against the memory limit: the file does not say how many points follow.
+    if (scan.points.size() == scan.points.capacity()) io_detail::grow_points(scan, has_colour, file_name_);
     scan.points.push_back(point);
     if (has_colour) {
       Rgb colour;
@@ -317,7 +338,7 @@ class XyzReader final : public io_detail::SingleScanSource {
 }  // namespace
 
 std::unique_ptr<ScanSource> open_xyz_file(const std::filesystem::path& path, Vec3f origin) {
-  return std::make_unique<XyzReader>(path, origin);
+  return io_detail::naming_bad_alloc(path, [&] { return std::make_unique<XyzReader>(path, origin); });
 }
 
 }  // namespace umbra

@@ -11,11 +11,13 @@
 // voxel); cast_ray_octomap keeps OctoMap's rules: the origin voxel is
 // checked first, the range is the distance to each voxel's centre, an
 // unknown voxel ends an unsuccessful cast unless unknown space is ignored.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
+#include "core/assert.hpp"
 #include "integrate/ray_walker.hpp"
 #include "map/map_access.hpp"
 #include "query/blocking_lookup.hpp"
@@ -59,7 +61,8 @@ class RayStepper {
       dim = t_max_[1] < t_max_[2] ? 1 : 2;
     }
     const std::int64_t next = key_[dim] + step_[dim];
-    if (next < 0 || next >= limit_) return false;
+    // A step of 0 on the chosen axis: no axis is left to move along.
+    if (step_[dim] == 0 || next < 0 || next >= limit_) return false;
     entered = t_max_[dim];
     key_[dim] = next;
     t_max_[dim] += t_delta_[dim];
@@ -87,11 +90,23 @@ CastStart prepare(const Grid& grid, Vec3d origin, Vec3d direction) {
   CastStart start;
   start.origin = Vec3f(origin);
   start.origin_key = grid.key(Vec3d(start.origin));  // throws std::out_of_range naming the coordinate
+  // A direction whose float squares overflow or vanish (1e20, 1e-25, or a
+  // double beyond float range, which became inf) is first scaled by a power
+  // of two, which changes no bit of the normalised direction otherwise; its
+  // normalised float form used to be NaN or 0, and the walk then never moved
+  // (an endless loop without max_range).
+  const double largest = std::max({std::fabs(direction.x), std::fabs(direction.y), std::fabs(direction.z)});
+  if (largest > 0x1p40 || (largest > 0.0 && largest < 0x1p-40)) {
+    const int exponent = -std::ilogb(largest);  // scalbn per component: 2^exponent alone may overflow
+    direction = {std::scalbn(direction.x, exponent), std::scalbn(direction.y, exponent),
+                 std::scalbn(direction.z, exponent)};
+  }
   Vec3f d(direction);
   const double length = octomap_norm(d);
   if (!(length > 0.0)) throw std::invalid_argument("ray cast: the direction is zero");
   const auto l = static_cast<float>(length);
   start.direction = {d.x / l, d.y / l, d.z / l};
+  UMBRA_ASSERT(start.direction.is_finite() && octomap_norm(start.direction) > 0.5);
   return start;
 }
 

@@ -159,7 +159,10 @@ void ViewImage::build(Pyramid& pyramid, bool greatest) {
         const int y0 = 2 * py;
         const int x1 = std::min(x0 + 1, below_w - 1);
         const int y1 = std::min(y0 + 1, below_h - 1);
-        auto at = [&](int x, int y) { return below[std::size_t(y) * std::size_t(below_w) + std::size_t(x)]; };
+        // below_w by init-capture: clang 14 cannot capture a structured binding (the fuzz build uses it).
+        auto at = [&below, row = std::size_t(below_w)](int x, int y) {
+          return below[std::size_t(y) * row + std::size_t(x)];
+        };
         const float a = greatest ? std::max(at(x0, y0), at(x1, y0)) : std::min(at(x0, y0), at(x1, y0));
         const float b = greatest ? std::max(at(x0, y1), at(x1, y1)) : std::min(at(x0, y1), at(x1, y1));
         out[std::size_t(py) * std::size_t(w) + std::size_t(px)] = greatest ? std::max(a, b) : std::min(a, b);

@@ -2,10 +2,14 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "umbra/core/grid.hpp"
+#include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {
 namespace {
@@ -64,6 +68,37 @@ TEST(Grid, RejectsBadParameters) {
   EXPECT_THROW(Grid(0.1, 22), std::invalid_argument);
   EXPECT_NO_THROW(Grid(0.1, 1));
   EXPECT_NO_THROW(Grid(0.1, 21));
+}
+
+// Resolutions are physical: 0.1 mm to 1 km, both ends included; the message
+// names the range and the value in its shortest exact form (no 309 digits).
+TEST(Grid, ResolutionRangeIsEnforcedWithItsBoundsInTheMessage) {
+  EXPECT_NO_THROW(Grid(kMinResolution, 21));
+  EXPECT_NO_THROW(Grid(kMaxResolution, 21));
+  EXPECT_EQ(kMinResolution, 1e-4);
+  EXPECT_EQ(kMaxResolution, 1e3);
+  const std::vector<std::pair<double, std::string>> cases = {
+      {std::nextafter(kMinResolution, 0.0), "got 9.999999999999999e-05"},
+      {std::nextafter(kMaxResolution, 2e3), "got 1000.0000000000001"},
+      {1e-300, "got 1e-300"},
+      {1e300, "got 1e+300"},
+      {std::numeric_limits<double>::denorm_min(), "got 5e-324"},
+      {-std::numeric_limits<double>::infinity(), "got -inf"},
+  };
+  for (const auto& [resolution, expected] : cases) {
+    try {
+      Grid(resolution, 16);
+      ADD_FAILURE() << resolution << " accepted";
+    } catch (const std::invalid_argument& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("resolution must be a number of metres in [0.0001, 1000] (0.1 mm to 1 km), " + expected),
+                std::string::npos)
+          << message;
+    }
+    MapConfig config;
+    config.resolution = resolution;
+    EXPECT_THROW(config.validate(), std::invalid_argument);
+  }
 }
 
 TEST(Grid, CentresAndCornersAtEveryDepth) {

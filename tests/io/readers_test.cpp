@@ -1108,6 +1108,35 @@ TEST(KittiReader, ErrorsNameTheFileAndPlace) {
   }
 }
 
+// A pose (or calibration) whose 3x3 part is singular would collapse every
+// point of its scan onto a plane, a line or the translation: refused with
+// the line, as the other readers refuse a zero quaternion.
+TEST(KittiReader, SingularPosesAreRefusedWithTheirLine) {
+  const fs::path dir = test::scratch_dir();
+  const KittiFixture fixture = kitti_fixture(dir);
+  ScanSourceOptions options;
+  options.poses = dir / "zero_poses.txt";
+  write_file(options.poses, Matrix34{}.text() + "\n0 0 0 0 0 0 0 0 0 0 0 0\n" + Matrix34{}.text() + "\n");
+  std::string message = format_error_of(fixture.folder, options);
+  EXPECT_TRUE(contains(message, options.poses.string() + ":2: the 3x3 rotation part has determinant 0")) << message;
+  // Flat: a rotation with its last row zeroed squashes the scan onto a plane.
+  write_file(options.poses, Matrix34{}.text() + "\n" + Matrix34{}.text() + "\n1 0 0 5 0 1 0 6 0 0 0 7\n");
+  message = format_error_of(fixture.folder, options);
+  EXPECT_TRUE(contains(message, options.poses.string() + ":3:")) << message;
+  // A scaled (affine) pose is still a pose.
+  write_file(options.poses, Matrix34{}.text() + "\n" + Matrix34{}.text() + "\n0.5 0 0 5 0 0.5 0 6 0 0 0.5 7\n");
+  const std::vector<Scan> scans = read_all(fixture.folder, options);
+  ASSERT_EQ(scans.size(), 3u);
+  EXPECT_EQ(scans[2].points[0], (Vec3f{5.5f, 6.5f, 7.5f}));
+  // The calibration's transform too.
+  options.poses = fixture.poses;
+  options.calibration = dir / "zero_calib.txt";
+  write_file(options.calibration, "Tr: 0 0 0 1 0 0 0 2 0 0 0 3\n");
+  message = format_error_of(fixture.folder, options);
+  EXPECT_TRUE(contains(message, options.calibration.string() + ":1:")) << message;
+  EXPECT_TRUE(contains(message, "determinant 0")) << message;
+}
+
 // =================================================================================
 // TUM RGB-D
 // =================================================================================
@@ -1201,6 +1230,17 @@ TEST(TumReader, FramesOnDiskAreBackProjected) {
   const std::vector<Scan> scans = read_all(*source);
   EXPECT_EQ(source->progress(), 1.0);
   expect_tum_frames(scans, fixture);
+  // The rows whose images are missing (lines 4 and 6) are skipped with a warning naming the first one.
+  const std::vector<std::string> warnings = source->warnings();
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_TRUE(contains(warnings[0], "my_association.txt: 2 of its 4 rows were skipped because their images are "
+                                    "missing (the first is line 4 of " + fixture.association.string() + ": " +
+                                    (fixture.folder / "depth" / "2.001.png").string() + " does not exist)"))
+      << warnings[0];
+  // The origins are known before any image is decoded.
+  const std::vector<Vec3f> origins = open_scan_source(fixture.folder, options)->origins();
+  ASSERT_EQ(origins.size(), 2u);
+  for (std::size_t frame = 0; frame < 2; ++frame) expect_near_point(origins[frame], fixture.origins[frame], 1e-6, "origin");
   options.format = "tum";
   expect_tum_frames(read_all(fixture.folder, options), fixture);
   expect_tum_frames(read_all(fixture.association, options), fixture);
@@ -1222,8 +1262,9 @@ TEST(TumReader, AssociationDiscoveryAndErrors) {
   write_file(fixture.folder / "associations.txt", "");
   EXPECT_THROW((void)find_tum_association(fixture.folder), std::runtime_error);
   ScanSourceOptions options;
-  options.association = "associations.txt";  // empty: no frames
-  EXPECT_EQ(open_scan_source(fixture.folder, options)->scan_count(), 0u);
+  options.association = "associations.txt";  // empty: no frames, which is an error naming the file
+  const std::string empty = format_error_of(fixture.folder, options);
+  EXPECT_TRUE(contains(empty, "associations.txt: the association file lists no frames")) << empty;
   fs::remove(fixture.folder / "associations.txt");
   fs::remove(fixture.association);
   try {
@@ -1259,7 +1300,64 @@ TEST(TumReader, AssociationDiscoveryAndErrors) {
   // A bad camera.
   options.depth_camera.fx = 0;
   EXPECT_THROW((void)open_scan_source(association, options), std::invalid_argument);
+  // Rows, but none with both images on disk: an error naming the first missing image.
+  options = {};
+  options.format = "tum";
+  write_file(association, "rgb/2.000.png depth/2.001.png 0 0 0 0 0 0 1\nrgb/4.000.png depth/4.001.png 0 0 0 0 0 0 1\n");
+  message = format_error_of(association, options);
+  EXPECT_TRUE(contains(message, "none of its 2 rows has both images on disk (the first is line 1 of")) << message;
+  EXPECT_TRUE(contains(message, "2.001.png does not exist")) << message;
 }
+
+/// A PNG that is only a header (and a stub of image data): enough for a
+/// reader to learn the size it declares, nothing to decode.
+void write_png_header_only(const fs::path& path, std::uint32_t width, std::uint32_t height, std::uint8_t bit_depth,
+                           std::uint8_t colour_type) {
+  Bytes png(true);
+  png.text("\x89PNG\r\n\x1a\n");
+  Bytes header(true);
+  header.put(width).put(height).put(bit_depth).put(colour_type);
+  header.put(std::uint8_t{0}).put(std::uint8_t{0}).put(std::uint8_t{0});
+  append_chunk(png, "IHDR", header.str());
+  append_chunk(png, "IDAT", std::string("\x78\x01", 2));
+  append_chunk(png, "IEND", "");
+  write_file(path, png.str());
+}
+
+// The bomb: a few hundred bytes of PNG declaring 8192 x 8192 pixels,
+// which would take 1.25 GiB to decode and back-project (20 bytes a pixel).
+// With a 256 MiB limit it is refused from the header, before any pixel is
+// allocated (an address-space cap of 64 MiB would turn any large allocation
+// into "out of memory" instead of "needs").
+TEST(TumReader, AFrameDeclaringHugeImagesIsRefusedBeforeDecoding) {
+  const fs::path dir = test::scratch_dir();
+  fs::create_directories(dir / "depth");
+  fs::create_directories(dir / "rgb");
+  write_png_header_only(dir / "depth" / "1.png", 8192, 8192, 16, 0);
+  write_png_header_only(dir / "rgb" / "1.png", 8192, 8192, 8, 2);
+  write_file(dir / "assoc.txt", "rgb/1.png depth/1.png 0 0 0 0 0 0 1\n");
+  const test::MemoryLimitScope limit(std::uint64_t{256} << 20);
+  ScanSourceOptions options;
+  options.format = "tum";
+  const auto source = open_scan_source(dir / "assoc.txt", options);
+  Scan scan;
+  std::string message;
+  {
+    const test::AddressSpaceCap cap(std::uint64_t{64} << 20);
+    try {
+      source->next(scan);
+      ADD_FAILURE() << "the frame was read";
+    } catch (const MemoryLimitError& error) {
+      message = error.what();
+    }
+  }
+  EXPECT_TRUE(contains(message, (dir / "depth" / "1.png").string() + ": a frame of 8192 x 8192 pixels (both images "
+                                "and its points) needs 1.2 GiB (1342177280 bytes), more than the memory limit of "
+                                "256.0 MiB (268435456 bytes)"))
+      << message;
+  EXPECT_EQ(scan.points.capacity(), 0u);
+}
+
 
 TEST(TumRealData, TenPioneerSlam2Frames) {
   // (The macro's variable must be called `path`: it also spells std::filesystem::path.)

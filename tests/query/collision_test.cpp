@@ -288,6 +288,36 @@ TEST(Collision, BadShapesAndShapesOutsideTheMapAreRefused) {
   EXPECT_THROW(map.is_free(std::span<const Sphere>(spheres), std::span<std::uint8_t>(answers)), std::invalid_argument);
 }
 
+// Directions whose float form overflowed or vanished (found by the query-line
+// fuzzer: "0.55 0.25 0.13 1 0 5.5e57" never returned): they cast like their
+// ordinary-sized multiples, with and without a range.
+TEST(Collision, HugeAndTinyRayDirectionsCastLikeOrdinaryOnes) {
+  OccupancyMap map(0.1, 6);  // spans [-3.2, 3.2)
+  std::vector<Vec3f> wall;
+  for (float y = -1.0f; y <= 1.0f; y += 0.05f) {
+    for (float z = -1.0f; z <= 1.0f; z += 0.05f) wall.push_back({2.0f, y, z});
+  }
+  map.insert_point_cloud({0.05f, 0.05f, 0.05f}, wall);
+  const Vec3d origin{0.05, 0.05, 0.05};
+  for (const Vec3d unit : {Vec3d{1, 0, 0}, Vec3d{1, 0.3, -0.2}, Vec3d{0, 0, 1}, Vec3d{-1, 0, 1e-3}}) {
+    for (const double range : {-1.0, 2.5}) {
+      const RayHit expected = map.cast_ray(origin, unit, {range, false, 0});
+      for (const double scale : {1e20, 1e57, 1e300, 1e-20, 1e-300}) {
+        const RayHit got = map.cast_ray(origin, unit * scale, {range, false, 0});
+        EXPECT_EQ(got.hit, expected.hit) << scale;
+        EXPECT_EQ(got.node.center, expected.node.center) << scale;
+        EXPECT_EQ(got.distance, expected.distance) << scale;
+      }
+    }
+  }
+  // A component beyond float range beside an ordinary one: along that axis.
+  const RayHit along_x = map.cast_ray(origin, {5.5e57, 1, 0});
+  EXPECT_TRUE(along_x.hit);
+  EXPECT_EQ(along_x.node.center, map.cast_ray(origin, {1, 0, 0}).node.center);
+  EXPECT_FALSE(map.cast_ray(origin, {1, 0, 5.5e57}).hit);  // straight up: nothing there, and it returns
+  EXPECT_EQ(map.cast_ray(origin, {1e-320, 0, 0}).node.center, along_x.node.center);  // subnormal: still a ray
+}
+
 TEST(Collision, BatchAnswersEqualSingleAnswers) {
   test::RandomMapSpec spec;
   spec.seed = 9;

@@ -223,6 +223,11 @@ TEST(InformationGain, EmptyMapSeesEveryVoxelOfTheFrustum) {
   // Known space is not counted.
   map.update_miss(Vec3d{1.0, 1.0, 0.0});
   expect_exact(map, f, "one free voxel");
+  // An origin on a voxel centre: centres lie exactly max_range away along
+  // the axes (a tie that contains() decides by a rounded distance).
+  OccupancyMap centred(0.1, 6);
+  expect_exact(centred, Frustum::from_degrees({0.05, 0.05, 0.05}, 10, 5, 120, 90, 0.0, 2.0), "origin on a centre");
+  expect_exact(centred, Frustum::from_degrees({0.05, 0.05, 0.05}, 0, 0, 120, 90, 1.0, 2.0), "origin on a centre, near");
 }
 
 TEST(InformationGain, OriginsOnGridCornersNextToObstacles) {

@@ -113,4 +113,8 @@ AddressSpaceCap::~AddressSpaceCap() {
   if (active_) ::setrlimit(RLIMIT_AS, &saved_);
 }
 
+MemoryLimitScope::MemoryLimitScope(std::uint64_t bytes) : saved_(memory_limit()) { set_memory_limit(bytes); }
+
+MemoryLimitScope::~MemoryLimitScope() { set_memory_limit(saved_); }
+
 }  // namespace umbra::test

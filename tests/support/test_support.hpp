@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "umbra/core/memory_limit.hpp"
 #include "umbra/io/scan_source.hpp"
 
 #include <gtest/gtest.h>
@@ -65,6 +66,19 @@ class AddressSpaceCap {
  private:
   rlimit saved_{};
   bool active_ = false;
+};
+
+/// Sets umbra's memory limit (umbra/core/memory_limit.hpp) for a scope and
+/// restores the previous one.
+class MemoryLimitScope {
+ public:
+  explicit MemoryLimitScope(std::uint64_t bytes);
+  ~MemoryLimitScope();
+  MemoryLimitScope(const MemoryLimitScope&) = delete;
+  MemoryLimitScope& operator=(const MemoryLimitScope&) = delete;
+
+ private:
+  std::uint64_t saved_;
 };
 
 }  // namespace umbra::test

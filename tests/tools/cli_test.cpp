@@ -124,11 +124,11 @@ TEST(Cli, BadInputGivesAClearErrorAndNoMap) {
 
   write_xyz(dir / "ok.xyz", room_scan());
   const CommandResult origin = run(cli() + " build " + quoted(dir / "ok.xyz") + " -o " + quoted(dir / "ok.umb") + " --origin 1,2");
-  EXPECT_EQ(origin.exit_code, 1);
+  EXPECT_EQ(origin.exit_code, 2);
   EXPECT_NE(origin.output.find("--origin"), std::string::npos) << origin.output;
 
   const CommandResult format = run(cli() + " build " + quoted(dir / "ok.xyz") + " -o " + quoted(dir / "ok.map"));
-  EXPECT_EQ(format.exit_code, 1);
+  EXPECT_EQ(format.exit_code, 2);
   EXPECT_NE(format.output.find("ok.map"), std::string::npos) << format.output;
 
   const CommandResult outside = run(cli() + " build " + quoted(dir / "ok.xyz") + " -o " + quoted(dir / "small.umb") +
@@ -193,7 +193,7 @@ TEST(Cli, BuildWithTheFastIntegratorThreadsBoxAndColour) {
 
   const CommandResult bad = run(cli() + " build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "bad.umb") +
                                 " --bbox 1,2,3,4,5");
-  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.output.find("--bbox"), std::string::npos) << bad.output;
 }
 

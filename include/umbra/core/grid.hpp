@@ -17,11 +17,20 @@
 
 namespace umbra {
 
+/// The voxel edges a map may have, in metres: 0.1 mm to 1 km. Maps, map
+/// files and the command line all refuse anything else (and NaN, infinities).
+inline constexpr double kMinResolution = 1e-4;
+inline constexpr double kMaxResolution = 1e3;
+
 class Grid {
  public:
-  /// Throws std::invalid_argument unless resolution is finite and > 0 and
-  /// depth_levels is in [1, 21].
+  /// Throws std::invalid_argument unless resolution is in [kMinResolution,
+  /// kMaxResolution] and depth_levels is in [1, 21].
   Grid(double resolution, int depth_levels);
+
+  /// Throws std::invalid_argument "resolution must be ... got X" unless
+  /// resolution is in [kMinResolution, kMaxResolution].
+  static void validate_resolution(double resolution);
 
   [[nodiscard]] double resolution() const { return resolution_; }
   [[nodiscard]] int depth_levels() const { return depth_levels_; }

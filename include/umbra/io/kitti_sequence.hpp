@@ -40,8 +40,10 @@ struct KittiOptions {
 /// poses is one scan in its sensor frame with origin `options.origin`.
 /// Throws std::runtime_error("cannot open PATH: reason") for a missing path,
 /// a folder without .bin files, or an unreadable poses/calibration file, and
-/// FormatError (file and line) for a malformed poses or calibration file or
-/// when a scan has no pose line. Bad .bin files throw FormatError (byte
+/// FormatError (file and line) for a malformed poses or calibration file
+/// (also a pose or transform whose 3x3 part is singular, |determinant| <
+/// 1e-6, such as all zeros: it would collapse the scan) or when a scan has
+/// no pose line. Bad .bin files throw FormatError (byte
 /// offset) from next(). open_scan_source() calls this for the "kitti" format.
 std::unique_ptr<ScanSource> open_kitti_velodyne(const std::filesystem::path& folder_or_file,
                                                 const KittiOptions& options = {});

@@ -29,6 +29,7 @@
 #include <filesystem>
 #include <functional>
 
+#include "umbra/core/memory_limit.hpp"
 #include "umbra/io/format_error.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
@@ -58,6 +59,10 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path);
 
 /// Reads and fully validates a map file (checksums first, then every field,
 /// node and value); throws FormatError saying what is wrong and where.
+/// Before allocating, the header's node counts give what the map will take
+/// (the file, and 68 bytes per node with children, 32 at the finest depth,
+/// 32 more with colour); above memory_limit() it throws MemoryLimitError
+/// naming the file, that need and the limit (umbra/core/memory_limit.hpp).
 [[nodiscard]] OccupancyMap load_map(const std::filesystem::path& path);
 
 /// Reads and validates the header only (its own checksum, every field, the

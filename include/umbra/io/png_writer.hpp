@@ -54,6 +54,7 @@ struct Image {
 void write_png(const Image& image, const std::filesystem::path& path);
 
 /// Reads a PNG file into an 8-bit RGB image (metres_per_pixel etc. are 0).
+/// Throws MemoryLimitError when its pixels (3 bytes each) exceed memory_limit().
 Image read_png(const std::filesystem::path& path);
 
 }  // namespace umbra

@@ -35,6 +35,13 @@
 //
 // Errors: malformed files throw umbra::FormatError naming the file and the
 // line or byte offset; a missing file throws std::runtime_error naming it.
+// Memory: a scan whose points need more than umbra::memory_limit() (12 bytes
+// a point, 15 with colour; see umbra/core/memory_limit.hpp) is refused with
+// umbra::MemoryLimitError naming the file, the need and the limit: at open
+// when the header declares the count (PLY, PCD, ScanGraph), else before the
+// points are read (KITTI by file size, TUM by image size) or as they arrive
+// (xyz). Any std::bad_alloc while opening or reading comes out as a
+// MemoryLimitError naming the file.
 #pragma once
 
 #include <cstddef>
@@ -66,6 +73,14 @@ class ScanSource {
   [[nodiscard]] virtual std::size_t scan_count() const = 0;
   /// Fraction of the input consumed so far, 0..1 (for progress bars).
   [[nodiscard]] virtual double progress() const = 0;
+  /// The sensor origin of every scan, in order, when the input states them
+  /// before its points (ScanGraph and KITTI / TUM poses, a PCD viewpoint,
+  /// the given origin of a single-scan file); empty when it does not. Lets a
+  /// caller check them all before inserting anything.
+  [[nodiscard]] virtual std::vector<Vec3f> origins() const { return {}; }
+  /// What the reader noticed but did not refuse (e.g. TUM association rows
+  /// whose images are missing), one sentence each naming the file.
+  [[nodiscard]] virtual std::vector<std::string> warnings() const { return {}; }
 };
 
 /// A pinhole depth camera (TUM RGB-D and other depth images): pixel (u, v)

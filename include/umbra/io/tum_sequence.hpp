@@ -29,7 +29,13 @@ namespace umbra {
 /// std::invalid_argument for a camera with non-positive or non-finite focal
 /// lengths or depth scale, std::runtime_error("cannot open FILE: reason")
 /// when the association file cannot be opened, FormatError (file and line)
-/// for a malformed row; undecodable images throw FormatError from next().
+/// for a malformed row, and FormatError when no row has both its images
+/// (an empty association file, or none of its images on disk); undecodable
+/// images throw FormatError from next(). Rows whose images are missing are
+/// skipped and counted in warnings() (the first such row named). A depth
+/// image whose frame would need more than memory_limit() (20 bytes a pixel:
+/// both images and the points) throws MemoryLimitError from next() before it
+/// is decoded.
 std::unique_ptr<ScanSource> open_tum_sequence(const std::filesystem::path& association_file,
                                               const DepthCamera& camera = {});
 

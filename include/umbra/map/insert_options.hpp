@@ -16,6 +16,8 @@ enum class IntegratorKind { simple, discrete, fast };
 
 /// The threads InsertOptions::threads = 0 stands for: the hardware's (at least 1).
 unsigned hardware_threads();
+/// The most InsertOptions::threads may ask for: 4 per hardware thread, at least 16.
+unsigned max_threads();
 
 /// "simple" / "discrete" / "fast"; throws std::invalid_argument for anything else.
 IntegratorKind parse_integrator_kind(const std::string& name);
@@ -31,11 +33,14 @@ struct InsertOptions {
   int clear_depth = -1;
   /// fast: coarse nodes before the end point traced voxel by voxel; 0: none.
   int fine_steps = 2;
-  /// Threads tracing rays; 0: all cores.
+  /// Threads tracing rays; 0: all cores; at most max_threads(). When the
+  /// system refuses to start some of them (a process limit), the scan runs
+  /// on those that did start: InsertStats::threads says how many.
   unsigned threads = 0;
 
   /// Throws std::invalid_argument naming the bad field (NaN max_range,
-  /// clear_depth above the map's depth levels, negative fine_steps).
+  /// clear_depth above the map's depth levels, negative fine_steps, threads
+  /// above max_threads()).
   void validate(int depth_levels) const;
   /// The clear depth used for a map with this grid.
   [[nodiscard]] int resolved_clear_depth(const Grid& grid) const;
@@ -50,6 +55,7 @@ struct InsertStats {
   std::size_t non_finite = 0;      ///< NaN / infinite points, skipped
   std::size_t out_of_bounds = 0;   ///< points (or truncated ends) outside the map, skipped
   std::size_t outside_box = 0;     ///< rays that miss the bounding box entirely, skipped
+  unsigned threads = 0;            ///< threads that traced the scan (the largest number, summed)
   /// Seconds the scan kept queries out: its apply phase (tracing, most of
   /// the insertion, lets them run). A query waits at most this long.
   double exclusive_seconds = 0.0;

@@ -1,0 +1,153 @@
+// numpy arrays in and out of the bindings: the argument checks every
+// vectorised function shares, and zero-copy views where the layouts agree.
+//
+// Conventions (the same for every function of the module):
+//  - points are arrays whose last axis has length 3; a function answering
+//    per point returns an array of the leading shape (points (H, W, 3) give
+//    answers (H, W); a single point (3,) gives a 0-d array);
+//  - the arguments of a batch of shapes are (N, 3) rows or one (3,) row
+//    broadcast to all N, and (N,) values or one scalar; N is their common
+//    count and the answers are (N,);
+//  - anything numeric is accepted and converted to float64 (float32 for the
+//    points of a scan); a float64 C-contiguous array is read in place.
+// Bad shapes raise ValueError naming the argument and the shape found;
+// non-numeric input raises TypeError.
+//
+// Cost: a view is free when the dtype and layout already match, else one
+// copy of the array (an (N, 3) float64 copy of 1,000,000 points takes a
+// few milliseconds); nothing here runs per element except that copy.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <initializer_list>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include "umbra/core/color.hpp"
+#include "umbra/core/vec3.hpp"
+
+namespace umbra::python {
+
+namespace py = pybind11;
+
+// The zero-copy views below read numpy rows of three numbers as these types.
+static_assert(sizeof(Vec3d) == 3 * sizeof(double) && std::is_standard_layout_v<Vec3d>);
+static_assert(sizeof(Vec3f) == 3 * sizeof(float) && std::is_standard_layout_v<Vec3f>);
+static_assert(sizeof(Rgb) == 3 && std::is_standard_layout_v<Rgb>);
+
+/// Points: an array (..., 3) of float64, read in place when it already is one.
+class PointArray {
+ public:
+  /// Throws ValueError unless the last axis has length 3.
+  PointArray(py::handle object, const char* name);
+  [[nodiscard]] std::size_t size() const { return count_; }
+  [[nodiscard]] Vec3d operator[](std::size_t i) const {
+    const double* p = data_ + 3 * i;
+    return {p[0], p[1], p[2]};
+  }
+  /// The shape of one answer per point: the points' shape without its last axis.
+  [[nodiscard]] const std::vector<py::ssize_t>& leading_shape() const { return leading_shape_; }
+
+ private:
+  py::array_t<double, py::array::c_style | py::array::forcecast> array_;
+  const double* data_ = nullptr;
+  std::size_t count_ = 0;
+  std::vector<py::ssize_t> leading_shape_;
+};
+
+/// One argument of a batch of shapes: (N, 3) rows, or one (3,) row for all.
+class RowArray {
+ public:
+  /// Throws ValueError unless the shape is (N, 3) or (3,).
+  RowArray(py::handle object, const char* name);
+  /// N, or nothing for a broadcast row (it fits any count).
+  [[nodiscard]] std::optional<std::size_t> count() const {
+    return broadcast_ ? std::nullopt : std::optional(count_);
+  }
+  [[nodiscard]] const char* name() const { return name_; }
+  [[nodiscard]] Vec3d operator[](std::size_t i) const {
+    const double* p = data_ + (broadcast_ ? 0 : 3 * i);
+    return {p[0], p[1], p[2]};
+  }
+
+ private:
+  py::array_t<double, py::array::c_style | py::array::forcecast> array_;
+  const double* data_ = nullptr;
+  std::size_t count_ = 0;
+  bool broadcast_ = false;
+  const char* name_;
+};
+
+/// One argument of a batch: (N,) values, or one scalar for all.
+class ValueArray {
+ public:
+  /// Throws ValueError unless the shape is (N,) or ().
+  ValueArray(py::handle object, const char* name);
+  [[nodiscard]] std::optional<std::size_t> count() const {
+    return broadcast_ ? std::nullopt : std::optional(count_);
+  }
+  [[nodiscard]] const char* name() const { return name_; }
+  [[nodiscard]] double operator[](std::size_t i) const { return data_[broadcast_ ? 0 : i]; }
+
+ private:
+  py::array_t<double, py::array::c_style | py::array::forcecast> array_;
+  const double* data_ = nullptr;
+  std::size_t count_ = 0;
+  bool broadcast_ = false;
+  const char* name_;
+};
+
+/// The count N the arguments of one batch agree on (1 when all broadcast).
+/// Throws ValueError naming two arguments whose counts differ.
+std::size_t batch_count(std::initializer_list<std::pair<const char*, std::optional<std::size_t>>> counts);
+
+/// The points of a scan, (N, 3) float32 as the integrator reads them
+/// (converted once when given as another dtype).
+class ScanPoints {
+ public:
+  ScanPoints(py::handle object, const char* name);
+  [[nodiscard]] std::span<const Vec3f> span() const { return {data_, count_}; }
+
+ private:
+  py::array_t<float, py::array::c_style | py::array::forcecast> array_;
+  const Vec3f* data_ = nullptr;
+  std::size_t count_ = 0;
+};
+
+/// Colours, (N, 3) of integers in [0, 255] (uint8 is read in place).
+/// Throws ValueError for another shape or a value out of range, TypeError
+/// for a non-integer dtype.
+class ColorArray {
+ public:
+  ColorArray(py::handle object, const char* name);
+  [[nodiscard]] std::span<const Rgb> span() const { return {data_, count_}; }
+
+ private:
+  py::array_t<std::uint8_t, py::array::c_style> array_;
+  const Rgb* data_ = nullptr;
+  std::size_t count_ = 0;
+};
+
+/// A new (N,) bool array and its bytes (numpy's bool is one byte, 0 or 1).
+struct BoolArray {
+  py::array_t<bool> array;
+  std::uint8_t* bytes;
+  explicit BoolArray(std::size_t n);
+};
+
+/// A shape as numpy prints it: "(4, 2)".
+std::string shape_text(const py::array& array);
+
+/// One point: a sequence or array of three numbers (ValueError otherwise).
+Vec3d vec3_of(py::handle object, const char* name);
+
+/// A tuple of three floats.
+py::tuple to_tuple(Vec3d v);
+
+}  // namespace umbra::python

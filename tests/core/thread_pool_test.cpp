@@ -1,0 +1,179 @@
+// ThreadPool: every task runs once, exceptions come back, and a pool whose
+// threads the system refuses to start (a low process limit) still finishes
+// its jobs on the threads that did start instead of hanging (issue 12).
+//
+// The process limit is real: a child process lowers RLIMIT_NPROC (as the
+// user nobody when the tests run as root, since root ignores the limit) and
+// reports what it saw through a pipe. The parent waits at most two minutes
+// for the report; that is a hang detector, not a speed limit.
+#include <poll.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/thread_pool.hpp"
+#include "umbra/map/occupancy_map.hpp"
+
+namespace umbra {
+namespace {
+
+TEST(ThreadPool, EveryTaskRunsOnceOnAWorkerOfThePool) {
+  for (const unsigned threads : {1u, 2u, 3u, 8u}) {
+    ThreadPool pool(threads);
+    EXPECT_EQ(pool.requested(), threads);
+    EXPECT_EQ(pool.size(), threads);
+    EXPECT_TRUE(pool.started_all());
+    std::vector<std::atomic<int>> runs(1000);
+    std::atomic<bool> worker_in_range{true};
+    pool.run(runs.size(), [&](std::size_t task, unsigned worker) {
+      runs[task].fetch_add(1);
+      if (worker >= pool.size()) worker_in_range = false;
+    });
+    for (const auto& r : runs) EXPECT_EQ(r.load(), 1);
+    EXPECT_TRUE(worker_in_range.load());
+  }
+}
+
+TEST(ThreadPool, TheFirstExceptionComesBack) {
+  ThreadPool pool(3);
+  EXPECT_THROW(pool.run(100, [](std::size_t task, unsigned) {
+    if (task == 17) throw std::runtime_error("task 17");
+  }), std::runtime_error);
+  std::atomic<int> after{0};
+  pool.run(10, [&](std::size_t, unsigned) { ++after; });  // still usable
+  EXPECT_EQ(after.load(), 10);
+}
+
+TEST(ThreadPool, ThreadLimitIsFourPerCoreAndAtLeastSixteen) {
+  EXPECT_EQ(ThreadPool::max_threads(), std::max(16u, 4 * ThreadPool::hardware_threads()));
+  EXPECT_EQ(max_threads(), ThreadPool::max_threads());
+  InsertOptions options;
+  options.threads = max_threads();
+  EXPECT_NO_THROW(options.validate(16));
+  options.threads = max_threads() + 1;
+  try {
+    options.validate(16);
+    ADD_FAILURE() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("threads must be at most " + std::to_string(max_threads())),
+              std::string::npos)
+        << e.what();
+  }
+  OccupancyMap map(0.1);
+  const std::vector<Vec3f> points = {{1, 1, 1}};
+  options.threads = 100000;
+  EXPECT_THROW(map.insert_point_cloud({0, 0, 0}, points, options), std::invalid_argument);
+}
+
+// --- under a real process limit -------------------------------------------------
+
+/// Tasks (threads) the user `uid` runs now, from /proc.
+unsigned tasks_of_user(uid_t uid) {
+  unsigned tasks = 0;
+  std::error_code ignored;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc", ignored)) {
+    std::ifstream status(entry.path() / "status");
+    std::string line;
+    bool mine = false;
+    while (std::getline(status, line)) {
+      if (line.rfind("Uid:", 0) == 0) mine = std::stoul(line.substr(4)) == uid;
+      if (mine && line.rfind("Threads:", 0) == 0) tasks += static_cast<unsigned>(std::stoul(line.substr(8)));
+    }
+  }
+  return tasks;
+}
+
+/// What the limited child saw.
+struct LimitedReport {
+  unsigned pool_size = 0;       // threads the pool of 8 has (caller included)
+  unsigned tasks_done = 0;      // of 1000
+  unsigned map_threads = 0;     // InsertStats::threads of an 8-thread insertion
+  unsigned same_map = 0;        // 1 when that map equals the one-thread map
+};
+
+/// Runs `work` in a child process that may start at most two more threads;
+/// nothing when the limit cannot be set up here (the child exits 77).
+std::optional<LimitedReport> run_with_few_threads() {
+  int fds[2];
+  if (::pipe(fds) != 0) return std::nullopt;
+  const pid_t child = ::fork();
+  if (child < 0) return std::nullopt;
+  if (child == 0) {
+    ::close(fds[0]);
+    // Root ignores RLIMIT_NPROC: become nobody first.
+    if (::geteuid() == 0 && (::setgid(65534) != 0 || ::setuid(65534) != 0)) ::_exit(77);
+    const rlim_t allowed = tasks_of_user(::getuid()) + 2;
+    const rlimit limit{allowed, allowed};
+    if (::setrlimit(RLIMIT_NPROC, &limit) != 0) ::_exit(77);
+    LimitedReport report;
+    {
+      ThreadPool pool(8);
+      std::atomic<unsigned> done{0};
+      pool.run(1000, [&](std::size_t, unsigned) { ++done; });
+      report.pool_size = pool.size();
+      report.tasks_done = done.load();
+    }
+    // The map: the same with 8 threads asked as with 1.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> coordinate(-3.0f, 3.0f);
+    std::vector<Vec3f> points(20000);
+    for (Vec3f& p : points) p = {coordinate(rng), coordinate(rng), coordinate(rng)};
+    OccupancyMap many(0.1);
+    OccupancyMap one(0.1);
+    InsertOptions options;
+    options.threads = 8;
+    report.map_threads = many.insert_point_cloud({0.05f, 0.05f, 0.05f}, points, options).threads;
+    options.threads = 1;
+    one.insert_point_cloud({0.05f, 0.05f, 0.05f}, points, options);
+    std::vector<std::pair<std::uint64_t, float>> a;
+    std::vector<std::pair<std::uint64_t, float>> b;
+    many.for_each_leaf([&](const Node& n) { a.emplace_back(morton::encode(n.key) * 32 + n.depth, n.log_odds); });
+    one.for_each_leaf([&](const Node& n) { b.emplace_back(morton::encode(n.key) * 32 + n.depth, n.log_odds); });
+    report.same_map = a == b && !a.empty() ? 1 : 0;
+    const bool written = ::write(fds[1], &report, sizeof report) == static_cast<ssize_t>(sizeof report);
+    ::_exit(written ? 0 : 1);
+  }
+  ::close(fds[1]);
+  LimitedReport report;
+  pollfd readable{fds[0], POLLIN, 0};
+  const bool answered = ::poll(&readable, 1, 120'000) == 1;  // a hang detector: the child takes milliseconds
+  const bool got = answered && ::read(fds[0], &report, sizeof report) == static_cast<ssize_t>(sizeof report);
+  ::close(fds[0]);
+  if (!answered) ::kill(child, SIGKILL);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 77) return std::nullopt;
+  EXPECT_TRUE(answered) << "the child hung: a pool waited for threads that were never started";
+  EXPECT_TRUE(got && WIFEXITED(status) && WEXITSTATUS(status) == 0) << "child status " << status;
+  return report;
+}
+
+TEST(ThreadPool, APoolWhoseThreadsCannotAllStartRunsOnThoseThatDid) {
+#if defined(__SANITIZE_THREAD__)
+  GTEST_SKIP() << "ThreadSanitizer starts threads of its own, which a process limit of a few tasks refuses";
+#endif
+  const std::optional<LimitedReport> report = run_with_few_threads();
+  if (!report) GTEST_SKIP() << "cannot lower the process limit here (needs root to become nobody, or a user limit)";
+  EXPECT_GE(report->pool_size, 1u);
+  EXPECT_LT(report->pool_size, 8u) << "the process limit did not bite";
+  EXPECT_EQ(report->tasks_done, 1000u);
+  EXPECT_GE(report->map_threads, 1u);
+  EXPECT_LT(report->map_threads, 8u);
+  EXPECT_EQ(report->same_map, 1u) << "the map made with the threads that started differs from the one-thread map";
+}
+
+}  // namespace
+}  // namespace umbra

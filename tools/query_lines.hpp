@@ -1,0 +1,92 @@
+// The input lines of `umbra query` (sphere, box, line, raycast, gain): what a line
+// must hold, reading and checking every line of an input, and answering one
+// checked line against a map. Kept apart from the command (query_command.cpp)
+// so that the libFuzzer target fuzz/fuzz_query_lines.cpp feeds lines through
+// exactly this code without the command-line parser. Cost: reading is one
+// pass over the text, one allocation per good line (its values); answering is
+// the library's query.
+#pragma once
+
+#include <cstddef>
+#include <istream>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "umbra/map/occupancy_map.hpp"
+#include "umbra/query/information_gain.hpp"
+
+namespace umbra::cli {
+
+/// The kinds of query that read lines, with their layout.
+enum class LineQuery { sphere, box, line, raycast, gain };
+
+/// "sphere", "box", "line", "raycast" or "gain"; nullopt for anything else.
+std::optional<LineQuery> line_query_named(std::string_view name);
+const char* to_string(LineQuery kind);
+/// How many numbers a line of this kind holds, and their names ("x y z r").
+std::size_t numbers_of(LineQuery kind);
+const char* layout_of(LineQuery kind);
+
+/// The numbers of one line (blank and '#' lines are not passed here):
+/// separated by spaces, tabs or commas, each finite, exactly numbers_of(kind)
+/// of them. Returns what is wrong (with `values` empty), or nullopt with
+/// `values` filled.
+std::optional<std::string> parse_query_line(std::string_view text, LineQuery kind, std::vector<double>& values);
+
+/// A line that was read: its number (from 1) and its values.
+struct QueryLine {
+  std::size_t number = 0;
+  std::vector<double> values;
+};
+
+/// A line that was refused: its number and why.
+struct BadQueryLine {
+  std::size_t number = 0;
+  std::string problem;
+};
+
+struct QueryLines {
+  std::vector<QueryLine> good;
+  std::vector<BadQueryLine> bad;
+};
+
+/// Every line of `in`, in order; blank lines and lines starting with '#'
+/// (after blanks) are skipped. Throws std::runtime_error when the stream
+/// fails to read (not for bad lines: those go to `bad`).
+QueryLines read_query_lines(std::istream& in, LineQuery kind);
+
+/// One answer: collides / hit, the centre of the voxel hit (raycast), the
+/// gain, or the reason there is no answer (the library's
+/// std::invalid_argument or std::out_of_range message: a negative radius, a
+/// shape outside the map...).
+struct QueryAnswer {
+  bool ok = false;
+  bool yes = false;
+  Vec3d point;
+  GainResult gain{};
+  std::string problem;
+};
+
+/// What the command line sets for every line.
+struct LineQuerySettings {
+  CollisionOptions collision;  ///< sphere, box, line, raycast (its depth)
+  /// line: other than 0 turns the segment into a capsule (so a negative or
+  /// NaN radius is refused like any bad capsule).
+  double radius = 0.0;
+  double hfov = 115.0;  ///< gain: the field of view in degrees and the ranges in metres
+  double vfov = 60.0;
+  double min_range = 0.0;
+  double max_range = 6.5;
+  GainMethod method = GainMethod::exact;
+};
+
+/// Answers one line's values (numbers_of(kind) of them, as parse_query_line
+/// gives them). Raycasts pass through unknown space and stop at the first
+/// occupied voxel.
+QueryAnswer answer_query_line(const OccupancyMap& map, LineQuery kind, std::span<const double> values,
+                              const LineQuerySettings& settings);
+
+}  // namespace umbra::cli
