@@ -1,12 +1,11 @@
 // `umbra view MAP -o map.html [--budget N] [--serve [--port P]]`: one HTML
 // file that shows a map in 3D in any browser, offline.
 //
-// The page is the template and script of tools/viewer/ (three.js, pinned in
-// tools/viewer/package-lock.json, bundled at build time into a generated
-// header, so nothing is fetched when the page opens), followed by the map's
-// numbers and node layers (viewer_data.hpp). A build without node and npm
-// has no page to write: the command then says so. Cost: the layers (see
-// viewer_data.hpp), then one write of the page (about 3-6 bytes per node).
+// The page is viewer_page.hpp's (three.js pinned in
+// tools/viewer/package-lock.json, bundled at build time, so nothing is
+// fetched when the page opens). A build without node and npm has no page to
+// write: the command then says so. Cost: the layers (see viewer_data.hpp),
+// then one write of the page (about 3-6 bytes per node).
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -20,10 +19,7 @@
 #include "report.hpp"
 #include "umbra/io/map_formats.hpp"
 #include "viewer_data.hpp"
-
-#if defined(UMBRA_HAVE_VIEWER)
-#include "umbra_viewer_assets.hpp"
-#endif
+#include "viewer_page.hpp"
 
 namespace umbra::cli {
 namespace {
@@ -35,25 +31,6 @@ struct ViewOptions {
   bool serve = false;
   int port = 8000;
 };
-
-#if defined(UMBRA_HAVE_VIEWER)
-
-std::string page_for(const OccupancyMap& map, const ViewerData& data, const std::string& title) {
-  std::string page(viewer_assets::kPageBeforeData);
-  page += "<script type=\"application/json\" id=\"umbra-map\">" + viewer_json(map, data, title) + "</script>\n";
-  std::size_t id = 0;
-  for (const ViewerLayer& layer : data.layers) {
-    if (!layer.embedded) continue;
-    page += "<script type=\"application/octet-stream\" id=\"layer-" + std::to_string(id++) + "\">";
-    page += base64(layer.deflated);
-    page += "</script>\n";
-  }
-  page += "<script>";
-  page += viewer_assets::kScript;
-  page += "</script>";
-  page += viewer_assets::kPageAfterData;
-  return page;
-}
 
 void print_summary(const OccupancyMap& map, const ViewerData& data) {
   if (!data.stats.has_known_space) {
@@ -79,22 +56,20 @@ void print_summary(const OccupancyMap& map, const ViewerData& data) {
 int write_and_serve(const ViewOptions& options) {
   const OccupancyMap map = load_any_map(options.map_path);
   const ViewerData data = collect_viewer_data(map, options.budget);
-  const std::string page = page_for(map, data, std::filesystem::path(options.map_path).filename().string());
+  const std::string page = viewer_page(map, data, std::filesystem::path(options.map_path).filename().string());
   print_summary(map, data);
   if (!options.output.empty()) {
     const auto* bytes = reinterpret_cast<const std::uint8_t*>(page.data());
     detail::write_file_atomically(options.output, {std::span<const std::uint8_t>(bytes, page.size())}, "page");
     std::printf("wrote %s (%s, three.js %s)\n", options.output.c_str(), human_bytes(page.size()).c_str(),
-                std::string(viewer_assets::kThreeVersion).c_str());
+                viewer_three_version().c_str());
   }
   std::fflush(stdout);
   if (options.serve) serve_page(page, options.port, stdout);
   return 0;
 }
 
-#else
-
-int write_and_serve(const ViewOptions&) {
+int explain_missing_page() {
   std::fprintf(stderr,
                "umbra view: this umbra was built without the browser viewer: node and npm were missing when it was "
                "configured, `npm ci` failed, or UMBRA_BUILD_VIEWER was OFF (the configure messages say which). "
@@ -102,14 +77,12 @@ int write_and_serve(const ViewOptions&) {
   return 1;
 }
 
-#endif
-
 int run_view(const ViewOptions& options) {
   if (options.output.empty() && !options.serve) {
     std::fprintf(stderr, "umbra view: error: say where the page goes: -o FILE.html, --serve, or both\n");
     return 2;
   }
-  return write_and_serve(options);
+  return viewer_page_available() ? write_and_serve(options) : explain_missing_page();
 }
 
 }  // namespace

@@ -2,12 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <initializer_list>
 #include <limits>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
+
+#include "sim/scene_bvh.hpp"
 
 namespace umbra::sim {
 
@@ -65,6 +69,72 @@ bool clip_to_cylinder(const Cylinder& cylinder, Vec3d origin, Vec3d direction, I
   interval.enter = std::max(interval.enter, (-b - root) / a);
   interval.exit = std::min(interval.exit, (-b + root) / a);
   return interval.enter <= interval.exit;
+}
+
+/// Narrows `interval` to where the ray is within `radius` of `center` (|direction| = 1).
+bool clip_to_ball(Vec3d center, double radius, Vec3d origin, Vec3d direction, Interval& interval) {
+  const Vec3d offset = origin - center;
+  const double b = offset.dot(direction);
+  const double c = offset.dot(offset) - radius * radius;
+  const double discriminant = b * b - c;
+  if (discriminant < 0.0) return false;
+  const double root = std::sqrt(discriminant);
+  interval.enter = std::max(interval.enter, -b - root);
+  interval.exit = std::min(interval.exit, -b + root);
+  return interval.enter <= interval.exit;
+}
+
+/// The ray's interval inside a pipe. A capsule is convex, so the interval is
+/// one piece: the union of the pieces inside its two end balls and inside the
+/// cylinder between the planes through its ends.
+bool clip_to_pipe(const Pipe& pipe, Vec3d origin, Vec3d direction, Interval& interval) {
+  Interval inside{kInfinity, -kInfinity};
+  auto include = [&inside](const Interval& piece) {
+    inside.enter = std::min(inside.enter, piece.enter);
+    inside.exit = std::max(inside.exit, piece.exit);
+  };
+  for (const Vec3d end : {pipe.a, pipe.b}) {
+    Interval piece;
+    if (clip_to_ball(end, pipe.radius, origin, direction, piece)) include(piece);
+  }
+  const Vec3d axis_vector = pipe.b - pipe.a;
+  const double length = axis_vector.norm();
+  if (length > 0.0) {
+    const Vec3d axis = axis_vector / length;
+    const Vec3d offset = origin - pipe.a;
+    Interval piece;
+    // Between the end planes: 0 <= (offset + t direction) . axis <= length.
+    if (clip_to_slab(offset.dot(axis), direction.dot(axis), 0.0, length, piece)) {
+      // Within the radius of the axis line: |w0 + t wd|^2 <= r^2 with w the parts across the axis.
+      const Vec3d w0 = offset - axis * offset.dot(axis);
+      const Vec3d wd = direction - axis * direction.dot(axis);
+      const double a = wd.dot(wd);
+      const double b = w0.dot(wd);
+      const double c = w0.dot(w0) - pipe.radius * pipe.radius;
+      bool meets = false;
+      if (a == 0.0) {
+        meets = c <= 0.0;  // along the axis: inside the tube or never
+      } else if (const double discriminant = b * b - a * c; discriminant >= 0.0) {
+        const double root = std::sqrt(discriminant);
+        piece.enter = std::max(piece.enter, (-b - root) / a);
+        piece.exit = std::min(piece.exit, (-b + root) / a);
+        meets = piece.enter <= piece.exit;
+      }
+      if (meets) include(piece);
+    }
+  }
+  if (inside.enter > inside.exit) return false;
+  interval.enter = std::max(interval.enter, inside.enter);
+  interval.exit = std::min(interval.exit, inside.exit);
+  return interval.enter <= interval.exit;
+}
+
+/// Distance from a point to the segment [a, b].
+double distance_to_segment(Vec3d point, Vec3d a, Vec3d b) {
+  const Vec3d ab = b - a;
+  const double length_squared = ab.dot(ab);
+  const double t = length_squared > 0.0 ? std::clamp((point - a).dot(ab) / length_squared, 0.0, 1.0) : 0.0;
+  return (point - (a + ab * t)).norm();
 }
 
 /// Folds one primitive's interval into the nearest hit so far.
@@ -125,7 +195,135 @@ void add_table(Scene& scene, double center_x, double center_y, double length_x, 
   }
 }
 
+// --- the primitives as the hierarchy sees them ------------------------------
+
+// A leaf of the hierarchy names its primitive by kind (top two bits) and
+// index in that kind's list.
+enum class Kind : std::uint32_t { box = 0, cylinder = 1, pipe = 2 };
+constexpr std::uint32_t kKindShift = 30;
+constexpr std::uint32_t kIndexMask = (1u << kKindShift) - 1;
+
+std::uint32_t primitive_id(Kind kind, std::size_t index) {
+  if (index > kIndexMask) throw std::length_error("Scene: more than 2^30 primitives of one kind");
+  return (static_cast<std::uint32_t>(kind) << kKindShift) | static_cast<std::uint32_t>(index);
+}
+Kind kind_of(std::uint32_t id) { return static_cast<Kind>(id >> kKindShift); }
+std::size_t index_of(std::uint32_t id) { return id & kIndexMask; }
+
+detail::BvhBox hierarchy_box(const Box& box) { return {box.min, box.max}; }
+bool clip(const Box& box, Vec3d origin, Vec3d direction, Interval& interval) {
+  return clip_to_box(box, origin, direction, interval);
+}
+bool clip(const Cylinder& cylinder, Vec3d origin, Vec3d direction, Interval& interval) {
+  return clip_to_cylinder(cylinder, origin, direction, interval);
+}
+bool clip(const Pipe& pipe, Vec3d origin, Vec3d direction, Interval& interval) {
+  return clip_to_pipe(pipe, origin, direction, interval);
+}
+
+bool contains(const Box& box, Vec3d point) {
+  return point.x >= box.min.x && point.x <= box.max.x && point.y >= box.min.y && point.y <= box.max.y &&
+         point.z >= box.min.z && point.z <= box.max.z;
+}
+bool contains(const Cylinder& cylinder, Vec3d point) {
+  const double dx = point.x - cylinder.center_x;
+  const double dy = point.y - cylinder.center_y;
+  return dx * dx + dy * dy <= cylinder.radius * cylinder.radius && point.z >= cylinder.z_min &&
+         point.z <= cylinder.z_max;
+}
+bool contains(const Pipe& pipe, Vec3d point) { return distance_to_segment(point, pipe.a, pipe.b) <= pipe.radius; }
+
+double surface_distance(const Box& box, Vec3d point) {
+  return surface_distance({std::max(box.min.x - point.x, point.x - box.max.x),
+                           std::max(box.min.y - point.y, point.y - box.max.y),
+                           std::max(box.min.z - point.z, point.z - box.max.z)});
+}
+double surface_distance(const Cylinder& cylinder, Vec3d point) {
+  const double radial = std::hypot(point.x - cylinder.center_x, point.y - cylinder.center_y) - cylinder.radius;
+  const double vertical = std::max(cylinder.z_min - point.z, point.z - cylinder.z_max);
+  return surface_distance({radial, vertical});
+}
+double surface_distance(const Pipe& pipe, Vec3d point) {
+  return std::abs(distance_to_segment(point, pipe.a, pipe.b) - pipe.radius);
+}
+
+/// Calls fn(primitive) with the primitive a hierarchy leaf names.
+template <typename Fn>
+decltype(auto) visit_primitive(const Scene& scene, std::uint32_t id, Fn&& fn) {
+  switch (kind_of(id)) {
+    case Kind::box:
+      return fn(scene.boxes()[index_of(id)]);
+    case Kind::cylinder:
+      return fn(scene.cylinders()[index_of(id)]);
+    case Kind::pipe:
+      break;
+  }
+  return fn(scene.pipes()[index_of(id)]);
+}
+
 }  // namespace
+
+double distance_to_solid(const Box& box, Vec3d point) {
+  double sum = 0.0;
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const double outside = std::max({box.min[axis] - point[axis], 0.0, point[axis] - box.max[axis]});
+    sum += outside * outside;
+  }
+  return std::sqrt(sum);
+}
+double distance_to_solid(const Cylinder& cylinder, Vec3d point) {
+  const double radial = std::max(0.0, std::hypot(point.x - cylinder.center_x, point.y - cylinder.center_y) - cylinder.radius);
+  const double vertical = std::max({0.0, cylinder.z_min - point.z, point.z - cylinder.z_max});
+  return std::hypot(radial, vertical);
+}
+double distance_to_solid(const Pipe& pipe, Vec3d point) {
+  return std::max(0.0, distance_to_segment(point, pipe.a, pipe.b) - pipe.radius);
+}
+
+Box bounds_of(const Box& box) { return box; }
+Box bounds_of(const Cylinder& c) {
+  return {{c.center_x - c.radius, c.center_y - c.radius, c.z_min}, {c.center_x + c.radius, c.center_y + c.radius, c.z_max}};
+}
+Box bounds_of(const Pipe& p) {
+  const Vec3d r{p.radius, p.radius, p.radius};
+  return {Vec3d{std::min(p.a.x, p.b.x), std::min(p.a.y, p.b.y), std::min(p.a.z, p.b.z)} - r,
+          Vec3d{std::max(p.a.x, p.b.x), std::max(p.a.y, p.b.y), std::max(p.a.z, p.b.z)} + r};
+}
+
+Scene::Scene() : bvh_(std::make_unique<detail::SceneBvh>()) {}
+Scene::~Scene() = default;
+Scene::Scene(const Scene& other)
+    : boxes_(other.boxes_),
+      cylinders_(other.cylinders_),
+      pipes_(other.pipes_),
+      bvh_(std::make_unique<detail::SceneBvh>(*other.bvh_)) {}
+Scene& Scene::operator=(const Scene& other) {
+  if (this != &other) *this = Scene(other);
+  return *this;
+}
+// A moved-from scene is empty and usable: it gets a fresh hierarchy.
+Scene::Scene(Scene&& other) noexcept
+    : boxes_(std::move(other.boxes_)),
+      cylinders_(std::move(other.cylinders_)),
+      pipes_(std::move(other.pipes_)),
+      bvh_(std::exchange(other.bvh_, std::make_unique<detail::SceneBvh>())) {
+  other.boxes_.clear();
+  other.cylinders_.clear();
+  other.pipes_.clear();
+}
+Scene& Scene::operator=(Scene&& other) noexcept {
+  if (this != &other) {
+    boxes_ = std::move(other.boxes_);
+    cylinders_ = std::move(other.cylinders_);
+    pipes_ = std::move(other.pipes_);
+    std::swap(bvh_, other.bvh_);
+    other.boxes_.clear();
+    other.cylinders_.clear();
+    other.pipes_.clear();
+    *other.bvh_ = detail::SceneBvh();
+  }
+  return *this;
+}
 
 void Scene::add_box(const Box& box) {
   if (!box.min.is_finite() || !box.max.is_finite()) {
@@ -136,6 +334,7 @@ void Scene::add_box(const Box& box) {
     throw std::invalid_argument("Scene::add_box: need min < max on every axis, got min " +
                                 to_text(box.min) + " max " + to_text(box.max));
   }
+  bvh_->insert(hierarchy_box(bounds_of(box)), primitive_id(Kind::box, boxes_.size()));
   boxes_.push_back(box);
 }
 
@@ -150,7 +349,19 @@ void Scene::add_cylinder(const Cylinder& cylinder) {
         << " z [" << cylinder.z_min << ", " << cylinder.z_max << "]";
     throw std::invalid_argument(out.str());
   }
+  bvh_->insert(hierarchy_box(bounds_of(cylinder)), primitive_id(Kind::cylinder, cylinders_.size()));
   cylinders_.push_back(cylinder);
+}
+
+void Scene::add_pipe(const Pipe& pipe) {
+  if (!pipe.a.is_finite() || !pipe.b.is_finite() || !std::isfinite(pipe.radius) || !(pipe.radius > 0.0)) {
+    std::ostringstream out;
+    out << "Scene::add_pipe: need finite ends and radius > 0, got a " << to_text(pipe.a) << " b "
+        << to_text(pipe.b) << " radius " << pipe.radius;
+    throw std::invalid_argument(out.str());
+  }
+  bvh_->insert(hierarchy_box(bounds_of(pipe)), primitive_id(Kind::pipe, pipes_.size()));
+  pipes_.push_back(pipe);
 }
 
 std::optional<double> Scene::intersect(Vec3d origin, Vec3d unit_direction, double max_range) const {
@@ -172,70 +383,44 @@ std::optional<double> Scene::intersect(Vec3d origin, Vec3d unit_direction, doubl
 std::optional<double> Scene::intersect_unchecked(Vec3d origin, Vec3d unit_direction,
                                                  double max_range) const {
   double nearest = kInfinity;
-  for (const Box& box : boxes_) {
+  bvh_->cast(origin, unit_direction, max_range, [&](std::uint32_t id, double t_max) {
     Interval interval;
-    if (clip_to_box(box, origin, unit_direction, interval)) keep_nearest(interval, nearest);
-  }
-  for (const Cylinder& cylinder : cylinders_) {
-    Interval interval;
-    if (clip_to_cylinder(cylinder, origin, unit_direction, interval)) {
-      keep_nearest(interval, nearest);
-    }
-  }
+    const bool meets = visit_primitive(*this, id, [&](const auto& primitive) {
+      return clip(primitive, origin, unit_direction, interval);
+    });
+    if (meets) keep_nearest(interval, nearest);
+    return std::min(t_max, nearest);
+  });
   if (nearest <= max_range) return nearest;
   return std::nullopt;
 }
 
 bool Scene::is_inside_solid(Vec3d point) const {
-  for (const Box& box : boxes_) {
-    if (point.x >= box.min.x && point.x <= box.max.x && point.y >= box.min.y &&
-        point.y <= box.max.y && point.z >= box.min.z && point.z <= box.max.z) {
-      return true;
-    }
-  }
-  for (const Cylinder& cylinder : cylinders_) {
-    const double dx = point.x - cylinder.center_x;
-    const double dy = point.y - cylinder.center_y;
-    if (dx * dx + dy * dy <= cylinder.radius * cylinder.radius && point.z >= cylinder.z_min &&
-        point.z <= cylinder.z_max) {
-      return true;
-    }
-  }
-  return false;
+  bool inside = false;
+  // A ball of radius 0 around the point: the primitives whose bounds hold it.
+  bvh_->visit_near(point, 0.0, [&](std::uint32_t id, double limit) {
+    if (!inside) inside = visit_primitive(*this, id, [&](const auto& primitive) { return contains(primitive, point); });
+    return inside ? -1.0 : limit;  // found: a negative limit ends the walk
+  });
+  return inside;
 }
 
 double Scene::distance_to_nearest_surface(Vec3d point) const {
+  // A primitive's surface lies inside its bounds, so the distance to the
+  // bounds is a lower bound of the distance to the surface.
   double nearest = kInfinity;
-  for (const Box& box : boxes_) {
-    nearest =
-        std::min(nearest, surface_distance({std::max(box.min.x - point.x, point.x - box.max.x),
-                                            std::max(box.min.y - point.y, point.y - box.max.y),
-                                            std::max(box.min.z - point.z, point.z - box.max.z)}));
-  }
-  for (const Cylinder& cylinder : cylinders_) {
-    const double radial =
-        std::hypot(point.x - cylinder.center_x, point.y - cylinder.center_y) - cylinder.radius;
-    const double vertical = std::max(cylinder.z_min - point.z, point.z - cylinder.z_max);
-    nearest = std::min(nearest, surface_distance({radial, vertical}));
-  }
+  bvh_->visit_near(point, kInfinity, [&](std::uint32_t id, double) {
+    nearest = std::min(nearest, visit_primitive(*this, id, [&](const auto& primitive) {
+                         return surface_distance(primitive, point);
+                       }));
+    return nearest * nearest;
+  });
   return nearest;
 }
 
 Box Scene::bounds() const {
   if (empty()) throw std::logic_error("Scene::bounds: the scene is empty");
-  Box result{{kInfinity, kInfinity, kInfinity}, {-kInfinity, -kInfinity, -kInfinity}};
-  auto grow = [&result](Vec3d low, Vec3d high) {
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      result.min[axis] = std::min(result.min[axis], low[axis]);
-      result.max[axis] = std::max(result.max[axis], high[axis]);
-    }
-  };
-  for (const Box& box : boxes_) grow(box.min, box.max);
-  for (const Cylinder& c : cylinders_) {
-    grow({c.center_x - c.radius, c.center_y - c.radius, c.z_min},
-         {c.center_x + c.radius, c.center_y + c.radius, c.z_max});
-  }
-  return result;
+  return {bvh_->bounds().min, bvh_->bounds().max};
 }
 
 Scene make_demo_scene() {

@@ -21,8 +21,10 @@
 // overlap from frame to frame as a hand-held or robot-mounted camera's do:
 // later frames look through the noisy surfaces of earlier ones.
 //
-// Cost model: width * height ray casts, each brute force over the scene's
-// primitives: about 10 ms for 640 x 240 pixels on the demo scene.
+// Cost model: width * height ray casts through the scene's hierarchy
+// (scene.hpp): about 10 ms for 640 x 240 pixels on the demo scene, about
+// 1.3 us per pixel on the 870 primitives of make_industrial_scene() (brute
+// force over them took 9.6 us).
 #pragma once
 
 #include <cstddef>

@@ -12,10 +12,9 @@
 // nothing can be reported as far points for the integrator to clear free
 // space along (emit_no_return).
 //
-// Cost model: rings * azimuth_steps ray casts, each brute force over the
-// scene's primitives; the default model on the demo scene (~100 primitives)
-// takes a few milliseconds. simulate_scan into an existing vector reuses its
-// memory.
+// Cost model: rings * azimuth_steps ray casts through the scene's hierarchy
+// (scene.hpp); the default model on the demo scene (~100 primitives) takes a
+// few milliseconds. simulate_scan into an existing vector reuses its memory.
 #pragma once
 
 #include <cstdint>

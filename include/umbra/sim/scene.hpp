@@ -1,17 +1,24 @@
-// Scene: a small world of solid primitives for the simulated sensor.
+// Scene: a small world of solid primitives for the simulated sensors.
 //
-// A scene is a list of axis-aligned boxes (walls, floor, ceiling, furniture)
-// and vertical cylinders (pillars, table legs). It exists so that tests,
-// examples and benchmarks have deterministic input that needs no data files:
-// make_demo_scene() builds an office floor of about 20 m x 12 m x 3 m, and
-// demo_path() walks a sensor down its corridor and into a room.
+// A scene is a list of axis-aligned boxes (walls, floors, furniture),
+// vertical cylinders (pillars, tanks, table legs) and pipes (capsules: the
+// points within a radius of a segment, at any slant). It exists so that
+// tests, examples and benchmarks have deterministic input that needs no data
+// files: make_demo_scene() builds an office floor of about 20 m x 12 m x 3 m,
+// and demo_path() walks a sensor down its corridor and into a room;
+// industrial_scene.hpp builds larger plants.
 //
 // Coordinates are metres in the map frame, z up. Solids are closed sets: a
-// point on a surface is inside. Cost model: intersect() and the other queries
-// test every primitive (brute force, O(primitives) per call), which is right
-// for scenes of a few hundred primitives; there is no acceleration structure.
+// point on a surface is inside. Cost model: the scene keeps a bounding volume
+// hierarchy over its primitives' bounds, updated by every add (O(log n)), so
+// intersect() and the other queries test only the primitives near the ray or
+// the point: a depth image of a plant of thousands of primitives costs little
+// more than one of a few dozen. A const Scene may be shared between threads;
+// copies are deep, and a moved-from scene is empty.
 #pragma once
 
+#include <cstddef>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -35,6 +42,26 @@ struct Cylinder {
   double z_max = 0.0;
 };
 
+/// A solid pipe: the points within `radius` of the segment from `a` to `b`
+/// (a capsule; the rounded ends stand for elbows and flanges). a == b is a ball.
+struct Pipe {
+  Vec3d a;
+  Vec3d b;
+  double radius = 0.0;
+};
+
+/// Distance from a point to a solid primitive: 0 inside or on it, else the
+/// Euclidean distance to its surface. For per-primitive work such as
+/// rasterising a scene (reachable_space.hpp); Scene answers for the whole scene.
+double distance_to_solid(const Box& box, Vec3d point);
+double distance_to_solid(const Cylinder& cylinder, Vec3d point);
+double distance_to_solid(const Pipe& pipe, Vec3d point);
+
+/// The smallest axis-aligned box holding a primitive.
+Box bounds_of(const Box& box);
+Box bounds_of(const Cylinder& cylinder);
+Box bounds_of(const Pipe& pipe);
+
 /// Where a sensor is and which way it looks: `yaw` is the heading in
 /// radians, counter-clockwise from +x about +z (the sensor is kept level).
 struct SensorPose {
@@ -42,18 +69,34 @@ struct SensorPose {
   double yaw = 0.0;
 };
 
+namespace detail {
+class SceneBvh;
+}
+
 class Scene {
  public:
+  Scene();
+  ~Scene();
+  Scene(const Scene& other);
+  Scene& operator=(const Scene& other);
+  Scene(Scene&& other) noexcept;
+  Scene& operator=(Scene&& other) noexcept;
+
   /// Adds a box; throws std::invalid_argument unless its corners are finite
   /// and min < max on every axis.
   void add_box(const Box& box);
   /// Adds a cylinder; throws std::invalid_argument unless its values are
   /// finite, radius > 0 and z_min < z_max.
   void add_cylinder(const Cylinder& cylinder);
+  /// Adds a pipe; throws std::invalid_argument unless its values are finite
+  /// and radius > 0.
+  void add_pipe(const Pipe& pipe);
 
   [[nodiscard]] const std::vector<Box>& boxes() const { return boxes_; }
   [[nodiscard]] const std::vector<Cylinder>& cylinders() const { return cylinders_; }
-  [[nodiscard]] bool empty() const { return boxes_.empty() && cylinders_.empty(); }
+  [[nodiscard]] const std::vector<Pipe>& pipes() const { return pipes_; }
+  [[nodiscard]] std::size_t primitive_count() const { return boxes_.size() + cylinders_.size() + pipes_.size(); }
+  [[nodiscard]] bool empty() const { return primitive_count() == 0; }
 
   /// Distance along the ray to the first surface hit, if it is within
   /// [0, max_range]. A ray that starts inside (or on) a solid returns 0.
@@ -64,7 +107,7 @@ class Scene {
                                                 double max_range) const;
 
   /// The same without the argument checks, for callers that already
-  /// guarantee them (the simulated LiDAR, once per beam).
+  /// guarantee them (the simulated sensors, once per beam).
   [[nodiscard]] std::optional<double> intersect_unchecked(Vec3d origin, Vec3d unit_direction,
                                                           double max_range) const;
 
@@ -80,8 +123,11 @@ class Scene {
   [[nodiscard]] Box bounds() const;
 
  private:
+  // The hierarchy's leaves name a primitive by kind and index (scene.cpp).
   std::vector<Box> boxes_;
   std::vector<Cylinder> cylinders_;
+  std::vector<Pipe> pipes_;
+  std::unique_ptr<detail::SceneBvh> bvh_;
 };
 
 /// An office floor, deterministic and built in code: the building spans

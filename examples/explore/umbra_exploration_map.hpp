@@ -1,0 +1,51 @@
+// The explorer's map on umbra: an OccupancyMap asked through its public API
+// only, with no lock of ours (the map's concurrency contract lets the
+// planning thread query while the mapping thread inserts).
+//
+//   collision of a node:  map.is_free(Sphere)             unknown blocks
+//   collision of an edge: map.is_free(Capsule)            every voxel within the radius of the segment
+//   gain of a view:       map.information_gain(Frustum)   exact, or fast (one ray per 2^d-voxel node)
+//   inserting an image:   map.insert_point_cloud(...)     the fast integrator, one thread
+//   coverage:             map.query(leaf && free)
+#pragma once
+
+#include "exploration_map.hpp"
+#include "umbra/map/occupancy_map.hpp"
+#include "umbra/query/information_gain.hpp"
+
+namespace umbra::explore {
+
+struct UmbraMapOptions {
+  double resolution = 0.16;
+  IntegratorKind integrator = IntegratorKind::fast;
+  GainMethod gain = GainMethod::exact;
+  int fast_gain_depth = 2;  ///< GainOptions::fast_depth
+};
+
+class UmbraExplorationMap final : public ExplorationMap {
+ public:
+  explicit UmbraExplorationMap(const UmbraMapOptions& options);
+
+  [[nodiscard]] std::string name() const override { return "umbra"; }
+  [[nodiscard]] double resolution() const override { return map_.resolution(); }
+  void assume_free(const Sphere& ball) override;
+  void insert(Vec3f origin, std::span<const Vec3f> points, double max_range) override;
+  [[nodiscard]] bool is_free(const Sphere& ball) const override;
+  [[nodiscard]] bool is_free(const Capsule& path) const override;
+  [[nodiscard]] double gain(const Frustum& view) const override;
+  void for_each_free_node(FunctionRef<void(Vec3d min, Vec3d max)> visit) const override;
+  [[nodiscard]] std::size_t memory_bytes() const override { return map_.memory_bytes(); }
+
+  /// The map itself (to save or show it when exploring is over).
+  [[nodiscard]] const OccupancyMap& map() const { return map_; }
+  /// Seconds inserting kept queries out (InsertStats::exclusive_seconds), summed.
+  [[nodiscard]] double exclusive_seconds() const { return exclusive_seconds_; }
+
+ private:
+  OccupancyMap map_;
+  InsertOptions insert_options_;
+  GainOptions gain_options_;
+  double exclusive_seconds_ = 0.0;  ///< written by the mapping thread only
+};
+
+}  // namespace umbra::explore
