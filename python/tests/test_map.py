@@ -55,7 +55,7 @@ def test_construction_and_properties():
 @pytest.mark.parametrize(
     "make, message",
     [
-        (lambda: umbra.OccupancyMap(0.0), "resolution must be a finite number > 0"),
+        (lambda: umbra.OccupancyMap(0.0), "resolution must be a number of metres in"),
         (lambda: umbra.OccupancyMap(float("nan")), "resolution"),
         (lambda: umbra.OccupancyMap(0.1, depth_levels=22), "depth_levels must be in [1, 21], got 22"),
         (lambda: umbra.SensorModel(p_hit=0.4), "p_hit"),
