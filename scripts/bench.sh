@@ -3,6 +3,8 @@
 # assertions in build-bench/, then one benchmark program:
 #   scripts/bench.sh [insert] ARGS...   bench/insert_benchmark.cpp (the default)
 #   scripts/bench.sh query ARGS...      bench/query/query_benchmark.cpp
+#   scripts/bench.sh concurrency ARGS...  bench/concurrency_benchmark.cpp
+#                                       (readers during insertion)
 #   scripts/bench.sh python ARGS...     bench/python_batch_benchmark.py (the
 #                                       Python module against C++, same map)
 # ARGS go to the program (--help lists them); results: docs/benchmarks.md.
@@ -12,7 +14,7 @@ root="$(umbra_root)"
 build_dir="${UMBRA_BENCH_BUILD_DIR:-$root/build-bench}"
 
 benchmark=insert
-if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == python ) ]]; then
+if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python ) ]]; then
   benchmark="$1"
   shift
 fi
