@@ -186,6 +186,15 @@ InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f
   // voxel does that exactly, and faster than grouping rays per voxel.
   scan.fast = options.integrator == IntegratorKind::fast && scan.clear_depth > 0;
   scan.fine_steps = options.fine_steps;
+  // Clear nodes of 32^3 voxels and more that may not be cleared whole are
+  // split, level by level, into children cleared whole where allowed, down
+  // to nodes of 2^3 voxels, which are walked voxel by voxel. Without it a
+  // 2 mm map's 12.8 cm nodes near the noisy surfaces of a depth image were
+  // walked voxel by voxel: 6.8 s and 8.4 GB for the ten TUM frames' map per
+  // frame, against 1.2 s and 450 MiB with it; 4 mm: 1.16 s -> 0.88 s per
+  // frame, 1005 -> 173 MiB. For smaller nodes each split costs more than the
+  // walk it saves (1 cm: 222 ms -> 350 ms per frame).
+  scan.walk_depth = scan.clear_depth >= 5 ? 1 : scan.clear_depth;
   scan.tree = &tree;
   if (box) {
     scan.box = box;

@@ -21,6 +21,12 @@
 //    last `fine_steps` before the end node. From there every ray goes on by
 //    itself: nodes it may clear are cleared whole, the others it crosses
 //    voxel by voxel, as do the last `fine_steps` nodes and the end node.
+//    Where coarse nodes span many voxels (clear_depth > walk_depth, at
+//    millimetre resolutions), a node the ray may not clear whole is split
+//    into the children it crosses, which are cleared whole where allowed,
+//    down to walk_depth: only the small nodes at or next to obstacles and
+//    hits, and the tail (the end node and the `fine_steps` nodes before it,
+//    counted in nodes of walk_depth), are walked voxel by voxel.
 //    Hits are added for the whole scan before any ray
 //    (ScanContext::hits_first), so that every tracer knows them.
 #pragma once
@@ -58,6 +64,10 @@ struct ScanContext {
   double max_range = -1.0;   ///< <= 0: unlimited
   bool fast = false;         ///< the fast integrator (else simple / discrete rules)
   int clear_depth = 0;       ///< fast: depth of the nodes cleared whole
+  /// fast: a node deeper than this that may not be cleared whole is split
+  /// into its children, each cleared whole if allowed; nodes at this depth
+  /// are walked voxel by voxel. Equal to clear_depth: no splitting.
+  int walk_depth = 0;
   int fine_steps = 0;        ///< fast: nodes before the end node traced voxel by voxel
   bool hits_first = false;   ///< hits are already in every tracer's batch
   const OccupancyTree* tree = nullptr;  ///< fast: where obstacles are (read only)
@@ -103,10 +113,21 @@ class RayTracer {
   template <typename Walk>
   void add_walk_misses(const ScanContext& scan, Walk&& walk);
   void add_end(const ScanContext& scan, const PreparedRay& ray);
-  /// Fast integrator: clears the depth-clear_depth node `code` whole if
-  /// nothing forbids it (a known obstacle, a hit of this scan in or next to
-  /// it, the box); true if it is cleared whole now.
-  bool clear_node_whole(const ScanContext& scan, std::uint64_t code, OccupancyTree::Cursor& cursor);
+  /// Marks the depth-`depth` nodes holding or next to one of `hits` (finest
+  /// codes), and their ancestors up to `up_to`, so that they are not cleared whole.
+  void keep_neighbours(const ScanContext& scan, std::span<const std::uint64_t> hits, int depth, int up_to);
+  /// Fast integrator: clears the depth-`depth` node `code` (walk_depth <=
+  /// depth <= clear_depth) whole if nothing forbids it (a known obstacle, a
+  /// hit of this scan in or next to it, the box); true if it is cleared whole now.
+  bool clear_node_whole(const ScanContext& scan, std::uint64_t code, int depth, OccupancyTree::Cursor& cursor);
+  /// Fast integrator: misses for the part of a ray from `a` to `b` (both in
+  /// the depth-`depth` node `code`, which may not be cleared whole): children
+  /// cleared whole where allowed, voxel by voxel at walk_depth (in the
+  /// ray's end node up to, not including, its end voxel).
+  void split_node(const ScanContext& scan, std::uint64_t code, int depth, Vec3d a, Vec3d b,
+                  OccupancyTree::Cursor& cursor);
+  /// Whether the depth-`depth` node `code` holds one of the ray's tail nodes.
+  [[nodiscard]] bool holds_tail(std::uint64_t code, int depth) const;
   /// Fast integrator: one ray from `from` (on it) to its end: nodes cleared
   /// whole where allowed, voxel by voxel elsewhere and over the last
   /// fine_steps nodes and the end node.
@@ -118,6 +139,7 @@ class RayTracer {
   /// coordinates: rays of one group cross the same nodes.
   struct NodeDecision {
     std::uint64_t code;
+    int depth;
     bool cleared;
   };
   static constexpr std::size_t kDecisions = 4096;
@@ -126,6 +148,8 @@ class RayTracer {
   std::vector<NodeDecision> decisions_ = std::vector<NodeDecision>(kDecisions);
   std::vector<NodeCrossing> crossings_;  // fast: the guide ray's coarse nodes
   std::vector<std::uint64_t> tail_;      // fast: the nodes one ray traces voxel by voxel whatever
+  std::uint64_t end_code_ = 0;           // fast, splitting: the traced ray's end voxel ...
+  Vec3f end_;                            // ... and end point
 };
 
 }  // namespace umbra

@@ -163,16 +163,18 @@ bool UpdateBatch::miss_node(std::uint64_t code, int depth, bool unless_hit) {
   return true;
 }
 
-void UpdateBatch::keep_fine(std::uint64_t code, int depth) {
-  UMBRA_ASSERT(depth >= 1 && depth <= depth_levels_);
+void UpdateBatch::keep_fine(std::uint64_t code, int depth, int up_to) {
+  UMBRA_ASSERT(depth >= 1 && depth <= up_to && up_to <= depth_levels_);
   // Descending as a hit does splits any full node on the way, which is right:
   // a kept node must stay open for voxel-by-voxel misses.
   const std::uint32_t group = descend(code, depth, Mark::hit);
-  const auto bit = static_cast<std::uint8_t>(1u << morton::slot(code, depth));
-  if (depth == 1) {
-    bricks_[group].keep |= bit;
-  } else {
-    inner_[depth][group].keep |= bit;
+  for (int d = depth; d <= up_to; ++d) {  // path_ is valid from `depth` up
+    const auto bit = static_cast<std::uint8_t>(1u << morton::slot(code, d));
+    if (d == 1) {
+      bricks_[group].keep |= bit;
+    } else {
+      inner_[d][path_[d]].keep |= bit;
+    }
   }
 }
 

@@ -115,9 +115,11 @@ class UpdateBatch {
   /// nothing is marked and the result is false (the fast integrator then
   /// traces the node voxel by voxel).
   bool add_miss_node_unless_hit(std::uint64_t code, int depth);
-  /// Marks the depth-`depth` node (>= 1) containing `code` so that
-  /// add_miss_node_unless_hit refuses it.
-  void keep_fine(std::uint64_t code, int depth);
+  /// Marks the depth-`depth` node (>= 1) containing `code`, and its
+  /// ancestors up to depth `up_to` (>= depth), so that add_miss_node_unless_hit
+  /// refuses them.
+  void keep_fine(std::uint64_t code, int depth, int up_to);
+  void keep_fine(std::uint64_t code, int depth) { keep_fine(code, depth, depth); }
   /// Merges another batch over the same depth levels into this one; its
   /// hits too unless `with_hits` is false (when both already hold the same hits).
   void merge(const UpdateBatch& other, bool with_hits = true);

@@ -161,6 +161,28 @@ TEST(FastIntegrator, NeverClearsAKnownObstacleWholesale) {
   EXPECT_EQ(map.state({3.05, 0.45, 0.05}), OccupancyState::free) << "obstacle-free nodes are cleared whole";
 }
 
+TEST(FastIntegrator, SplitsLargeNodesHoldingAnObstacleAndClearsTheirFreeChildrenWhole) {
+  // 3.2 m clear nodes (depth 5) are split level by level down to 20 cm
+  // (depth 1): only the 20 cm node around the obstacle is walked voxel by voxel.
+  OccupancyMap map(0.1, 8);
+  const Vec3d obstacle{1.05, 0.15, 0.05};  // next to the ray, in the 20 cm node of its voxel (1.05, 0.05, 0.05)
+  for (int i = 0; i < 3; ++i) map.update_hit(obstacle);
+  const float before = map.log_odds(obstacle);
+  InsertOptions options;
+  options.integrator = IntegratorKind::fast;
+  options.clear_depth = 5;
+  options.fine_steps = 0;
+  map.insert_point_cloud({0.05f, 0.05f, 0.05f}, std::vector<Vec3f>{{5.05f, 0.05f, 0.05f}}, options);
+  EXPECT_EQ(map.log_odds(obstacle), before) << "the obstacle is off the ray: untouched";
+  EXPECT_EQ(map.state({1.05, 0.05, 0.05}), OccupancyState::free) << "the ray's voxel next to the obstacle";
+  EXPECT_EQ(map.state({1.15, 0.15, 0.15}), OccupancyState::unknown) << "the obstacle's 20 cm node: voxel by voxel";
+  EXPECT_EQ(map.state({0.85, 0.15, 0.15}), OccupancyState::free) << "an obstacle-free 20 cm child: cleared whole";
+  EXPECT_EQ(map.state({0.45, 0.45, 0.45}), OccupancyState::free) << "an obstacle-free 80 cm child: cleared whole";
+  EXPECT_EQ(map.state({2.05, 1.55, 1.55}), OccupancyState::free) << "an obstacle-free 1.6 m child: cleared whole";
+  EXPECT_EQ(map.state({1.05, 0.05, 0.25}), OccupancyState::unknown) << "a 20 cm child the ray does not cross";
+  EXPECT_EQ(map.state({1.05, 1.65, 0.05}), OccupancyState::unknown) << "a 1.6 m child the ray does not cross";
+}
+
 TEST(FastIntegrator, EveryRayClearsTheVoxelsItCrossesInNodesHoldingAnObstacle) {
   // Known obstacles scattered over a region that bundles of rays cross, as a
   // depth camera's rays cross the surfaces of earlier frames. In every node
@@ -209,11 +231,12 @@ TEST(FastIntegrator, EveryRayClearsTheVoxelsItCrossesInNodesHoldingAnObstacle) {
 }
 
 OccupancyMap build(const std::vector<Scan>& scans, double resolution, double max_range, IntegratorKind kind,
-                   int fine_steps) {
+                   int fine_steps, int clear_depth = -1) {
   OccupancyMap map(resolution);
   InsertOptions options;
   options.integrator = kind;
   options.fine_steps = fine_steps;
+  options.clear_depth = clear_depth;
   options.max_range = max_range;
   for (const Scan& scan : scans) map.insert_point_cloud(scan.origin, scan.points, options);
   return map;
@@ -249,10 +272,10 @@ std::size_t free_behind_surfaces(const Scan& scan, const OccupancyMap& exact, co
 /// `behind_scans` scans one at a time, almost no free voxels behind the
 /// surfaces of a scan that the simple integrator does not free.
 void check_fast_integrator(const std::string& name, const std::vector<Scan>& scans, double resolution,
-                           double max_range, std::size_t behind_scans) {
+                           double max_range, std::size_t behind_scans, int clear_depth = -1) {
   const OccupancyMap simple = build(scans, resolution, max_range, IntegratorKind::simple, 0);
   for (const int fine_steps : {2, 0}) {
-    const OccupancyMap fast = build(scans, resolution, max_range, IntegratorKind::fast, fine_steps);
+    const OccupancyMap fast = build(scans, resolution, max_range, IntegratorKind::fast, fine_steps, clear_depth);
     ASSERT_EQ(test::check_invariants(fast), "");
     const test::MapAgreement a = test::compare_maps(simple, fast);
     const std::string label = name + " at " + std::to_string(resolution).substr(0, 4) + " m n=" +
@@ -278,7 +301,8 @@ void check_fast_integrator(const std::string& name, const std::vector<Scan>& sca
     for (std::size_t i = 0; i < std::min(behind_scans, scans.size()); ++i) {
       const std::vector<Scan> one{scans[i]};
       extra += free_behind_surfaces(scans[i], build(one, resolution, max_range, IntegratorKind::simple, 0),
-                                    build(one, resolution, max_range, IntegratorKind::fast, fine_steps), max_range,
+                                    build(one, resolution, max_range, IntegratorKind::fast, fine_steps, clear_depth),
+                                    max_range,
                                     checked);
     }
     std::printf("[ fast     ] %s n=%d: %zu of %zu voxels behind surfaces free in fast but not in simple\n",
@@ -330,6 +354,16 @@ TEST(FastIntegrator, AgreesWithTheSimpleIntegratorOnALidarInTheProceduralBuildin
 
 TEST(FastIntegrator, AgreesWithTheSimpleIntegratorOnADepthCameraInTheProceduralBuildingAt2cm) {
   check_fast_integrator("procedural building, depth camera", depth_camera_building_frames(8), 0.02, 6.5, 2);
+}
+
+TEST(FastIntegrator, AgreesWithTheSimpleIntegratorWhenLargeClearNodesAreSplit) {
+  // 64 cm clear nodes at 2 cm (32 voxels across), split down to 4 cm where
+  // they may not be cleared whole: the path millimetre maps take (12.8 cm
+  // nodes at 2 mm, split down to 4 mm), at a size a test can compare with
+  // the simple integrator. And 1.28 m nodes (64 voxels, as at 2 mm).
+  const std::vector<Scan> frames = depth_camera_building_frames(8);
+  check_fast_integrator("procedural building, depth camera, 64 cm clear nodes", frames, 0.02, 6.5, 2, 5);
+  check_fast_integrator("procedural building, depth camera, 1.28 m clear nodes", frames, 0.02, 6.5, 2, 6);
 }
 
 using test::read_all;
