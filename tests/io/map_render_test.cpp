@@ -26,6 +26,7 @@
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/sim/lidar.hpp"
 #include "umbra/sim/scene.hpp"
+#include "support/demo_maps.hpp"
 
 namespace umbra {
 namespace {
@@ -347,21 +348,7 @@ TEST(MapRenderSlice, CoarseLayerShowsTheMaximumOfItsVoxels) {
 // --- the demo building against per-voxel lookups --------------------------------------
 
 const OccupancyMap& demo_map() {
-  static const OccupancyMap map = [] {
-    const sim::Scene scene = sim::make_demo_scene();
-    sim::LidarModel lidar;
-    lidar.rings = 16;
-    lidar.azimuth_steps = 360;
-    OccupancyMap built(kResolution);
-    InsertOptions insert;
-    insert.max_range = lidar.max_range;
-    std::vector<Vec3f> points;
-    for (const sim::SensorPose& pose : sim::demo_path()) {
-      sim::simulate_scan(scene, pose, lidar, points);
-      built.insert_point_cloud(Vec3f(pose.position), points, insert);
-    }
-    return built;
-  }();
+  static const OccupancyMap map = test::demo_lidar_map(MapConfig{kResolution});
   return map;
 }
 
@@ -563,29 +550,14 @@ TEST(MapRender, BadOptionsAreNamed) {
 /// The demo building mapped in colour: each point coloured by its position.
 const OccupancyMap& coloured_demo_map() {
   static const OccupancyMap map = [] {
-    const sim::Scene scene = sim::make_demo_scene();
-    sim::LidarModel lidar;
-    lidar.rings = 16;
-    lidar.azimuth_steps = 360;
     MapConfig config;
     config.resolution = 0.2;
     config.color = true;
-    OccupancyMap built(config);
-    InsertOptions insert;
-    insert.max_range = lidar.max_range;
-    std::vector<Vec3f> points;
-    std::vector<Rgb> colours;
-    for (const sim::SensorPose& pose : sim::demo_path()) {
-      sim::simulate_scan(scene, pose, lidar, points);
-      colours.clear();
-      for (const Vec3f& p : points) {
-        colours.push_back({static_cast<std::uint8_t>(std::clamp(p.x * 12.0f, 0.0f, 255.0f)),
-                           static_cast<std::uint8_t>(std::clamp(p.y * 20.0f, 0.0f, 255.0f)),
-                           static_cast<std::uint8_t>(std::clamp(255.0f - p.z * 60.0f, 0.0f, 255.0f))});
-      }
-      built.insert_point_cloud(Vec3f(pose.position), points, colours, insert);
-    }
-    return built;
+    return test::demo_lidar_map(config, [](std::size_t, Vec3f p) {
+      return Rgb{static_cast<std::uint8_t>(std::clamp(p.x * 12.0f, 0.0f, 255.0f)),
+                 static_cast<std::uint8_t>(std::clamp(p.y * 20.0f, 0.0f, 255.0f)),
+                 static_cast<std::uint8_t>(std::clamp(255.0f - p.z * 60.0f, 0.0f, 255.0f))};
+    });
   }();
   return map;
 }

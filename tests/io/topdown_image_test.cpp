@@ -19,6 +19,7 @@
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/sim/lidar.hpp"
 #include "umbra/sim/scene.hpp"
+#include "support/demo_maps.hpp"
 
 namespace umbra {
 namespace {
@@ -254,18 +255,7 @@ Rgb reference_pixel(const OccupancyMap& map, const Image& image, const TopdownOp
 }
 
 TEST(TopdownImage, DemoSceneMapMatchesPerVoxelReference) {
-  const sim::Scene scene = sim::make_demo_scene();
-  sim::LidarModel lidar;
-  lidar.rings = 16;
-  lidar.azimuth_steps = 360;
-  OccupancyMap map(kResolution);
-  InsertOptions insert;
-  insert.max_range = lidar.max_range;
-  std::vector<Vec3f> points;
-  for (const sim::SensorPose& pose : sim::demo_path()) {
-    sim::simulate_scan(scene, pose, lidar, points);
-    map.insert_point_cloud(Vec3f(pose.position), points, insert);
-  }
+  const OccupancyMap map = test::demo_lidar_map(MapConfig{kResolution});
   TopdownOptions options;
   // Window limits between voxel centres, so that no centre lies on a limit.
   options.min_z = -0.22;  // the top of the floor slab

@@ -26,6 +26,7 @@
 #include "umbra/query/predicate.hpp"
 #include "umbra/sim/lidar.hpp"
 #include "umbra/sim/scene.hpp"
+#include "support/demo_maps.hpp"
 
 namespace umbra {
 namespace {
@@ -37,24 +38,12 @@ std::string quoted(const std::filesystem::path& path) { return "'" + path.string
 
 /// The demo building at 20 cm, with colour, saved as DIR/building.umb.
 std::filesystem::path building_map(const std::filesystem::path& dir) {
-  const sim::Scene scene = sim::make_demo_scene();
-  sim::LidarModel lidar;
-  lidar.rings = 16;
-  lidar.azimuth_steps = 360;
   MapConfig config;
   config.resolution = 0.2;
   config.color = true;
-  OccupancyMap map(config);
-  InsertOptions insert;
-  insert.max_range = lidar.max_range;
-  std::vector<Vec3f> points;
-  std::vector<Rgb> colours;
-  for (const sim::SensorPose& pose : sim::demo_path()) {
-    sim::simulate_scan(scene, pose, lidar, points);
-    colours.assign(points.size(), Rgb{10, 200, 30});
-    for (std::size_t i = 0; i < points.size(); i += 3) colours[i] = Rgb{250, 5, 90};
-    map.insert_point_cloud(Vec3f(pose.position), points, colours, insert);
-  }
+  const OccupancyMap map = test::demo_lidar_map(config, [](std::size_t i, Vec3f) {
+    return i % 3 == 0 ? Rgb{250, 5, 90} : Rgb{10, 200, 30};
+  });
   const auto path = dir / "building.umb";
   save_map(map, path);
   return path;

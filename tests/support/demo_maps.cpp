@@ -1,0 +1,35 @@
+#include "support/demo_maps.hpp"
+
+#include <stdexcept>
+#include <vector>
+
+#include "umbra/sim/lidar.hpp"
+#include "umbra/sim/scene.hpp"
+
+namespace umbra::test {
+
+OccupancyMap demo_lidar_map(const MapConfig& config, const PointColour& colour) {
+  if (config.color && !colour) throw std::invalid_argument("demo_lidar_map: a coloured map needs a colour function");
+  const sim::Scene scene = sim::make_demo_scene();
+  sim::LidarModel lidar;
+  lidar.rings = 16;
+  lidar.azimuth_steps = 360;
+  OccupancyMap map(config);
+  InsertOptions insert;
+  insert.max_range = lidar.max_range;
+  std::vector<Vec3f> points;
+  std::vector<Rgb> colours;
+  for (const sim::SensorPose& pose : sim::demo_path()) {
+    sim::simulate_scan(scene, pose, lidar, points);
+    if (config.color) {
+      colours.clear();
+      for (std::size_t i = 0; i < points.size(); ++i) colours.push_back(colour(i, points[i]));
+      map.insert_point_cloud(Vec3f(pose.position), points, colours, insert);
+    } else {
+      map.insert_point_cloud(Vec3f(pose.position), points, insert);
+    }
+  }
+  return map;
+}
+
+}  // namespace umbra::test
