@@ -50,26 +50,29 @@ PointArray::PointArray(py::handle object, const char* name) : array_(as_array<Fl
   data_ = array_.data();
 }
 
-RowArray::RowArray(py::handle object, const char* name) : array_(as_array<Float64>(object, name)), name_(name) {
-  const bool rows = array_.ndim() == 2 && array_.shape(1) == 3;
-  broadcast_ = array_.ndim() == 1 && array_.shape(0) == 3;
-  if (!rows && !broadcast_) {
-    throw py::value_error(std::string(name) + " must be an array of shape (N, 3) or (3,), got shape " +
-                          shape_text(array_));
+template <int kWidth>
+BatchArgument<kWidth>::BatchArgument(py::handle object, const char* name)
+    : array_(as_array<Float64>(object, name)), name_(name) {
+  if constexpr (kWidth == 3) {
+    const bool rows = array_.ndim() == 2 && array_.shape(1) == 3;
+    broadcast_ = array_.ndim() == 1 && array_.shape(0) == 3;
+    if (!rows && !broadcast_) {
+      throw py::value_error(std::string(name) + " must be an array of shape (N, 3) or (3,), got shape " +
+                            shape_text(array_));
+    }
+  } else {
+    if (array_.ndim() > 1) {
+      throw py::value_error(std::string(name) + " must be a number or an array of shape (N,), got shape " +
+                            shape_text(array_));
+    }
+    broadcast_ = array_.ndim() == 0;
   }
-  count_ = rows ? static_cast<std::size_t>(array_.shape(0)) : 1;
-  data_ = array_.data();
-}
-
-ValueArray::ValueArray(py::handle object, const char* name) : array_(as_array<Float64>(object, name)), name_(name) {
-  if (array_.ndim() > 1) {
-    throw py::value_error(std::string(name) + " must be a number or an array of shape (N,), got shape " +
-                          shape_text(array_));
-  }
-  broadcast_ = array_.ndim() == 0;
   count_ = broadcast_ ? 1 : static_cast<std::size_t>(array_.shape(0));
   data_ = array_.data();
 }
+
+template class BatchArgument<1>;
+template class BatchArgument<3>;
 
 std::size_t batch_count(std::initializer_list<std::pair<const char*, std::optional<std::size_t>>> counts) {
   const char* first_name = nullptr;

@@ -61,19 +61,28 @@ class PointArray {
   std::vector<py::ssize_t> leading_shape_;
 };
 
-/// One argument of a batch of shapes: (N, 3) rows, or one (3,) row for all.
-class RowArray {
+/// One argument of a batch: N rows of kWidth values, or one row for all.
+/// kWidth 3: points ((N, 3) rows, or one (3,) row); kWidth 1: values ((N,)
+/// values, or one scalar).
+template <int kWidth>
+class BatchArgument {
  public:
-  /// Throws ValueError unless the shape is (N, 3) or (3,).
-  RowArray(py::handle object, const char* name);
+  static_assert(kWidth == 1 || kWidth == 3);
+  /// Throws ValueError unless the shape is one of the two above.
+  BatchArgument(py::handle object, const char* name);
   /// N, or nothing for a broadcast row (it fits any count).
   [[nodiscard]] std::optional<std::size_t> count() const {
     return broadcast_ ? std::nullopt : std::optional(count_);
   }
   [[nodiscard]] const char* name() const { return name_; }
-  [[nodiscard]] Vec3d operator[](std::size_t i) const {
-    const double* p = data_ + (broadcast_ ? 0 : 3 * i);
-    return {p[0], p[1], p[2]};
+  /// Row i: a Vec3d for kWidth 3, a double for kWidth 1.
+  [[nodiscard]] auto operator[](std::size_t i) const {
+    const double* p = data_ + (broadcast_ ? 0 : kWidth * i);
+    if constexpr (kWidth == 3) {
+      return Vec3d{p[0], p[1], p[2]};
+    } else {
+      return *p;
+    }
   }
 
  private:
@@ -84,24 +93,10 @@ class RowArray {
   const char* name_;
 };
 
-/// One argument of a batch: (N,) values, or one scalar for all.
-class ValueArray {
- public:
-  /// Throws ValueError unless the shape is (N,) or ().
-  ValueArray(py::handle object, const char* name);
-  [[nodiscard]] std::optional<std::size_t> count() const {
-    return broadcast_ ? std::nullopt : std::optional(count_);
-  }
-  [[nodiscard]] const char* name() const { return name_; }
-  [[nodiscard]] double operator[](std::size_t i) const { return data_[broadcast_ ? 0 : i]; }
-
- private:
-  py::array_t<double, py::array::c_style | py::array::forcecast> array_;
-  const double* data_ = nullptr;
-  std::size_t count_ = 0;
-  bool broadcast_ = false;
-  const char* name_;
-};
+extern template class BatchArgument<1>;  // defined in numpy_arrays.cpp
+extern template class BatchArgument<3>;
+using RowArray = BatchArgument<3>;
+using ValueArray = BatchArgument<1>;
 
 /// The count N the arguments of one batch agree on (1 when all broadcast).
 /// Throws ValueError naming two arguments whose counts differ.
