@@ -54,7 +54,7 @@ struct StudyOptions {
   double yaw_rate = 1.0;
   int max_nodes = 150;
   double extension_range = 1.5;
-  int yaw_samples = 1;
+  int yaw_samples = 4;
   double coverage_period = 2.0;
 };
 

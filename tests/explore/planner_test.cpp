@@ -69,6 +69,7 @@ PlannerConfig room_config() {
   config.max_nodes = 60;
   config.lambda = 0.4;
   config.min_gain = 0.5;  // FakeMap's gains below it count as none in a score
+  config.yaw_samples = 1;  // one gain per node (FakeMap's gain ignores the heading)
   return config;
 }
 
