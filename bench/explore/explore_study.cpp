@@ -54,6 +54,7 @@ struct StudyOptions {
   double yaw_rate = 1.0;
   int max_nodes = 150;
   double extension_range = 1.5;
+  int yaw_samples = 4;
   double coverage_period = 2.0;
 };
 
@@ -69,6 +70,7 @@ ExplorerConfig config_for(const StudyOptions& options, const sim::IndustrialPlan
   config.planner.bounds = Aabb{plant.interior.min, plant.interior.max};
   config.planner.max_nodes = options.max_nodes;
   config.planner.extension_range = options.extension_range;
+  config.planner.yaw_samples = options.yaw_samples;
   config.camera.width = options.image_width;
   config.camera.height = options.image_height;
   config.camera.hfov_deg = config.planner.camera.hfov_deg;
@@ -334,6 +336,9 @@ int main(int argc, char** argv) {
   app.add_option("--speed", options.speed, "robot speed, m/s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--yaw-rate", options.yaw_rate, "robot turn rate, rad/s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--max-nodes", options.max_nodes, "planner tree nodes at most per step")->capture_default_str()->check(CLI::Range(15, 100000));
+  app.add_option("--yaw-samples", options.yaw_samples, "headings tried per planner node (the best gain is kept)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
   app.add_option("--extension-range", options.extension_range, "planner edge length at most, metres")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);

@@ -69,6 +69,7 @@ PlannerConfig room_config() {
   config.max_nodes = 60;
   config.lambda = 0.4;
   config.min_gain = 0.5;  // FakeMap's gains below it count as none in a score
+  config.yaw_samples = 1;  // one gain per node (FakeMap's gain ignores the heading)
   return config;
 }
 
@@ -338,6 +339,51 @@ TEST(NbvPlanner, TrappedRobotFliesBackTheWayItCame) {
   EXPECT_FALSE(fresh.plan(map, start).gain_found);
 }
 
+/// FakeMap whose gain also depends on the heading: most looking along +x.
+class HeadingMap final : public ExplorationMap {
+ public:
+  static double gain_of(const Frustum& view) { return 1.0 + 2.0 * std::cos(view.yaw); }
+  [[nodiscard]] std::string name() const override { return "heading"; }
+  [[nodiscard]] double resolution() const override { return 0.1; }
+  void assume_free(const Sphere&) override {}
+  void insert(Vec3f, std::span<const Vec3f>, double) override {}
+  [[nodiscard]] bool is_free(const Sphere&) const override { return true; }
+  [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
+  [[nodiscard]] double gain(const Frustum& view) const override {
+    ++gains;
+    return gain_of(view);
+  }
+  void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
+  [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
+  mutable int gains = 0;
+};
+
+TEST(NbvPlanner, EachNodeKeepsTheBestOfItsSampledHeadings) {
+  PlannerConfig config = room_config();
+  config.yaw_samples = 4;
+  const HeadingMap map;
+  NbvPlanner planner(config, 11);
+  planner.plan(map, Pose{{2.0, 2.0, 2.0}, 0.0});
+  const auto& tree = planner.tree();
+  ASSERT_EQ(tree.size(), std::size_t(config.max_nodes) + 1);
+  EXPECT_EQ(std::size_t(map.gains), 4 * (tree.size() - 1)) << "four headings per node, no gain computed twice";
+  double worst = 3.0;
+  for (std::size_t i = 1; i < tree.size(); ++i) {
+    // The node's own gain is its heading's, and no other of the four evenly
+    // spaced headings from it would have had more.
+    const double yaw = tree[i].pose.yaw;
+    const Frustum view = config.camera.frustum(tree[i].pose);
+    EXPECT_DOUBLE_EQ(tree[i].gain, HeadingMap::gain_of(view));
+    for (int k = 1; k < 4; ++k) {
+      const Frustum other = config.camera.frustum(Pose{tree[i].pose.position, yaw + k * std::numbers::pi / 2.0});
+      EXPECT_GE(tree[i].gain, HeadingMap::gain_of(other)) << "node " << i;
+    }
+    worst = std::min(worst, tree[i].gain);
+  }
+  // The best of four headings 90 degrees apart is within 45 degrees of +x.
+  EXPECT_GE(worst, 1.0 + 2.0 * std::cos(std::numbers::pi / 4.0) - 1e-9);
+}
+
 TEST(NbvPlanner, BadConfigIsRefusedByName) {
   PlannerConfig config = room_config();
   config.max_nodes = config.initial_nodes - 1;
@@ -347,6 +393,9 @@ TEST(NbvPlanner, BadConfigIsRefusedByName) {
   } catch (const std::invalid_argument& error) {
     EXPECT_NE(std::string(error.what()).find("max_nodes"), std::string::npos) << error.what();
   }
+  config = room_config();
+  config.yaw_samples = 0;
+  EXPECT_THROW(NbvPlanner(config, 1), std::invalid_argument);
 }
 
 /// Every voxel whose cube meets `shape` is known free in `map` (brute force).
