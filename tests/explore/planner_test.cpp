@@ -14,7 +14,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "nbv_planner.hpp"
@@ -60,6 +62,35 @@ class FakeMap final : public ExplorationMap {
   mutable int ball_checks = 0;
   mutable int capsule_checks = 0;
   mutable int gains = 0;
+};
+
+/// Free everywhere (but for the balls `blocked` refuses), nothing inserted,
+/// the gain of a view given by `view_gain`: the open-space test doubles.
+class OpenMap final : public ExplorationMap {
+ public:
+  using Gain = std::function<double(const Frustum&)>;
+  using Blocked = std::function<bool(const Sphere&)>;
+  OpenMap(std::string name, Gain view_gain, Blocked blocked = {})
+      : name_(std::move(name)), view_gain_(std::move(view_gain)), blocked_(std::move(blocked)) {}
+  [[nodiscard]] std::string name() const override { return name_; }
+  [[nodiscard]] double resolution() const override { return 0.1; }
+  void assume_free(const Sphere&) override {}
+  void insert(Vec3f, std::span<const Vec3f>, double) override {}
+  [[nodiscard]] bool is_free(const Sphere& ball) const override { return !blocked_ || !blocked_(ball); }
+  [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
+  [[nodiscard]] double gain(const Frustum& view) const override {
+    ++gains;
+    return view_gain_(view);
+  }
+  void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
+  [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
+
+  mutable int gains = 0;
+
+ private:
+  std::string name_;
+  Gain view_gain_;
+  Blocked blocked_;
 };
 
 PlannerConfig room_config() {
@@ -163,20 +194,9 @@ TEST(NbvPlanner, DiscountingTurnsTheRobotTowardsNearGainWhenLambdaIsLarge) {
   // lambda = 5/m a west node within 1.6 m of path scores at least e^-8 =
   // 3.4e-4, an east node adds at most 100 e^-15 = 3e-5 per node (and its
   // descendants less and less): the first step goes west.
-  class TwoSides final : public ExplorationMap {
-   public:
-    [[nodiscard]] std::string name() const override { return "two sides"; }
-    [[nodiscard]] double resolution() const override { return 0.1; }
-    void assume_free(const Sphere&) override {}
-    void insert(Vec3f, std::span<const Vec3f>, double) override {}
-    [[nodiscard]] bool is_free(const Sphere&) const override { return true; }
-    [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
-    [[nodiscard]] double gain(const Frustum& view) const override {
-      return view.origin.x > 8.0 ? 100.0 : (view.origin.x < 4.0 ? 1.0 : 0.0);
-    }
-    void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
-    [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
-  } map;
+  const OpenMap map("two sides", [](const Frustum& view) {
+    return view.origin.x > 8.0 ? 100.0 : (view.origin.x < 4.0 ? 1.0 : 0.0);
+  });
   PlannerConfig config = room_config();
   config.bounds = Aabb{{0.5, 4.5, 1.5}, {9.5, 5.5, 2.5}};
   config.max_nodes = 150;
@@ -197,18 +217,7 @@ TEST(NbvPlanner, DiscountingTurnsTheRobotTowardsNearGainWhenLambdaIsLarge) {
 }
 
 TEST(NbvPlanner, NoGainMeansDoneAndSameSeedSameTree) {
-  class NoGain final : public ExplorationMap {
-   public:
-    [[nodiscard]] std::string name() const override { return "no gain"; }
-    [[nodiscard]] double resolution() const override { return 0.1; }
-    void assume_free(const Sphere&) override {}
-    void insert(Vec3f, std::span<const Vec3f>, double) override {}
-    [[nodiscard]] bool is_free(const Sphere&) const override { return true; }
-    [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
-    [[nodiscard]] double gain(const Frustum&) const override { return 0.1; }
-    void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
-    [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
-  } map;
+  const OpenMap map("no gain", [](const Frustum&) { return 0.1; });
   const PlannerConfig config = room_config();
   NbvPlanner a(config, 5);
   NbvPlanner b(config, 5);
@@ -223,18 +232,7 @@ TEST(NbvPlanner, GrowsOnWhenNoGainIsNearAndStopsAtTheFirstGain) {
   // A 40 m corridor with gain only beyond x = 25; the robot at x = 2. A tree
   // of max_nodes = 20 cannot reach it: the tree grows on until a node there
   // has gain, and the step is the first edge towards it.
-  class FarGain final : public ExplorationMap {
-   public:
-    [[nodiscard]] std::string name() const override { return "far gain"; }
-    [[nodiscard]] double resolution() const override { return 0.1; }
-    void assume_free(const Sphere&) override {}
-    void insert(Vec3f, std::span<const Vec3f>, double) override {}
-    [[nodiscard]] bool is_free(const Sphere&) const override { return true; }
-    [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
-    [[nodiscard]] double gain(const Frustum& view) const override { return view.origin.x > 25.0 ? 2.0 : 0.0; }
-    void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
-    [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
-  } map;
+  const OpenMap map("far gain", [](const Frustum& view) { return view.origin.x > 25.0 ? 2.0 : 0.0; });
   PlannerConfig config = room_config();
   config.bounds = Aabb{{0.5, 4.0, 1.0}, {39.5, 6.0, 3.0}};
   config.initial_nodes = 20;
@@ -267,18 +265,7 @@ TEST(NbvPlanner, OnlyCrumbsLeftLowerTheThresholdAndCountThemAgain) {
   // Every view sees 0.3 m^3: below min_gain (1), above final_min_gain
   // (0.125). The grown-on tree finds nothing; halving the threshold twice
   // (0.5, 0.25) makes the crumbs count, and scores follow the new threshold.
-  class Crumbs final : public ExplorationMap {
-   public:
-    [[nodiscard]] std::string name() const override { return "crumbs"; }
-    [[nodiscard]] double resolution() const override { return 0.1; }
-    void assume_free(const Sphere&) override {}
-    void insert(Vec3f, std::span<const Vec3f>, double) override {}
-    [[nodiscard]] bool is_free(const Sphere&) const override { return true; }
-    [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
-    [[nodiscard]] double gain(const Frustum&) const override { return 0.3; }
-    void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
-    [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
-  } map;
+  const OpenMap map("crumbs", [](const Frustum&) { return 0.3; });
   PlannerConfig config = room_config();
   config.min_gain = 1.0;
   config.final_min_gain = 0.125;
@@ -307,26 +294,16 @@ TEST(NbvPlanner, TrappedRobotFliesBackTheWayItCame) {
   // Free everywhere except the balls around `trap` (a surface seen after the
   // robot got there): planning from there goes back to the last pose it
   // planned from, and from an empty history nowhere.
-  class Trap final : public ExplorationMap {
-   public:
-    Vec3d trap{50.0, 50.0, 50.0};
-    [[nodiscard]] std::string name() const override { return "trap"; }
-    [[nodiscard]] double resolution() const override { return 0.1; }
-    void assume_free(const Sphere&) override {}
-    void insert(Vec3f, std::span<const Vec3f>, double) override {}
-    [[nodiscard]] bool is_free(const Sphere& ball) const override { return (ball.center - trap).norm() > 0.2; }
-    [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
-    [[nodiscard]] double gain(const Frustum&) const override { return 2.0; }
-    void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
-    [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
-  } map;
+  Vec3d trap{50.0, 50.0, 50.0};
+  const OpenMap map("trap", [](const Frustum&) { return 2.0; },
+                    [&trap](const Sphere& ball) { return (ball.center - trap).norm() <= 0.2; });
   const PlannerConfig config = room_config();
   NbvPlanner planner(config, 2);
   const Pose start{{2.0, 2.0, 2.0}, 0.0};
   const PlanStep first = planner.plan(map, start);
   ASSERT_TRUE(first.gain_found);
   EXPECT_FALSE(first.backtracked);
-  map.trap = first.next.position;
+  trap = first.next.position;
   const PlanStep back = planner.plan(map, first.next);
   EXPECT_TRUE(back.gain_found);
   EXPECT_TRUE(back.backtracked);
@@ -335,33 +312,17 @@ TEST(NbvPlanner, TrappedRobotFliesBackTheWayItCame) {
   EXPECT_EQ(planner.tree().size(), 1u);  // no tree grown from a trap
 
   NbvPlanner fresh(config, 2);
-  map.trap = start.position;
+  trap = start.position;
   EXPECT_FALSE(fresh.plan(map, start).gain_found);
 }
 
-/// FakeMap whose gain also depends on the heading: most looking along +x.
-class HeadingMap final : public ExplorationMap {
- public:
-  static double gain_of(const Frustum& view) { return 1.0 + 2.0 * std::cos(view.yaw); }
-  [[nodiscard]] std::string name() const override { return "heading"; }
-  [[nodiscard]] double resolution() const override { return 0.1; }
-  void assume_free(const Sphere&) override {}
-  void insert(Vec3f, std::span<const Vec3f>, double) override {}
-  [[nodiscard]] bool is_free(const Sphere&) const override { return true; }
-  [[nodiscard]] bool is_free(const Capsule&) const override { return true; }
-  [[nodiscard]] double gain(const Frustum& view) const override {
-    ++gains;
-    return gain_of(view);
-  }
-  void for_each_free_node(FunctionRef<void(Vec3d, Vec3d)>) const override {}
-  [[nodiscard]] std::size_t memory_bytes() const override { return 0; }
-  mutable int gains = 0;
-};
+/// A view's gain by its heading: most looking along +x.
+double heading_gain(const Frustum& view) { return 1.0 + 2.0 * std::cos(view.yaw); }
 
 TEST(NbvPlanner, EachNodeKeepsTheBestOfItsSampledHeadings) {
   PlannerConfig config = room_config();
   config.yaw_samples = 4;
-  const HeadingMap map;
+  const OpenMap map("heading", heading_gain);
   NbvPlanner planner(config, 11);
   planner.plan(map, Pose{{2.0, 2.0, 2.0}, 0.0});
   const auto& tree = planner.tree();
@@ -373,10 +334,10 @@ TEST(NbvPlanner, EachNodeKeepsTheBestOfItsSampledHeadings) {
     // spaced headings from it would have had more.
     const double yaw = tree[i].pose.yaw;
     const Frustum view = config.camera.frustum(tree[i].pose);
-    EXPECT_DOUBLE_EQ(tree[i].gain, HeadingMap::gain_of(view));
+    EXPECT_DOUBLE_EQ(tree[i].gain, heading_gain(view));
     for (int k = 1; k < 4; ++k) {
       const Frustum other = config.camera.frustum(Pose{tree[i].pose.position, yaw + k * std::numbers::pi / 2.0});
-      EXPECT_GE(tree[i].gain, HeadingMap::gain_of(other)) << "node " << i;
+      EXPECT_GE(tree[i].gain, heading_gain(other)) << "node " << i;
     }
     worst = std::min(worst, tree[i].gain);
   }
