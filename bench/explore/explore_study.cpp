@@ -55,6 +55,7 @@ struct StudyOptions {
   int max_nodes = 150;
   double extension_range = 1.5;
   int yaw_samples = 4;
+  bool routing = true;
   double coverage_period = 2.0;
 };
 
@@ -71,6 +72,7 @@ ExplorerConfig config_for(const StudyOptions& options, const sim::IndustrialPlan
   config.planner.max_nodes = options.max_nodes;
   config.planner.extension_range = options.extension_range;
   config.planner.yaw_samples = options.yaw_samples;
+  config.planner.route_to_memory = options.routing;
   config.camera.width = options.image_width;
   config.camera.height = options.image_height;
   config.camera.hfov_deg = config.planner.camera.hfov_deg;
@@ -173,6 +175,11 @@ std::string summary_markdown(const std::vector<Run>& runs, const StudyOptions& o
   row("iterations that grew the tree on (no gain near)", [](const Run& r) { return std::to_string(r.result.planner.grown_on); });
   row("gain threshold halvings (end game)", [](const Run& r) { return std::to_string(r.result.planner.threshold_lowered); });
   row("steps back (trapped by a newly seen surface)", [](const Run& r) { return std::to_string(r.result.planner.backtracks); });
+  row("routes to a remembered pose (edges flown on them, routes blocked)", [](const Run& r) {
+    const PlannerStats& p = r.result.planner;
+    return std::to_string(p.routes) + " (" + std::to_string(p.route_steps) + ", " + std::to_string(p.routes_blocked) + ")";
+  });
+  row("roadmap vertices at the end", [](const Run& r) { return std::to_string(r.result.planner.roadmap_vertices); });
   row("planner iterations per second of planning", [](const Run& r) {
     return fixed(double(r.result.planner.steps) / std::max(1e-9, r.result.planning_time), 2);
   });
@@ -226,7 +233,8 @@ std::string summary_json(const std::vector<Run>& runs, double reachable_m3) {
       << ", \"time_to_90\": " << fixed(r.time_to(0.9), 2)
       << ", \"final_coverage\": " << fixed(r.coverage.empty() ? 0.0 : r.coverage.back().coverage, 5)
       << ", \"finished\": " << (r.finished ? "true" : "false") << ", \"end_time\": " << fixed(r.end_time, 2)
-      << ", \"steps\": " << r.planner.steps << ", \"grown_on\": " << r.planner.grown_on << ", \"nodes\": " << r.planner.nodes
+      << ", \"steps\": " << r.planner.steps << ", \"grown_on\": " << r.planner.grown_on
+      << ", \"routes\": " << r.planner.routes << ", \"route_steps\": " << r.planner.route_steps << ", \"nodes\": " << r.planner.nodes
       << ", \"planning_time\": " << fixed(r.planning_time, 3) << ", \"flight_time\": " << fixed(r.flight_time, 3)
       << ", \"node_check_seconds\": " << fixed(r.planner.node_checks.seconds, 4)
       << ", \"edge_check_seconds\": " << fixed(r.planner.edge_checks.seconds, 4)
@@ -336,6 +344,8 @@ int main(int argc, char** argv) {
   app.add_option("--speed", options.speed, "robot speed, m/s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--yaw-rate", options.yaw_rate, "robot turn rate, rad/s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--max-nodes", options.max_nodes, "planner tree nodes at most per step")->capture_default_str()->check(CLI::Range(15, 100000));
+  app.add_flag("!--no-routing", options.routing,
+               "never route to remembered poses over the roadmap (the local tree alone, as before)");
   app.add_option("--yaw-samples", options.yaw_samples, "headings tried per planner node (the best gain is kept)")
       ->capture_default_str()
       ->check(CLI::Range(1, 64));

@@ -33,6 +33,22 @@
 // left at the end), scoring the same tree again; when nothing reaches even
 // that, the exploration is over. The threshold is never raised again.
 //
+// Receding-horizon planners also glean: a node a metre away that sees a
+// little unknown space (behind clutter, under the ceiling) outscores a room
+// twenty metres away, so whole rooms stay unexplored (the plant's upper
+// storey of hall B, seed 1: 4% of the reachable space after 1500 s). So the
+// planner keeps a roadmap (roadmap.hpp) of where the robot has been and of
+// the branches to its remembered poses, and each step compares the best
+// rate of the local tree, gain / (path length + `route_overhead`), with the
+// same rate of the remembered poses along the roadmap (their gain computed
+// again, lazily: the best bounds first, as a gain never grows while the map
+// only learns). When a remembered pose wins, the robot flies the roadmap's
+// shortest route there in straight legs that cut its corners (each step
+// flies to the farthest of the next 8 waypoints, at most 4 extensions away,
+// that the ball reaches freely; when not even the next one is free, its
+// edge is removed and the planner plans afresh), facing along its way and
+// turning to the remembered heading at the end.
+//
 // A frame inserted after the robot reached a node may show a surface within
 // the check radius of it (a pipe seen from a new side): then no edge leaves
 // the robot. The step then flies back to the pose the robot planned from
@@ -53,6 +69,7 @@
 #include <vector>
 
 #include "exploration_map.hpp"
+#include "roadmap.hpp"
 #include "umbra/core/aabb.hpp"
 
 namespace umbra::explore {
@@ -86,7 +103,14 @@ struct PlannerConfig {
   double memory_bias = 0.25;
   /// Remembered poses at most (the oldest are dropped; each is one gain
   /// computation when the tree grows on).
-  int memory_size = 64;
+  int memory_size = 4096;
+  /// Route to remembered poses over the roadmap when they promise more
+  /// gain per metre than the local tree (see the file comment).
+  bool route_to_memory = true;
+  /// Metres added to every path length in the gain rate: the cost of
+  /// turning and settling at a goal, so that a crumb next to the robot does
+  /// not outrate a room (a rate is gain / (path length + route_overhead)).
+  double route_overhead = 2.0;
   /// Samples tried per step at most, as a multiple of max_nodes (in a
   /// cramped map most samples give no node).
   int samples_per_node = 20;
@@ -122,6 +146,10 @@ struct PlannerStats {
   std::uint64_t grown_on = 0;  ///< steps whose tree grew past max_nodes (no gain near)
   std::uint64_t threshold_lowered = 0;  ///< times the gain threshold was halved
   std::uint64_t backtracks = 0;         ///< steps back along the way the robot came (trapped)
+  std::uint64_t routes = 0;             ///< routes chosen to a remembered pose
+  std::uint64_t route_steps = 0;        ///< steps that flew an edge of a route
+  std::uint64_t routes_blocked = 0;     ///< routes abandoned at an edge found blocked
+  std::uint64_t roadmap_vertices = 0;   ///< the roadmap's size
   /// Queries that began while the mapping thread was inserting (set by the
   /// explorer): proof that mapping and planning overlapped.
   std::uint64_t queries_during_insertion = 0;
@@ -131,6 +159,7 @@ struct PlanStep {
   bool gain_found = false;
   bool grown_on = false;  ///< the tree grew past max_nodes to find gain
   bool backtracked = false;  ///< the robot was trapped: `next` is where it planned from before
+  bool routed = false;       ///< `next` is on a route to a remembered pose
   Pose next;              ///< first node of the best branch (when gain_found)
   double best_gain = 0.0;  ///< m^3, the best node's own gain
   double best_score = 0.0;
@@ -173,8 +202,26 @@ class NbvPlanner {
   /// at least `enough_nodes`, some node has gain (or the samples run out).
   /// Returns whether some node has gain.
   bool grow(const ExplorationMap& map, int enough_nodes, int target_nodes, bool from_memory, bool gain_found);
-  /// Remembers the nodes of the tree with gain that are not on `branch`.
+  /// A pose of an earlier tree that had gain, and the roadmap vertex there.
+  struct Remembered {
+    Pose pose;
+    int vertex = -1;
+    double gain = 0.0;  ///< when last computed: a bound on its gain now
+  };
+
+  /// Remembers the nodes of the tree with gain that are not on `branch`,
+  /// with their branches from the root in the roadmap.
   void remember(const std::vector<std::size_t>& branch);
+  /// Makes the robot's position a roadmap vertex joined to where it came
+  /// from and to the free neighbours near it.
+  void enter_roadmap(const ExplorationMap& map, Vec3d position);
+  /// The next edge of the route being flown, if it is still free.
+  std::optional<Pose> follow_route(const ExplorationMap& map, const Pose& robot);
+  /// Chooses a remembered pose whose rate beats `local_rate` and sets the
+  /// route there; returns the first pose to fly to.
+  std::optional<Pose> choose_route(const ExplorationMap& map, double local_rate);
+  /// The local tree's best gain / (path length + route_overhead).
+  [[nodiscard]] double local_rate() const;
   /// Drops remembered poses that have no gain now.
   void refresh_memory(const ExplorationMap& map);
   /// Whether some node's gain reaches the threshold.
@@ -188,7 +235,11 @@ class NbvPlanner {
   const std::atomic<bool>* inserting_;
   std::vector<TreeNode> tree_;
   std::vector<Pose> previous_branch_;  ///< the last best branch after its first node
-  std::vector<Pose> memory_;           ///< poses of earlier trees with gain, oldest first
+  std::vector<Remembered> memory_;     ///< poses of earlier trees with gain, oldest first
+  Roadmap roadmap_;
+  int robot_vertex_ = -1;              ///< the roadmap vertex where the robot is
+  std::vector<int> route_;             ///< vertices still to fly to, in order
+  double route_yaw_ = 0.0;             ///< the heading at the route's end
   double threshold_;                   ///< gain below it is none: min_gain, lowered at the end
   std::vector<Pose> history_;          ///< poses the robot planned from, oldest first
   PlannerStats stats_;

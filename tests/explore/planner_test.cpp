@@ -345,6 +345,126 @@ TEST(NbvPlanner, EachNodeKeepsTheBestOfItsSampledHeadings) {
   EXPECT_GE(worst, 1.0 + 2.0 * std::cos(std::numbers::pi / 4.0) - 1e-9);
 }
 
+constexpr double planner_extension_range = PlannerConfig{}.extension_range;
+
+/// Plans once from `robot` (with gain everywhere), then returns a pose of that
+/// tree `away` metres or more from the robot and off the chosen branch: a pose the planner remembers.
+Pose remembered_pose(NbvPlanner& planner, const ExplorationMap& map, const Pose& robot, double away, PlanStep& first) {
+  first = planner.plan(map, robot);
+  const auto& tree = planner.tree();
+  std::size_t best = 1;
+  for (std::size_t i = 1; i < tree.size(); ++i) {
+    if (tree[i].score > tree[best].score) best = i;
+  }
+  std::vector<std::size_t> branch;
+  for (std::size_t i = best; i != 0; i = std::size_t(tree[i].parent)) branch.push_back(i);
+  const auto off_branch = [&](std::size_t i) { return std::find(branch.begin(), branch.end(), i) == branch.end(); };
+  // A far node off the branch with no later such node near it: the memory
+  // keeps one pose per neighbourhood, the newest.
+  for (std::size_t i = tree.size() - 1; i >= 1; --i) {
+    if ((tree[i].pose.position - robot.position).norm() < away || !off_branch(i)) continue;
+    bool newest = true;
+    for (std::size_t j = i + 1; j < tree.size(); ++j) {
+      newest = newest && !(off_branch(j) && (tree[j].pose.position - tree[i].pose.position).norm() <
+                                                 planner_extension_range);
+    }
+    if (newest) return tree[i].pose;
+  }
+  ADD_FAILURE() << "no node " << away << " m away off the branch";
+  return robot;
+}
+
+TEST(NbvPlanner, RoutesOverTheRoadmapToARememberedPoseThatOutratesTheLocalTree) {
+  // First step: gain 40 everywhere. Then only crumbs (1.2, above the
+  // threshold) but at one remembered pose `goal` far away, which keeps its
+  // 40: 40 / (distance + overhead) beats 1.2 / (1.5 + overhead), so the
+  // robot flies the roadmap there edge by edge, facing its way, and ends at
+  // the goal's position and heading, in legs that cut the roadmap's corners.
+  PlannerConfig config = room_config();
+  config.bounds = Aabb{{0.5, 0.5, 0.5}, {19.5, 9.5, 3.5}};
+  config.min_gain = 1.0;
+  config.final_min_gain = 1.0;
+  Vec3d goal_position{-1, -1, -1};
+  const OpenMap map("goal far away", [&](const Frustum& view) {
+    if (goal_position.x < 0.0) return 40.0;
+    return view.origin == goal_position ? 40.0 : 1.2;
+  });
+  NbvPlanner planner(config, 21);
+  const Pose start{{2.0, 5.0, 2.0}, 0.0};
+  PlanStep step;
+  const Pose goal = remembered_pose(planner, map, start, 6.0, step);
+  goal_position = goal.position;
+
+  Pose robot = step.next;
+  int routed_steps = 0;
+  for (int k = 0; k < 50 && robot.position != goal.position; ++k) {
+    step = planner.plan(map, robot);
+    ASSERT_TRUE(step.gain_found);
+    ASSERT_TRUE(step.routed) << "step " << k << " left the route";
+    // Legs cut corners of the roadmap (all free here) up to four extensions long.
+    EXPECT_LE((step.next.position - robot.position).norm(), 4.0 * config.extension_range + 1e-9);
+    if (step.next.position != goal.position) {
+      const Vec3d way = step.next.position - robot.position;
+      EXPECT_NEAR(step.next.yaw, std::atan2(way.y, way.x), 1e-12) << "faces along its way";
+    }
+    robot = step.next;
+    ++routed_steps;
+  }
+  EXPECT_EQ(robot.position, goal.position);
+  EXPECT_DOUBLE_EQ(robot.yaw, goal.yaw);
+  EXPECT_EQ(planner.stats().routes, 1u);
+  EXPECT_EQ(planner.stats().route_steps, std::uint64_t(routed_steps));
+  EXPECT_GE(routed_steps, 1);
+
+  // Without routing the robot stays with the local crumbs.
+  config.route_to_memory = false;
+  NbvPlanner local(config, 21);
+  goal_position = {-1, -1, -1};
+  remembered_pose(local, map, start, 6.0, step);
+  goal_position = goal.position;
+  EXPECT_FALSE(local.plan(map, step.next).routed);
+  EXPECT_EQ(local.stats().routes, 0u);
+}
+
+TEST(NbvPlanner, ARouteBlockedByNewSurfacesIsDroppedAndThePlannerPlansAfresh) {
+  PlannerConfig config = room_config();
+  config.bounds = Aabb{{0.5, 0.5, 0.5}, {19.5, 9.5, 3.5}};
+  config.min_gain = 1.0;
+  config.final_min_gain = 1.0;
+  Vec3d goal_position{-1, -1, -1};
+  std::vector<Vec3d> walls;  // balls there are blocked
+  const OpenMap map(
+      "blocked route",
+      [&](const Frustum& view) {
+        if (goal_position.x < 0.0) return 40.0;
+        return view.origin == goal_position ? 40.0 : 1.2;
+      },
+      [&](const Sphere& ball) { return std::find(walls.begin(), walls.end(), ball.center) != walls.end(); });
+  NbvPlanner planner(config, 21);
+  const Pose start{{2.0, 5.0, 2.0}, 0.0};
+  PlanStep step;
+  const Pose goal = remembered_pose(planner, map, start, 6.0, step);
+  std::vector<Vec3d> first_tree;
+  for (const auto& node : planner.tree()) first_tree.push_back(node.pose.position);
+  goal_position = goal.position;
+  const Pose robot = step.next;
+  step = planner.plan(map, robot);
+  ASSERT_TRUE(step.routed);
+  ASSERT_EQ(planner.stats().routes, 1u);
+  if (step.next.position == goal.position) GTEST_SKIP() << "the route was one leg";
+  // Surfaces seen at every node of the first tree but where the robot is:
+  // no leg of the route is free, so it is dropped, and the step is the local tree's.
+  const Pose here = step.next;
+  for (const Vec3d& p : first_tree) {
+    if (p != here.position) walls.push_back(p);
+  }
+  step = planner.plan(map, here);
+  EXPECT_GE(planner.stats().routes_blocked, 1u);
+  EXPECT_FALSE(step.routed);
+  EXPECT_TRUE(step.gain_found);
+  EXPECT_EQ(std::find(walls.begin(), walls.end(), step.next.position), walls.end());
+}
+
 TEST(NbvPlanner, BadConfigIsRefusedByName) {
   PlannerConfig config = room_config();
   config.max_nodes = config.initial_nodes - 1;
