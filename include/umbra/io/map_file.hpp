@@ -60,8 +60,9 @@ struct MapSaveOptions {
   /// calling thread walks the tree and compresses; with 2 or more zstd
   /// compresses on the other threads while the calling thread walks, so the
   /// two overlap (the 3DTK map at 5 cm: 27 ms instead of 42, the same CPU
-  /// time, 0.002% more bytes, since each 1 MiB job is compressed apart). A
-  /// libzstd built without threads compresses on the calling thread.
+  /// time, 0.002% more bytes, since each 1 MiB job is compressed apart).
+  /// That needs a free core: when none is, 1 is ~10 ms quicker. A libzstd
+  /// built without threads compresses on the calling thread.
   unsigned threads = 0;
 
   /// Throws std::invalid_argument naming the field (threads above max_threads()).
