@@ -7,6 +7,9 @@
 #                                       (readers during insertion)
 #   scripts/bench.sh python ARGS...     bench/python_batch_benchmark.py (the
 #                                       Python module against C++, same map)
+#   scripts/bench.sh build ARGS...      bench/build_benchmark.cpp (the whole
+#                                       `umbra build` process, reading and
+#                                       writing included, against OctoMap)
 # ARGS go to the program (--help lists them); results: docs/benchmarks.md.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -14,7 +17,7 @@ root="$(umbra_root)"
 build_dir="${UMBRA_BENCH_BUILD_DIR:-$root/build-bench}"
 
 benchmark=insert
-if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python ) ]]; then
+if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python || "$1" == build ) ]]; then
   benchmark="$1"
   shift
 fi
@@ -29,6 +32,12 @@ if [[ "$benchmark" == python ]]; then
   python="$(sed -n 's/^Python3_EXECUTABLE:FILEPATH=//p' "$build_dir/CMakeCache.txt")"
   PYTHONPATH="$build_dir/python" "${python:-python3}" "$root/bench/python_batch_benchmark.py" \
     --cpp "$build_dir/bench/$target" --data "$root/../shared/data" "$@"
+  exit
+fi
+if [[ "$benchmark" == build ]]; then
+  # It runs the umbra program itself, as a user would.
+  cmake --build "$build_dir" --target "$target" umbra_cli -j "$(umbra_jobs)"
+  "$build_dir/bench/$target" --umbra "$build_dir/tools/umbra" --data "$root/../shared/data" "$@"
   exit
 fi
 cmake --build "$build_dir" --target "$target" -j "$(umbra_jobs)"

@@ -371,7 +371,7 @@ int run_build(const BuildOptions& options) {
   if (uncoloured > 0) std::printf("warning: --color, but %zu scans carry no colours\n", uncoloured);
 
   const auto save_start = std::chrono::steady_clock::now();
-  save_map(map, options.output);
+  save_map(map, options.output, MapSaveOptions{options.threads});
   std::printf("wrote %s in %.3f s\n", options.output.c_str(), seconds_since(save_start));
   print_statistics(stdout, compute_statistics(map));
   if (problems.count() > 0) {
@@ -414,7 +414,8 @@ Command add_build_command(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   command->add_option("--threads", options->threads,
-                      "threads that discretise, trace and apply each scan (0: all cores; at most " +
+                      "threads that discretise, trace and apply each scan, and compress the map file while it is "
+                      "written (0: all cores; at most " +
                           std::to_string(max_threads()) + ", 4 per core)")
       ->capture_default_str()
       ->check(number_in(0, max_threads(), "the number of threads (4 per core at most)"));

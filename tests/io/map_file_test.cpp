@@ -982,6 +982,62 @@ TEST(MapFile, ColouredMapsRoundTripExactly) {
   }
 }
 
+/// A coloured map whose values and colour streams are several MiB each, so
+/// that saving with helper threads cuts them into several 1 MiB zstd jobs:
+/// a 100^3 block of voxels with random values and colours.
+OccupancyMap large_coloured_map() {
+  MapConfig config = depth_config(8);
+  config.color = true;
+  OccupancyMap map(config);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> value(config.sensor.clamp_min_log_odds(), config.sensor.clamp_max_log_odds());
+  for (std::uint32_t x = 0; x < 100; ++x) {
+    for (std::uint32_t y = 0; y < 100; ++y) {
+      for (std::uint32_t z = 0; z < 100; ++z) {
+        map.set_log_odds(Key{x, y, z}, value(rng));
+        if (rng() % 2 == 0) map.set_color(Key{x, y, z}, Rgb{static_cast<std::uint8_t>(x), 7, static_cast<std::uint8_t>(z)});
+      }
+    }
+  }
+  return map;
+}
+
+TEST(MapFile, SavingWithAnyNumberOfThreadsLoadsBackTheSameMap) {
+  const fs::path dir = test::scratch_dir();
+  const OccupancyMap map = large_coloured_map();
+  const MapFileInfo one_job = [&] {
+    save_map(map, dir / "t1.umb", MapSaveOptions{1});
+    return read_map_info(dir / "t1.umb");
+  }();
+  // Several jobs per stream, or the threaded path is not tested.
+  ASSERT_GT(4 * one_job.childless_nodes, 3u << 20);
+  for (const unsigned threads : {0u, 1u, 2u, 3u, 16u}) {
+    SCOPED_TRACE("threads " + std::to_string(threads));
+    const fs::path path = dir / ("t" + std::to_string(threads) + ".umb");
+    save_map(map, path, MapSaveOptions{threads});
+    expect_same_map(map, load_map(path));
+    // Deterministic: the same setting gives the same bytes.
+    save_map(map, dir / "again.umb", MapSaveOptions{threads});
+    EXPECT_TRUE(read_bytes(path) == read_bytes(dir / "again.umb"));
+  }
+}
+
+TEST(MapFile, TooManySaveThreadsAreRefusedBeforeAnyFileExists) {
+  const fs::path path = test::scratch_dir() / "threads.umb";
+  const OccupancyMap map(depth_config(4));
+  try {
+    save_map(map, path, MapSaveOptions{max_threads() + 1});
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("threads must be at most " + std::to_string(max_threads())),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("got " + std::to_string(max_threads() + 1)), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_NO_THROW(save_map(map, path, MapSaveOptions{max_threads()}));
+}
+
 TEST(MapFile, EveryTruncationOfAColouredFileIsReported) {
   const fs::path dir = test::scratch_dir();
   const OccupancyMap map = coloured_map(3, true, 5);

@@ -1,10 +1,13 @@
 // OccupancyMap: the user-facing API, its errors and its statistics.
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "support/map_internals.hpp"
+#include "umbra/map/map_statistics.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {
@@ -182,6 +185,53 @@ TEST(OccupancyMap, LeavesCoverEveryKnownVoxelOnce) {
 
 namespace umbra {
 namespace {
+
+/// compute_statistics the plain way: every known leaf's box in metres, through the public API.
+MapStatistics statistics_leaf_by_leaf(const OccupancyMap& map) {
+  MapStatistics stats;
+  map.for_each_leaf([&](const Node& leaf) {
+    if (leaf.state == OccupancyState::unknown) return;
+    (leaf.state == OccupancyState::occupied ? stats.occupied_voxels : stats.free_voxels) += std::uint64_t{1}
+                                                                                             << (3 * leaf.depth);
+    const Vec3d low = map.grid().min_corner(leaf.key, leaf.depth);
+    const double size = map.grid().node_size(leaf.depth);
+    const Vec3d high = low + Vec3d{size, size, size};
+    for (int axis = 0; axis < 3; ++axis) {
+      stats.known_min[axis] = stats.has_known_space ? std::min(stats.known_min[axis], low[axis]) : low[axis];
+      stats.known_max[axis] = stats.has_known_space ? std::max(stats.known_max[axis], high[axis]) : high[axis];
+    }
+    stats.has_known_space = true;
+  });
+  return stats;
+}
+
+TEST(OccupancyMap, StatisticsAgreeWithALeafByLeafCount) {
+  // An odd resolution, so that metres round; free inner leaves of several
+  // depths (pruned free space) and the extremes on different depths.
+  OccupancyMap map(0.07, 16);
+  EXPECT_FALSE(compute_statistics(map).has_known_space);
+  std::vector<Vec3f> points;
+  for (int i = 0; i < 400; ++i) {
+    const float a = 0.0157f * static_cast<float>(i);
+    points.push_back({3.1f * std::cos(a), 2.3f * std::sin(a), -1.3f + 0.01f * static_cast<float>(i)});
+  }
+  map.insert_point_cloud({0.2f, -0.4f, 0.1f}, points);
+  map.set_log_odds(Vec3d{-9.0, 4.0, 7.5}, 3.0f);    // occupied, far from the rest
+  map.set_log_odds(Vec3d{6.0, -8.0, -5.25}, -1.5f);  // a lone free voxel
+  const MapStatistics fast = compute_statistics(map);
+  const MapStatistics plain = statistics_leaf_by_leaf(map);
+  ASSERT_TRUE(fast.has_known_space);
+  EXPECT_GT(map.node_counts().inner_leaf, 100u);
+  EXPECT_EQ(fast.occupied_voxels, plain.occupied_voxels);
+  EXPECT_EQ(fast.free_voxels, plain.free_voxels);
+  for (int axis = 0; axis < 3; ++axis) {
+    EXPECT_EQ(fast.known_min[axis], plain.known_min[axis]) << "axis " << axis;
+    EXPECT_EQ(fast.known_max[axis], plain.known_max[axis]) << "axis " << axis;
+  }
+  EXPECT_EQ(fast.known_min.x, map.grid().min_corner(*map.grid().key_checked(Vec3d{-9.0, 4.0, 7.5})).x);
+  EXPECT_EQ(fast.known_max.y, map.grid().min_corner(*map.grid().key_checked(Vec3d{-9.0, 4.0, 7.5})).y + 0.07);
+  EXPECT_DOUBLE_EQ(fast.free_volume_m3, static_cast<double>(plain.free_voxels) * 0.07 * 0.07 * 0.07);
+}
 
 TEST(OccupancyMap, NarrowingTheClampingRangeClampsStoredValues) {
   OccupancyMap map(0.1);
