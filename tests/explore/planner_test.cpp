@@ -374,21 +374,30 @@ Pose remembered_pose(NbvPlanner& planner, const ExplorationMap& map, const Pose&
   return robot;
 }
 
+/// A 19 x 9 x 3 m room; gains from 1 m^3 count.
+PlannerConfig routing_room_config() {
+  PlannerConfig config = room_config();
+  config.bounds = Aabb{{0.5, 0.5, 0.5}, {19.5, 9.5, 3.5}};
+  config.min_gain = 1.0;
+  config.final_min_gain = 1.0;
+  return config;
+}
+
+/// 40 everywhere until a goal is set (x >= 0); then 40 at the goal and 1.2 elsewhere.
+double goal_gain(Vec3d goal_position, const Frustum& view) {
+  if (goal_position.x < 0.0) return 40.0;
+  return view.origin == goal_position ? 40.0 : 1.2;
+}
+
 TEST(NbvPlanner, RoutesOverTheRoadmapToARememberedPoseThatOutratesTheLocalTree) {
   // First step: gain 40 everywhere. Then only crumbs (1.2, above the
   // threshold) but at one remembered pose `goal` far away, which keeps its
   // 40: 40 / (distance + overhead) beats 1.2 / (1.5 + overhead), so the
   // robot flies the roadmap there edge by edge, facing its way, and ends at
   // the goal's position and heading, in legs that cut the roadmap's corners.
-  PlannerConfig config = room_config();
-  config.bounds = Aabb{{0.5, 0.5, 0.5}, {19.5, 9.5, 3.5}};
-  config.min_gain = 1.0;
-  config.final_min_gain = 1.0;
+  PlannerConfig config = routing_room_config();
   Vec3d goal_position{-1, -1, -1};
-  const OpenMap map("goal far away", [&](const Frustum& view) {
-    if (goal_position.x < 0.0) return 40.0;
-    return view.origin == goal_position ? 40.0 : 1.2;
-  });
+  const OpenMap map("goal far away", [&](const Frustum& view) { return goal_gain(goal_position, view); });
   NbvPlanner planner(config, 21);
   const Pose start{{2.0, 5.0, 2.0}, 0.0};
   PlanStep step;
@@ -427,18 +436,12 @@ TEST(NbvPlanner, RoutesOverTheRoadmapToARememberedPoseThatOutratesTheLocalTree) 
 }
 
 TEST(NbvPlanner, ARouteBlockedByNewSurfacesIsDroppedAndThePlannerPlansAfresh) {
-  PlannerConfig config = room_config();
-  config.bounds = Aabb{{0.5, 0.5, 0.5}, {19.5, 9.5, 3.5}};
-  config.min_gain = 1.0;
-  config.final_min_gain = 1.0;
+  PlannerConfig config = routing_room_config();
   Vec3d goal_position{-1, -1, -1};
   std::vector<Vec3d> walls;  // balls there are blocked
   const OpenMap map(
       "blocked route",
-      [&](const Frustum& view) {
-        if (goal_position.x < 0.0) return 40.0;
-        return view.origin == goal_position ? 40.0 : 1.2;
-      },
+      [&](const Frustum& view) { return goal_gain(goal_position, view); },
       [&](const Sphere& ball) { return std::find(walls.begin(), walls.end(), ball.center) != walls.end(); });
   NbvPlanner planner(config, 21);
   const Pose start{{2.0, 5.0, 2.0}, 0.0};
