@@ -52,6 +52,7 @@
 
 #include "bench_data.hpp"
 #include "common/argument_cursor.hpp"
+#include "common/sweep_flags.hpp"
 #include "umbra/io/scan_source.hpp"
 
 namespace {
@@ -231,32 +232,22 @@ int main(int argc, char** argv) {
   if (argc == 7 && std::string(argv[1]) == "--octomap-child") {
     return octomap_child(argv[2], std::stod(argv[3]), std::stod(argv[4]), std::string(argv[5]) == "1", argv[6]);
   }
-  umbra::bench::DatasetOptions data_options;
   Settings settings;
   settings.self = fs::canonical("/proc/self/exe").string();
-  std::string resolutions = "0.05,0.02";
-  std::string datasets = "3dtk,tum";
-  std::string method_names = "octomap-discrete,umbra-discrete,umbra-fast-n0";
-  std::string thread_counts = "1,2";
-  std::string markdown_path;
+  umbra_bench::SweepFlags sweep;
+  sweep.datasets = "3dtk,tum";
+  sweep.methods = "octomap-discrete,umbra-discrete,umbra-fast-n0";
+  sweep.threads = "1,2";
+  sweep.repeat = 5;
   std::string out_dir;
-  int repeat = 5;
   bool best = false;
   for (umbra_bench::ArgumentCursor args{argc, argv}; args.next();) {
     const std::string arg = args.flag();
     auto value = [&] { return args.value(); };
+    if (sweep.take(arg, args)) continue;
     if (arg == "--umbra") settings.umbra = value();
-    else if (arg == "--data") data_options.data_dir = value();
-    else if (arg == "--res") resolutions = value();
-    else if (arg == "--datasets") datasets = value();
-    else if (arg == "--methods") method_names = value();
-    else if (arg == "--threads") thread_counts = value();
-    else if (arg == "--repeat") repeat = std::stoi(value());
-    else if (arg == "--max-range") data_options.max_range = std::stod(value());
-    else if (arg == "--tum-max-range") data_options.tum_max_range = std::stod(value());
     else if (arg == "--best") best = true;
     else if (arg == "--out") out_dir = value();
-    else if (arg == "--markdown") markdown_path = value();
     else if (arg == "--help" || arg == "-h") {
       std::printf(
           "usage: umbra_build_benchmark --umbra PATH [--data DIR] [--datasets 3dtk,tum] [--res 0.05,0.02]\n"
@@ -276,7 +267,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::vector<Method> methods;
-  for (const std::string& name : split_list(method_names)) {
+  for (const std::string& name : split_list(sweep.methods)) {
     const auto it = std::find_if(kAllMethods.begin(), kAllMethods.end(), [&](const Method& m) { return m.name == name; });
     if (it == kAllMethods.end()) {
       std::fprintf(stderr, "unknown method %s\n", name.c_str());
@@ -294,21 +285,21 @@ int main(int argc, char** argv) {
            "file vs .ot |\n"
         << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   try {
-    for (const std::string& name : split_list(datasets)) {
+    for (const std::string& name : split_list(sweep.datasets)) {
       umbra::bench::Dataset data;  // only its path and range: each process reads the input itself
       data.name = name;
-      data.path = umbra::bench::dataset_path(name, data_options);
-      data.max_range = name == "tum" ? data_options.tum_max_range : data_options.max_range;
+      data.path = umbra::bench::dataset_path(name, sweep.data);
+      data.max_range = name == "tum" ? sweep.data.tum_max_range : sweep.data.max_range;
       if (data.path.empty()) throw std::runtime_error(name + " is not read from a file; use 3dtk, tum, scan.dat or a path");
-      for (const std::string& res_text : split_list(resolutions)) {
+      for (const std::string& res_text : split_list(sweep.resolutions)) {
         const double resolution = std::stod(res_text);
         // Runs per (method, threads); OctoMap has no threads and runs once per repetition.
         std::map<std::pair<std::string, unsigned>, std::vector<Run>> runs;
-        for (int r = 0; r < repeat; ++r) {
+        for (int r = 0; r < sweep.repeat; ++r) {
           for (const Method& method : methods) {
-            for (const std::string& threads_text : split_list(thread_counts)) {
+            for (const std::string& threads_text : split_list(sweep.threads)) {
               const unsigned threads = method.octomap ? 1 : static_cast<unsigned>(std::stoul(threads_text));
-              if (method.octomap && threads_text != split_list(thread_counts).front()) continue;
+              if (method.octomap && threads_text != split_list(sweep.threads).front()) continue;
               const Run run = measure(settings, data, method, resolution, threads);
               runs[{method.name, threads}].push_back(run);
               std::fprintf(stderr, "%s res %g %s threads %u run %d: wall %.3f s, CPU %.3f s, peak RSS %.1f MiB, file %.2f MiB, "
@@ -355,8 +346,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "umbra_build_benchmark: %s\n", e.what());
     return 1;
   }
-  std::printf("%s of %d runs each\n\n%s", best ? "Best" : "Median", repeat, table.str().c_str());
-  if (!markdown_path.empty()) std::ofstream(markdown_path) << table.str();
+  std::printf("%s of %d runs each\n\n%s", best ? "Best" : "Median", sweep.repeat, table.str().c_str());
+  if (!sweep.markdown.empty()) std::ofstream(sweep.markdown) << table.str();
   if (out_dir.empty()) fs::remove_all(settings.out_dir);
   return 0;
 }

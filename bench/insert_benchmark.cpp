@@ -50,6 +50,7 @@
 
 #include "bench_data.hpp"
 #include "common/argument_cursor.hpp"
+#include "common/sweep_flags.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace {
@@ -235,27 +236,14 @@ struct Result {
 }  // namespace
 
 int main(int argc, char** argv) {
-  umbra::bench::DatasetOptions data_options;
-  std::string resolutions = "0.05,0.02";
-  std::string datasets = "scan.dat,3dtk";
-  std::string method_names = "octomap-plain,umbra-simple,octomap-discrete,umbra-discrete";
-  std::string thread_counts = "1";
-  std::string markdown_path;
-  int repeat = 3;
+  umbra_bench::SweepFlags sweep;
+  sweep.datasets = "scan.dat,3dtk";
+  sweep.methods = "octomap-plain,umbra-simple,octomap-discrete,umbra-discrete";
   bool color = false;
   for (umbra_bench::ArgumentCursor args{argc, argv}; args.next();) {
     const std::string arg = args.flag();
-    auto value = [&] { return args.value(); };
-    if (arg == "--data") data_options.data_dir = value();
-    else if (arg == "--res") resolutions = value();
-    else if (arg == "--datasets") datasets = value();
-    else if (arg == "--methods") method_names = value();
-    else if (arg == "--threads") thread_counts = value();
-    else if (arg == "--repeat") repeat = std::stoi(value());
-    else if (arg == "--max-range") data_options.max_range = std::stod(value());
-    else if (arg == "--tum-max-range") data_options.tum_max_range = std::stod(value());
-    else if (arg == "--color") color = true;
-    else if (arg == "--markdown") markdown_path = value();
+    if (sweep.take(arg, args)) continue;
+    if (arg == "--color") color = true;
     else if (arg == "--help" || arg == "-h") {
       std::printf(
           "usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum,sim-camera] [--res 0.05,0.02]\n"
@@ -271,7 +259,7 @@ int main(int argc, char** argv) {
     }
   }
   std::vector<Method> methods;
-  for (const std::string& name : split_list(method_names)) {
+  for (const std::string& name : split_list(sweep.methods)) {
     const auto it = std::find_if(kAllMethods.begin(), kAllMethods.end(), [&](const Method& m) { return m.name == name; });
     if (it == kAllMethods.end()) {
       std::fprintf(stderr, "unknown method %s\n", name.c_str());
@@ -281,9 +269,9 @@ int main(int argc, char** argv) {
   }
 
   std::vector<Dataset> loaded;
-  for (const std::string& name : split_list(datasets)) {
+  for (const std::string& name : split_list(sweep.datasets)) {
     try {
-      loaded.push_back(load(name, data_options));
+      loaded.push_back(load(name, sweep.data));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "cannot load %s: %s\n", name.c_str(), e.what());
       return 1;
@@ -299,15 +287,15 @@ int main(int argc, char** argv) {
            "map vs OctoMap | peak RSS growth (MiB) | CPU ms/scan | CPU speed-up |\n"
         << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Dataset& data : loaded) {
-    for (const std::string& res_text : split_list(resolutions)) {
+    for (const std::string& res_text : split_list(sweep.resolutions)) {
       const double resolution = std::stod(res_text);
       std::map<std::string, Result> octomap_results;
-      for (const std::string& threads_text : split_list(thread_counts)) {
+      for (const std::string& threads_text : split_list(sweep.threads)) {
         const unsigned threads = static_cast<unsigned>(std::stoul(threads_text));
         std::map<std::string, std::vector<std::vector<double>>> times;  // method -> scan -> repeats
         std::map<std::string, std::vector<std::vector<double>>> cpu_times;
         std::map<std::string, Measurement> last;
-        for (int r = 0; r < repeat; ++r) {
+        for (int r = 0; r < sweep.repeat; ++r) {
           for (const Method& method : methods) {
             if (method.octomap && octomap_results.count(method.name)) continue;  // OctoMap: once
             const Measurement m = measure_in_child(data, method, resolution, threads, color);
@@ -368,8 +356,8 @@ int main(int argc, char** argv) {
     }
   }
   std::printf("%s", table.str().c_str());
-  if (!markdown_path.empty()) {
-    std::ofstream out(markdown_path);
+  if (!sweep.markdown.empty()) {
+    std::ofstream out(sweep.markdown);
     out << table.str();
   }
   return 0;
