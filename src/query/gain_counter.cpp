@@ -1,6 +1,7 @@
 #include "query/gain_counter.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "integrate/ray_walker.hpp"
@@ -88,6 +89,9 @@ constexpr double kPixelsPerFarVoxel = 1.0;
 constexpr double kMaxPixels = 400000.0;
 // Widest cone (in voxels across, where its obstacles are) worth sweeping.
 constexpr double kMaxSweepWidth = 16.0;
+// Regions of up to 2^k voxels per edge across the frustum's boundary are
+// counted as one block of centres (FrustumGeometry::count_grid_points).
+constexpr int kBlockCountDepth = 2;
 
 }  // namespace
 
@@ -317,6 +321,20 @@ void GainCounter::count_region(Key key, int depth, float value, Overlap overlap)
   }
   if (overlap == Overlap::inside) {
     add(std::uint64_t{1} << (3 * depth), value);
+    return;
+  }
+  if (depth <= kBlockCountDepth) {
+    // A small region across the frustum's boundary: its centres tested as
+    // one block, not a subtree of overlap tests and single points.
+    const int n = 1 << depth;
+    std::array<double, 8> xs, ys, zs;
+    for (int i = 0; i < n; ++i) {
+      xs[std::size_t(i)] = grid_.axis_center(key.x + std::uint32_t(i));
+      ys[std::size_t(i)] = grid_.axis_center(key.y + std::uint32_t(i));
+      zs[std::size_t(i)] = grid_.axis_center(key.z + std::uint32_t(i));
+    }
+    const int inside = frustum_->count_grid_points(xs.data(), ys.data(), zs.data(), n);
+    if (inside > 0) add(std::uint64_t(inside), value);
     return;
   }
   for (unsigned slot = 0; slot < 8; ++slot) count_region(child_key(key, depth, slot), depth - 1, value, overlap);

@@ -143,7 +143,61 @@ bool FrustumGeometry::contains_quickly(Vec3d point) const {
   const double low = frustum.min_range + range_margin;
   const double high = frustum.max_range - range_margin;
   if (sure && distance2 >= low * low && distance2 <= high * high) return true;
+  // Surely beyond the range or before min_range: no atan2 (the centres just
+  // past max_range went to contains(), 2.6% of a 20 cm gain query).
+  const double beyond = frustum.max_range + range_margin;
+  const double before = frustum.min_range - range_margin;
+  if (distance2 > beyond * beyond || (before > 0.0 && distance2 < before * before)) return false;
   return contains(point);
+}
+
+int FrustumGeometry::count_grid_points(const double* xs, const double* ys, const double* zs, int n) const {
+  constexpr int kMax = 8;
+  const Vec3d o = frustum.origin;
+  // The plane and range terms of each coordinate, multiplied as
+  // contains_quickly() multiplies them (so the sums below are its values to
+  // the bit: d.dot(normal) is x * nx + y * ny + z * nz, left to right).
+  double dx[kMax], dy[kMax], dz[kMax];
+  double sx[4][kMax], sy[4][kMax], sz[4][kMax];
+  double farthest2 = 0.0;
+  for (int i = 0; i < n; ++i) {
+    dx[i] = xs[i] - o.x;
+    dy[i] = ys[i] - o.y;
+    dz[i] = zs[i] - o.z;
+    for (int plane = 0; plane < 4; ++plane) {
+      sx[plane][i] = dx[i] * side[std::size_t(plane)].x;
+      sy[plane][i] = dy[i] * side[std::size_t(plane)].y;
+      sz[plane][i] = dz[i] * side[std::size_t(plane)].z;
+    }
+  }
+  for (const double* d : {dx, dy, dz}) farthest2 += std::max(d[0] * d[0], d[n - 1] * d[n - 1]);
+  // One margin for the block, from its farthest point: at least each
+  // point's own (a larger margin only sends more points to contains()).
+  const double margin = 1e-9 * (std::sqrt(farthest2) * (1.0 + 1e-12) + 1.0);
+  const double range_margin = 1e-9 * (frustum.max_range + 1.0);
+  const double low = frustum.min_range + range_margin;
+  const double high = frustum.max_range - range_margin;
+  const double beyond = frustum.max_range + range_margin;
+  const double before = frustum.min_range - range_margin;
+  int count = 0;
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const double distance2 = dx[i] * dx[i] + dy[j] * dy[j] + dz[k] * dz[k];
+        if (distance2 > beyond * beyond || (before > 0.0 && distance2 < before * before)) continue;
+        bool sure = distance2 >= low * low && distance2 <= high * high;
+        bool out = false;
+        for (int plane = 0; plane < 4; ++plane) {
+          const double s = sx[plane][i] + sy[plane][j] + sz[plane][k];
+          out |= s < -margin;
+          sure &= s > margin;
+        }
+        if (out) continue;
+        if (sure || contains({xs[i], ys[j], zs[k]})) ++count;
+      }
+    }
+  }
+  return count;
 }
 
 Overlap FrustumGeometry::overlap(const Aabb& box) const {

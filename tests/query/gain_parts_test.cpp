@@ -2,14 +2,17 @@
 // definition: OccupiedBitmap rows against its single bits, ViewImage
 // footprints against the projections of points of the box (every point's
 // pixel must lie in its box's footprint), and its pyramids against a scan of
-// the pixels.
+// the pixels. FrustumGeometry's block count of voxel centres against
+// contains() point by point.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
 
+#include "query/geometry.hpp"
 #include "query/occupied_bitmap.hpp"
 #include "query/view_image.hpp"
 
@@ -165,6 +168,62 @@ TEST(ViewImage, PyramidsAndCandidatesFollowTheDraws) {
     EXPECT_LE(image.nearest(rect), least);
     EXPECT_GE(image.nearest_in_every_pixel(rect), greatest);
   }
+}
+
+/// Whether `frustum` holds (xs[i], ys[j], zs[k]), point by point: the definition.
+int count_one_by_one(const FrustumGeometry& frustum, const double* xs, const double* ys, const double* zs, int n) {
+  int count = 0;
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const bool inside = frustum.contains({xs[i], ys[j], zs[k]});
+        EXPECT_EQ(frustum.contains_quickly({xs[i], ys[j], zs[k]}), inside);
+        count += inside ? 1 : 0;
+      }
+    }
+  }
+  return count;
+}
+
+TEST(FrustumGeometry, BlockCountsEqualContainsPointByPoint) {
+  // Blocks of grid points around frustums whose origin is a grid point, so
+  // that points lie exactly on the side planes (yaw 0 or 45 degrees, fields
+  // of view of 90 degrees) and exactly at max_range or min_range (3-4-5
+  // triangles), besides random ones.
+  const double step = 0.1;
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int counted = 0;
+  int blocks_across = 0;
+  for (int f = 0; f < 60; ++f) {
+    const bool on_grid = f % 2 == 0;
+    const Vec3d origin = on_grid ? Vec3d{0.0, 0.0, 0.0} : Vec3d{unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5};
+    const double yaw = on_grid ? 45.0 * (f % 8 / 2) : 360.0 * unit(rng);
+    const double pitch = on_grid ? 0.0 : 60.0 * unit(rng) - 30.0;
+    const double hfov = on_grid ? 90.0 : 20.0 + 150.0 * unit(rng);
+    const double vfov = on_grid ? 90.0 : 20.0 + 140.0 * unit(rng);
+    const double max_range = on_grid ? 0.5 : 0.2 + 0.8 * unit(rng);
+    const double min_range = f % 3 == 0 ? (on_grid ? 0.5 * 0.6 : 0.3 * max_range) : 0.0;
+    const FrustumGeometry frustum(Frustum::from_degrees(origin, yaw, pitch, hfov, vfov, min_range, max_range));
+    for (int b = 0; b < 40; ++b) {
+      const int n = 1 << std::uniform_int_distribution<int>(0, 3)(rng);
+      std::array<double, 8> xs{}, ys{}, zs{};
+      std::array<int, 3> first{};
+      for (int& a : first) a = std::uniform_int_distribution<int>(-12, 12 - n)(rng);
+      for (int i = 0; i < n; ++i) {
+        xs[std::size_t(i)] = double(first[0] + i) * step;
+        ys[std::size_t(i)] = double(first[1] + i) * step;
+        zs[std::size_t(i)] = double(first[2] + i) * step;
+      }
+      const int expected = count_one_by_one(frustum, xs.data(), ys.data(), zs.data(), n);
+      ASSERT_EQ(frustum.count_grid_points(xs.data(), ys.data(), zs.data(), n), expected)
+          << "frustum " << f << " block " << b << " of " << n << " per edge";
+      counted += expected;
+      blocks_across += expected > 0 && expected < n * n * n ? 1 : 0;
+    }
+  }
+  EXPECT_GT(counted, 1000);
+  EXPECT_GT(blocks_across, 100);
 }
 
 }  // namespace
