@@ -283,12 +283,14 @@ void GainCounter::visit_region(Key key, int depth, float value, Overlap overlap)
 }
 
 GainCounter::Visibility GainCounter::decide(Key key, int depth, float value) {
-  const Visibility surely = node_visibility(key, depth);
-  if (surely != Visibility::undecided || !fast_ || depth > fast_depth_) return surely;
   // Fast: the two opposite corner voxels decide a node without obstacles
   // inside when they agree (with an obstacle inside, the voxels in front of
   // it and behind it differ).
-  if (thresholds_.is_occupied(value)) return Visibility::undecided;
+  const bool corners_decide = fast_ && depth <= fast_depth_ && !thresholds_.is_occupied(value);
+  // A node the sweep would prove hidden has both corners blocked, so the
+  // corners give the same answer for less (fast at 20 cm: 5% of the time in sweeps).
+  const Visibility surely = node_visibility(key, depth, /*sweep=*/!corners_decide);
+  if (surely != Visibility::undecided || !corners_decide) return surely;
   const std::uint32_t last = (1u << depth) - 1;
   const bool low = voxel_visible(key);
   const bool high = voxel_visible({key.x + last, key.y + last, key.z + last});
@@ -351,7 +353,7 @@ void GainCounter::add(std::uint64_t voxels, float value) {
 
 // --- visibility --------------------------------------------------------------------
 
-GainCounter::Visibility GainCounter::node_visibility(Key key, int depth) {
+GainCounter::Visibility GainCounter::node_visibility(Key key, int depth, bool sweep) {
   if (!use_image_) return Visibility::undecided;
   // The centres the walks aim at (rounded to float: within the margin).
   const Aabb targets = grown(centres_of(key, depth), margin_);
@@ -367,7 +369,7 @@ GainCounter::Visibility GainCounter::node_visibility(Key key, int depth) {
   const double obstacle_free = double(image_.nearest(rect));  // no obstacle nearer in the cone
   if (obstacle_free > std::sqrt(farthest_distance_squared(s.apex, targets))) return Visibility::visible;
   // For eight voxels or fewer a sweep costs more than the rays it saves.
-  if (depth < 2) return Visibility::undecided;
+  if (!sweep || depth < 2) return Visibility::undecided;
   // Some rays reach the node's near side without passing an obstacle: a
   // sweep would not prove it hidden.
   const double obstacles_before = double(image_.nearest_in_every_pixel(rect));

@@ -73,7 +73,8 @@ class GainCounter {
   void count_node(NodeRef ref, Key key, Overlap overlap);
   void count_region(Key key, int depth, float value, Overlap overlap);
   void add(std::uint64_t voxels, float value);
-  [[nodiscard]] Visibility node_visibility(Key key, int depth);
+  /// What the image (and, if `sweep`, an OcclusionSweep) proves of a node.
+  [[nodiscard]] Visibility node_visibility(Key key, int depth, bool sweep);
   bool voxel_visible(Key key);
   /// What the image and the sweep prove of a node (whose value, the maximum
   /// of its voxels, is `value`); for the fast method also what its corner
