@@ -38,31 +38,31 @@ Aabb grown(const Aabb& box, double by) {
   return {box.min - Vec3d{by, by, by}, box.max + Vec3d{by, by, by}};
 }
 
-/// Whether the segment from `a` to `b` meets the box shrunk by `margin` on
-/// every side (`inside`) and the box grown by it (`near`): one slab test for both.
+/// Whether the segment from `a` to `a + d` meets the box shrunk by `margin`
+/// on every side (`inside`) and the box grown by it (`near`): one slab test
+/// for both. `inverse` holds 1 / d per axis (computed once per segment: the
+/// segment is tested against several boxes).
 struct SegmentBox {
   bool inside;
   bool near;
 };
-SegmentBox segment_meets(Vec3d a, Vec3d b, const Aabb& box, double margin) {
+SegmentBox segment_meets(Vec3d a, Vec3d d, Vec3d inverse, const Aabb& box, double margin) {
   double in0 = 0.0, in1 = 1.0, out0 = 0.0, out1 = 1.0;
   for (int axis = 0; axis < 3; ++axis) {
-    const double d = b[axis] - a[axis];
     const double low = box.min[axis] - a[axis];
     const double high = box.max[axis] - a[axis];
-    if (d == 0.0) {
+    if (d[axis] == 0.0) {
       if (low - margin > 0.0 || high + margin < 0.0) return {false, false};
       if (low + margin > 0.0 || high - margin < 0.0) in0 = 2.0;  // never inside the shrunk box
       continue;
     }
-    const double inverse = 1.0 / d;
-    double enter = (low + margin) * inverse;
-    double leave = (high - margin) * inverse;
+    double enter = (low + margin) * inverse[axis];
+    double leave = (high - margin) * inverse[axis];
     if (enter > leave) std::swap(enter, leave);
     in0 = std::max(in0, enter);
     in1 = std::min(in1, leave);
-    enter = (low - margin) * inverse;
-    leave = (high + margin) * inverse;
+    enter = (low - margin) * inverse[axis];
+    leave = (high + margin) * inverse[axis];
     if (enter > leave) std::swap(enter, leave);
     out0 = std::max(out0, enter);
     out1 = std::min(out1, leave);
@@ -404,11 +404,13 @@ GainCounter::Visibility GainCounter::ray_visibility_from_image(Key key) const {
   bool overflow = false;
   const ViewImage::Candidate* candidates = image_.candidates(px, py, count, overflow);
   bool grazed = false;
+  Vec3d inverse;
+  for (int axis = 0; axis < 3; ++axis) inverse[axis] = d[axis] == 0.0 ? 0.0 : 1.0 / d[axis];
   for (int i = 0; i < count && double(candidates[i].near) <= distance; ++i) {
     const Aabb& cube = obstacles_[candidates[i].index];
     // Through the inside, shrunk by the margin: the walk surely visits it
     // (before the target's voxel, which is unknown and so not in it).
-    const SegmentBox meets = segment_meets(apex, target, cube, margin_);
+    const SegmentBox meets = segment_meets(apex, d, inverse, cube, margin_);
     if (meets.inside) return Visibility::blocked;
     grazed |= meets.near;
   }

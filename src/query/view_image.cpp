@@ -41,14 +41,22 @@ bool ViewImage::footprint(const Aabb& box, PixelRect& rect, bool& clipped) const
   const Setup& s = setup_;
   const Vec3d d0 = box.min - s.apex;
   const Vec3d e = box.max - box.min;
+  // The corners' coordinates from the first corner's and the edges' (the
+  // rounding differs from a dot product per corner by ~1e-16 relative,
+  // well inside the margin below; 24 products instead of 72).
+  const double z0 = d0.dot(s.f);
+  const double x0 = d0.dot(s.l);
+  const double y0 = d0.dot(s.u);
+  const Vec3d ez{e.x * s.f.x, e.y * s.f.y, e.z * s.f.z};
+  const Vec3d ex{e.x * s.l.x, e.y * s.l.y, e.z * s.l.z};
+  const Vec3d ey{e.x * s.u.x, e.y * s.u.y, e.z * s.u.z};
   std::array<double, 8> z;
   std::array<double, 8> x;
   std::array<double, 8> y;
   for (unsigned i = 0; i < 8; ++i) {
-    const Vec3d d{d0.x + ((i & 1u) ? e.x : 0.0), d0.y + ((i & 2u) ? e.y : 0.0), d0.z + ((i & 4u) ? e.z : 0.0)};
-    z[i] = d.dot(s.f);
-    x[i] = d.dot(s.l);
-    y[i] = d.dot(s.u);
+    z[i] = z0 + ((i & 1u) ? ez.x : 0.0) + ((i & 2u) ? ez.y : 0.0) + ((i & 4u) ? ez.z : 0.0);
+    x[i] = x0 + ((i & 1u) ? ex.x : 0.0) + ((i & 2u) ? ex.y : 0.0) + ((i & 4u) ? ex.z : 0.0);
+    y[i] = y0 + ((i & 1u) ? ey.x : 0.0) + ((i & 2u) ? ey.y : 0.0) + ((i & 4u) ? ey.z : 0.0);
   }
   double x_low = std::numeric_limits<double>::infinity();
   double x_high = -x_low;
@@ -63,7 +71,8 @@ bool ViewImage::footprint(const Aabb& box, PixelRect& rect, bool& clipped) const
   clipped = false;
   for (unsigned i = 0; i < 8; ++i) {
     if (z[i] >= s.near_plane) {
-      take(x[i] / z[i], y[i] / z[i]);
+      const double inverse = 1.0 / z[i];  // one division per corner, not two
+      take(x[i] * inverse, y[i] * inverse);
     } else {
       clipped = true;
     }
