@@ -17,6 +17,7 @@ float round_down(double value) {
 
 void ViewImage::reset(const Setup& setup) {
   setup_ = setup;
+  inverse_pixel_ = 1.0 / setup.pixel;
   width_ = std::max(1, static_cast<int>(std::ceil(2.0 * setup.half_width / setup.pixel)));
   height_ = std::max(1, static_cast<int>(std::ceil(2.0 * setup.half_height / setup.pixel)));
   level_sizes_.clear();
@@ -30,10 +31,12 @@ void ViewImage::reset(const Setup& setup) {
   }
   minima_.resize(level_sizes_.size());
   maxima_.resize(level_sizes_.size());
-  minima_[0].assign(std::size_t(width_) * std::size_t(height_), std::numeric_limits<float>::infinity());
   if (setup.candidates) {
+    minima_[0].resize(std::size_t(width_) * std::size_t(height_));  // finish() fills it from the lists
     candidates_.resize(std::size_t(width_) * std::size_t(height_) * kCandidates);
     counts_.assign(std::size_t(width_) * std::size_t(height_), 0);
+  } else {
+    minima_[0].assign(std::size_t(width_) * std::size_t(height_), std::numeric_limits<float>::infinity());
   }
 }
 
@@ -96,10 +99,10 @@ bool ViewImage::footprint(const Aabb& box, PixelRect& rect, bool& clipped) const
   x_high += 1e-9 * (1.0 + std::fabs(x_high));
   y_low -= 1e-9 * (1.0 + std::fabs(y_low));
   y_high += 1e-9 * (1.0 + std::fabs(y_high));
-  const double left = (x_low + s.half_width) / s.pixel;
-  const double right = (x_high + s.half_width) / s.pixel;
-  const double bottom = (y_low + s.half_height) / s.pixel;
-  const double top = (y_high + s.half_height) / s.pixel;
+  const double left = (x_low + s.half_width) * inverse_pixel_;
+  const double right = (x_high + s.half_width) * inverse_pixel_;
+  const double bottom = (y_low + s.half_height) * inverse_pixel_;
+  const double top = (y_high + s.half_height) * inverse_pixel_;
   if (right < 0.0 || bottom > double(height_) || top < 0.0 || left > double(width_)) return false;
   rect.x0 = std::max(0, static_cast<int>(std::floor(std::max(left, -1.0))));
   rect.x1 = std::min(width_ - 1, static_cast<int>(std::floor(std::min(right, double(width_)))));
@@ -112,8 +115,10 @@ bool ViewImage::pixel_of(Vec3d d, int& px, int& py) const {
   const Setup& s = setup_;
   const double z = d.dot(s.f);
   if (!(z >= s.near_plane)) return false;
-  const double fx = (d.dot(s.l) / z + s.half_width) / s.pixel;
-  const double fy = (d.dot(s.u) / z + s.half_height) / s.pixel;
+  // One division: the reciprocal of z, and of the pixel (set in reset()).
+  const double inverse = 1.0 / z;
+  const double fx = (d.dot(s.l) * inverse + s.half_width) * inverse_pixel_;
+  const double fy = (d.dot(s.u) * inverse + s.half_height) * inverse_pixel_;
   if (!(fx >= 0.0 && fx < double(width_) && fy >= 0.0 && fy < double(height_))) return false;
   px = static_cast<int>(fx);
   py = static_cast<int>(fy);
@@ -122,21 +127,27 @@ bool ViewImage::pixel_of(Vec3d d, int& px, int& py) const {
 
 void ViewImage::draw(const PixelRect& rect, double near, std::uint32_t obstacle) {
   const float distance = round_down(near);
-  std::vector<float>& nearest = minima_[0];
+  if (!setup_.candidates) {
+    std::vector<float>& nearest = minima_[0];
+    for (int py = rect.y0; py <= rect.y1; ++py) {
+      for (int px = rect.x0; px <= rect.x1; ++px) nearest[index(px, py)] = std::min(nearest[index(px, py)], distance);
+    }
+    return;
+  }
+  // With lists the nearest distance is the head of the list: finish() reads
+  // it from there (one store per pixel less; drawing was 18% of a 20 cm query).
   for (int py = rect.y0; py <= rect.y1; ++py) {
-    for (int px = rect.x0; px <= rect.x1; ++px) {
-      const std::size_t i = index(px, py);
-      nearest[i] = std::min(nearest[i], distance);
-      if (!setup_.candidates) continue;
-      Candidate* list = &candidates_[i * kCandidates];
-      std::uint8_t& count = counts_[i];
-      int n = count & ~kOverflow;
+    const std::size_t row = index(rect.x0, py);
+    Candidate* list = &candidates_[row * kCandidates];
+    std::uint8_t* count = &counts_[row];
+    for (int px = rect.x0; px <= rect.x1; ++px, list += kCandidates, ++count) {
+      int n = *count & ~kOverflow;
       if (n == kCandidates) {
-        count |= kOverflow;
+        *count |= kOverflow;
         if (!(distance < list[n - 1].near)) continue;
         --n;  // the farthest one makes room
       } else {
-        ++count;
+        ++*count;
       }
       int at = n;
       while (at > 0 && list[at - 1].near > distance) {
@@ -149,6 +160,12 @@ void ViewImage::draw(const PixelRect& rect, double near, std::uint32_t obstacle)
 }
 
 void ViewImage::finish() {
+  if (setup_.candidates) {
+    std::vector<float>& nearest = minima_[0];
+    for (std::size_t i = 0; i < nearest.size(); ++i) {
+      nearest[i] = counts_[i] != 0 ? candidates_[i * kCandidates].near : std::numeric_limits<float>::infinity();
+    }
+  }
   maxima_[0] = minima_[0];
   build(minima_, false);
   build(maxima_, true);

@@ -109,6 +109,7 @@ class ViewImage {
   void build(Pyramid& pyramid, bool greatest);
 
   Setup setup_{};
+  double inverse_pixel_ = 1.0;
   int width_ = 0;
   int height_ = 0;
   Pyramid minima_;  // nearest obstacle per pixel, then minima of blocks
