@@ -89,6 +89,9 @@ constexpr double kPixelsPerFarVoxel = 1.0;
 constexpr double kMaxPixels = 400000.0;
 // Widest cone (in voxels across, where its obstacles are) worth sweeping.
 constexpr double kMaxSweepWidth = 16.0;
+// Child slots from the one nearest a point to the one farthest from it (to
+// be XORed with the nearest's slot): by the number of axes crossed.
+constexpr std::array<unsigned, 8> kNearToFar = {0, 1, 2, 4, 3, 5, 6, 7};
 // Regions of up to 2^k voxels per edge across the frustum's boundary are
 // counted as one block of centres (FrustumGeometry::count_grid_points).
 constexpr int kBlockCountDepth = 2;
@@ -97,19 +100,28 @@ constexpr int kBlockCountDepth = 2;
 
 GainCounter::GainCounter(const Grid& grid) : grid_(grid) {}
 
+// (Grid::center and min_corner are out of line; these inline forms are the
+// same formulas for finest voxels and aligned node keys: 3% of a 20 cm query.)
+Vec3d GainCounter::centre_of(Key key) const {
+  return {grid_.axis_center(key.x), grid_.axis_center(key.y), grid_.axis_center(key.z)};
+}
+
 Aabb GainCounter::centres_of(Key key, int depth) const {
-  const Vec3d low = grid_.center(key);
+  const Vec3d low = centre_of(key);
   const double span = grid_.resolution() * double((1u << depth) - 1u);
   return {low, low + Vec3d{span, span, span}};
 }
 
 bool GainCounter::in_frustum(Key key, Overlap parent) const {
   if (parent == Overlap::inside) return true;
-  return frustum_->contains_quickly(grid_.center(key));
+  return frustum_->contains_quickly(centre_of(key));
 }
 
 Aabb GainCounter::cube_of(Key key, int depth) const {
-  const Vec3d low = grid_.min_corner(key, depth);
+  const auto offset = std::int64_t{grid_.key_offset()};
+  const double res = grid_.resolution();
+  const Vec3d low{double(std::int64_t{key.x} - offset) * res, double(std::int64_t{key.y} - offset) * res,
+                  double(std::int64_t{key.z} - offset) * res};
   const double size = grid_.node_size(depth);
   return {low, low + Vec3d{size, size, size}};
 }
@@ -205,6 +217,8 @@ void GainCounter::setup_pose(const Frustum& frustum) {
     high_key[a] = std::uint32_t(std::clamp<std::int64_t>(std::int64_t(std::floor(to)) + grid_.key_offset() + 1, 0, last));
   }
   occupied_.reset(low_key, high_key);
+  touching_distance_ = setup.near_plane * std::sqrt(1.0 + setup.half_width * setup.half_width +
+                                                    setup.half_height * setup.half_height);
   draw_obstacles(FrustumGeometry(view), tree_->root(), Key{}, Overlap::partly);
   image_.finish();
   sweep_pose_ = {&occupied_, &grid_, apex, origin_key_, margin_};
@@ -220,7 +234,13 @@ void GainCounter::draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key k
       overlap = view.overlap(reach);
       if (overlap == Overlap::outside) return;
     }
-    for (unsigned slot = 0; slot < 8; ++slot) {
+    // Children nearest the apex first: the candidate lists are sorted by
+    // distance, and obstacles drawn near to far mostly append to them.
+    const Vec3d middle = (cube.min + cube.max) * 0.5;
+    const Vec3d apex = image_.setup().apex;
+    const unsigned near_slot = (apex.x >= middle.x ? 1u : 0u) | (apex.y >= middle.y ? 2u : 0u) | (apex.z >= middle.z ? 4u : 0u);
+    for (const unsigned order : kNearToFar) {
+      const unsigned slot = order ^ near_slot;
       draw_obstacles(view, tree_->child(ref, slot), child_key(key, depth, slot), overlap);
     }
     return;
@@ -233,8 +253,7 @@ void GainCounter::draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key k
   const ViewImage::Setup& s = image_.setup();
   const double near = std::sqrt(distance_squared(s.apex, reach));
   if (near > view.frustum.max_range) return;
-  const double widest = std::sqrt(1.0 + s.half_width * s.half_width + s.half_height * s.half_height);
-  if (near <= s.near_plane * widest) touching_ = true;
+  if (near <= touching_distance_) touching_ = true;
   PixelRect rect;
   bool clipped = false;
   if (!image_.footprint(reach, rect, clipped)) return;

@@ -82,9 +82,11 @@ class GainCounter {
   Visibility decide(Key key, int depth, float value);
   [[nodiscard]] Visibility ray_visibility_from_image(Key key) const;
   bool walk_is_clear(Key key);
+  [[nodiscard]] Vec3d centre_of(Key key) const;  // of a finest voxel
   [[nodiscard]] Aabb centres_of(Key key, int depth) const;
   /// Whether the centre of voxel `key` lies in the frustum, given what its parent region's overlap was.
   [[nodiscard]] bool in_frustum(Key key, Overlap parent) const;
+  /// The cube of the node at `depth` whose first voxel is `key`.
   [[nodiscard]] Aabb cube_of(Key key, int depth) const;
 
   const Grid& grid_;
@@ -98,6 +100,7 @@ class GainCounter {
   double margin_ = 0.0;
   bool use_image_ = false;
   bool touching_ = false;  // an obstacle touches the origin: the image proves no visibility
+  double touching_distance_ = 0.0;  // obstacles this near the apex may reach before the near plane
   bool fast_ = false;
   int fast_depth_ = 0;
 
