@@ -65,6 +65,7 @@ class GainCounter {
 
   void setup_pose(const Frustum& frustum);
   void draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key key, Overlap overlap);
+  void draw_solid_obstacle(const FrustumGeometry& view, Key key, int depth);
   // The walk over unknown space: a tree node, or a region of one value (a
   // childless node or part of one).
   void visit_node(NodeRef ref, Key key, Overlap overlap);
