@@ -36,7 +36,9 @@ std::vector<GainResult> OccupancyMap::information_gain(std::span<const Frustum> 
   const unsigned threads = std::min<std::size_t>(options.threads == 0 ? ThreadPool::hardware_threads() : options.threads,
                                                  std::max<std::size_t>(frustums.size(), 1));
   // One counter (image and buffers) per thread; the map is held per pose.
-  std::vector<detail::GainCounter> counters(threads, detail::GainCounter(grid()));
+  std::vector<detail::GainCounter> counters;
+  counters.reserve(threads);
+  for (unsigned t = 0; t < threads; ++t) counters.emplace_back(grid());
   auto answer = [&](std::size_t i, unsigned worker) {
     results[i] = detail::MapAccess::read(
         *this, [&](const OccupancyTree& tree) { return counters[worker].count(tree, frustums[i], options); });

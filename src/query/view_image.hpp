@@ -30,6 +30,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "umbra/core/aabb.hpp"
@@ -115,7 +116,8 @@ class ViewImage {
   Pyramid minima_;  // nearest obstacle per pixel, then minima of blocks
   Pyramid maxima_;  // the same pixels, then maxima of blocks
   std::vector<std::array<int, 2>> level_sizes_;  // width, height per level
-  std::vector<Candidate> candidates_;
+  std::unique_ptr<Candidate[]> candidates_;  // kCandidates per pixel
+  std::size_t candidate_capacity_ = 0;
   std::vector<std::uint8_t> counts_;
 };
 
