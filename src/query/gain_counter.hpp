@@ -80,7 +80,7 @@ class GainCounter {
   /// What the image and the sweep prove of a node (whose value, the maximum
   /// of its voxels, is `value`); for the fast method also what its corner
   /// voxels suggest.
-  Visibility decide(Key key, int depth, float value);
+  Visibility decide(Key key, int depth, float value, Overlap overlap);
   [[nodiscard]] Visibility ray_visibility_from_image(Key key) const;
   bool walk_is_clear(Key key);
   [[nodiscard]] Vec3d centre_of(Key key) const;  // of a finest voxel
