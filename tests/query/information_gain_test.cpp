@@ -202,6 +202,29 @@ INSTANTIATE_TEST_SUITE_P(DepthsAndPruning, RandomMapGain,
                                   (test.param.auto_prune ? "_pruned" : "_unpruned");
                          });
 
+TEST(InformationGain, FastEqualsBruteForceWhenNoRayIsBlocked) {
+  // An occupied voxel right behind the sensor (the origin on its face)
+  // blocks no ray of a frustum looking away from it, but it touches the
+  // origin, so the image proves nothing and fast decides its small nodes by
+  // their corner voxels everywhere, inside the frustum and across its
+  // boundary; every corner is visible, so fast must equal the definition.
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> coordinate(-1.5, 1.5);
+  OccupancyMap map(0.1, 5);
+  for (int i = 0; i < 400; ++i) map.update_miss(Vec3d{coordinate(rng), coordinate(rng), coordinate(rng)});
+  map.set_log_odds(Vec3d{-0.05, 0.05, 0.05}, 2.0f);
+  for (const double pitch : {-20.0, 0.0, 15.0}) {
+    for (const double yaw : {-25.0, 0.0, 30.0}) {
+      const Frustum f = Frustum::from_degrees({0.0, 0.03, 0.04}, yaw, pitch, 100, 60, 0.0, 1.2);
+      const Expected expected = brute_force_gain(map, f);
+      EXPECT_EQ(map.information_gain(f, {.method = GainMethod::fast}).unknown_voxels, expected.voxels) << describe(f);
+      EXPECT_EQ(map.information_gain(f, {.method = GainMethod::fast, .fast_depth = 3}).unknown_voxels,
+                expected.voxels)
+          << describe(f);
+    }
+  }
+}
+
 // --- hand-made cases ------------------------------------------------------------------
 
 TEST(InformationGain, SensorInsideAnOccupiedVoxelSeesNothing) {
