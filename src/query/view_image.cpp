@@ -118,20 +118,6 @@ bool ViewImage::footprint(const Aabb& box, PixelRect& rect, bool& clipped) const
   return rect.x0 <= rect.x1 && rect.y0 <= rect.y1;
 }
 
-bool ViewImage::pixel_of(Vec3d d, int& px, int& py) const {
-  const Setup& s = setup_;
-  const double z = d.dot(s.f);
-  if (!(z >= s.near_plane)) return false;
-  // One division: the reciprocal of z, and of the pixel (set in reset()).
-  const double inverse = 1.0 / z;
-  const double fx = (d.dot(s.l) * inverse + s.half_width) * inverse_pixel_;
-  const double fy = (d.dot(s.u) * inverse + s.half_height) * inverse_pixel_;
-  if (!(fx >= 0.0 && fx < double(width_) && fy >= 0.0 && fy < double(height_))) return false;
-  px = static_cast<int>(fx);
-  py = static_cast<int>(fy);
-  return true;
-}
-
 void ViewImage::draw(const PixelRect& rect, double near, std::uint32_t obstacle) {
   const float distance = round_down(near);
   if (!setup_.candidates) {

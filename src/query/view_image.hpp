@@ -75,7 +75,21 @@ class ViewImage {
   /// part of the box lies before the near plane.
   bool footprint(const Aabb& box, PixelRect& rect, bool& clipped) const;
   /// The pixel of one direction d (d.f > 0); false outside the image.
-  bool pixel_of(Vec3d d, int& x, int& y) const;
+  /// (Inline: called per ray, and a Vec3d passed by value to an out-of-line
+  /// call was copied through the stack, a store-forwarding stall per ray.)
+  bool pixel_of(const Vec3d& d, int& x, int& y) const {
+    const Setup& s = setup_;
+    const double z = d.dot(s.f);
+    if (!(z >= s.near_plane)) return false;
+    // One division: the reciprocal of z, and of the pixel (set in reset()).
+    const double inverse = 1.0 / z;
+    const double fx = (d.dot(s.l) * inverse + s.half_width) * inverse_pixel_;
+    const double fy = (d.dot(s.u) * inverse + s.half_height) * inverse_pixel_;
+    if (!(fx >= 0.0 && fx < double(width_) && fy >= 0.0 && fy < double(height_))) return false;
+    x = static_cast<int>(fx);
+    y = static_cast<int>(fy);
+    return true;
+  }
 
   /// Draws an obstacle at distance `near` into the pixels of `rect`.
   void draw(const PixelRect& rect, double near, std::uint32_t index);
