@@ -179,18 +179,44 @@ int FrustumGeometry::count_grid_points(const double* xs, const double* ys, const
   const double high = frustum.max_range - range_margin;
   const double beyond = frustum.max_range + range_margin;
   const double before = frustum.min_range - range_margin;
+  // Constraints the whole block surely meets are left out of the loop
+  // (most boundary blocks cross one plane or the range): rounded addition
+  // is monotone, so a point's sum is at least the sum of the least terms,
+  // added in the same order, and at most that of the greatest.
+  auto least = [n](const double* v) { return *std::min_element(v, v + n); };
+  auto greatest = [n](const double* v) { return *std::max_element(v, v + n); };
+  std::array<int, 4> planes{};
+  int active = 0;
+  for (int plane = 0; plane < 4; ++plane) {
+    if (least(sx[plane]) + least(sy[plane]) + least(sz[plane]) > margin) continue;  // surely inside this one
+    if (greatest(sx[plane]) + greatest(sy[plane]) + greatest(sz[plane]) < -margin) return 0;
+    planes[std::size_t(active++)] = plane;
+  }
+  double square_x[kMax], square_y[kMax], square_z[kMax];
+  for (int i = 0; i < n; ++i) {
+    square_x[i] = dx[i] * dx[i];
+    square_y[i] = dy[i] * dy[i];
+    square_z[i] = dz[i] * dz[i];
+  }
+  const bool range_sure = farthest2 <= high * high &&
+                          least(square_x) + least(square_y) + least(square_z) >= low * low;
+  if (range_sure && active == 0) return n * n * n;
   int count = 0;
   for (int k = 0; k < n; ++k) {
     for (int j = 0; j < n; ++j) {
       for (int i = 0; i < n; ++i) {
-        const double distance2 = dx[i] * dx[i] + dy[j] * dy[j] + dz[k] * dz[k];
-        if (distance2 > beyond * beyond || (before > 0.0 && distance2 < before * before)) continue;
-        bool sure = distance2 >= low * low && distance2 <= high * high;
+        bool sure = range_sure;
+        if (!range_sure) {
+          const double distance2 = square_x[i] + square_y[j] + square_z[k];
+          if (distance2 > beyond * beyond || (before > 0.0 && distance2 < before * before)) continue;
+          sure = distance2 >= low * low && distance2 <= high * high;
+        }
         bool out = false;
-        for (int plane = 0; plane < 4; ++plane) {
-          const double s = sx[plane][i] + sy[plane][j] + sz[plane][k];
-          out |= s < -margin;
-          sure &= s > margin;
+        for (int a = 0; a < active; ++a) {
+          const int plane = planes[std::size_t(a)];
+          const double value = sx[plane][i] + sy[plane][j] + sz[plane][k];
+          out |= value < -margin;
+          sure &= value > margin;
         }
         if (out) continue;
         if (sure || contains({xs[i], ys[j], zs[k]})) ++count;
