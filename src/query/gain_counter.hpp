@@ -38,6 +38,7 @@
 // the map for reading.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -121,6 +122,11 @@ class GainCounter {
   // hold no occupied voxel (its code prefix), so a ray through it needs no lookup.
   unsigned clear_shift_ = 64;
   std::uint64_t clear_prefix_ = 0;
+  // The nodes of the last lookup, path_[d] at depth d for d >= path_depth_
+  // (64: none yet), all holding voxel path_code_.
+  std::array<NodeRef, kMaxDepthLevels + 1> path_{};
+  std::uint64_t path_code_ = 0;
+  int path_depth_ = 64;
 };
 
 }  // namespace umbra::detail
