@@ -147,7 +147,12 @@ class OccupancyTree {
     return has_color() ? colors_[node.depth][node.group].weight[node.slot] : 0;
   }
   [[nodiscard]] bool contains_free(NodeRef node) const;
-  [[nodiscard]] bool contains_unknown(NodeRef node) const;
+  /// (Inline: the information gain asks it of every child it walks; out of
+  /// line it was 3% of a 20 cm query's cycles, 1.7% of its instructions.)
+  [[nodiscard]] bool contains_unknown(NodeRef node) const {
+    if (node.depth == 0) return thresholds_.is_unknown(log_odds(node));
+    return (inner_[node.depth][node.group].contains_unknown >> node.slot & 1u) != 0;
+  }
   /// True when the node has eight childless children of one value (only
   /// possible while automatic pruning is off).
   [[nodiscard]] bool all_children_same(NodeRef node) const {
