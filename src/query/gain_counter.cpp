@@ -321,7 +321,10 @@ GainCounter::Visibility GainCounter::decide(Key key, int depth, float value, Ove
   // inside when they agree (with an obstacle inside, the voxels in front of
   // it and behind it differ).
   const bool corners_decide = fast_ && depth <= fast_depth_ && !thresholds_.is_occupied(value);
-  if (!corners_decide) return node_visibility(key, depth, /*sweep=*/true);
+  // Fast sweeps nothing: a node a sweep would prove hidden is split until
+  // its parts' corners say blocked, the same answer, and that measured
+  // cheaper (20 cm 457 -> 441 us/pose, 5 cm 12.5 -> 11.8 ms/pose).
+  if (!corners_decide) return node_visibility(key, depth, /*sweep=*/!fast_);
   // A node the sweep proves hidden has both corners blocked, and one wholly
   // in the frustum that the image proves visible has both corners visible,
   // so the corners alone give the same answers there, for less: most of

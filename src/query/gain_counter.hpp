@@ -22,7 +22,9 @@
 // The fast method also decides an undecided node of at most 2^fast_depth
 // voxels per edge by the rays to its two opposite corner voxels when they
 // agree (both visible: counted whole; both blocked: skipped), and splits it
-// when they do not.
+// when they do not. Inside the frustum it asks the corners without the
+// image, and it sweeps nothing: a hidden node's corners are blocked, so
+// both give its answers for less.
 //
 // Every "surely" uses `margin_`, a bound on how far the walk's float
 // arithmetic strays from the exact segment (see margin_for()): a voxel the
