@@ -109,7 +109,8 @@ class GainCounter {
   int fast_depth_ = 0;
 
   ViewImage image_;
-  OccupiedBitmap occupied_;  // the drawn obstacles' voxels
+  bool sweeps_ = false;      // whether nodes may be swept (not for fast)
+  OccupiedBitmap occupied_;  // the drawn obstacles' voxels (kept only when sweeping)
   OcclusionSweep sweep_;
   OcclusionSweep::Pose sweep_pose_{};
   std::vector<Aabb> obstacles_;  // cubes of the drawn obstacles (not grown)
