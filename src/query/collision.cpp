@@ -17,9 +17,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "integrate/ray_walker.hpp"
 #include "map/map_access.hpp"
 #include "query/blocking_lookup.hpp"
+#include "query/exact_dda.hpp"
 #include "query/geometry.hpp"
 #include "query/query_walk.hpp"
 #include "umbra/map/occupancy_map.hpp"
@@ -200,14 +200,15 @@ CollisionResult check_segment(const OccupancyMap& map, const Segment& segment, c
     CollisionResult result;
     NodeRef blocking{};
     std::uint64_t blocking_code = 0;
-    // Returns false to stop the walk at the first blocking voxel.
+    // Stops the walk at the first blocking voxel; jumps over the node found
+    // to hold nothing blocking (from 2^3 voxels up).
     auto visit = [&](std::uint64_t code) {
-      if (!lookup.blocks(code, &blocking)) return true;
+      if (!lookup.blocks(code, &blocking)) return lookup.clear_depth();
       result.free = false;
       blocking_code = code;
-      return false;
+      return detail::kStopWalk;
     };
-    walk_ray(grid, from, *from_key, to, *to_key, visit);
+    detail::walk_segment_jumping(grid, from, *from_key, to, *to_key, visit);
     if (result.free) visit(morton::encode(*to_key));
     if (!result.free) result.blocking = detail::make_node(tree, grid, blocking, blocking_code);
     return result;

@@ -1,0 +1,189 @@
+// ExactDda: OctoMap's voxel-by-voxel ray stepping (computeRayKeys, castRay),
+// with an exact jump out of a whole node.
+//
+// The stepping is OctoMap's to the bit: double t_max/t_delta per axis from
+// the origin voxel's border, the axis with the smallest t_max steps, ties
+// going to the later axis. So the walk's events (one per voxel border
+// crossed) come in the order (t value ascending, axis descending), and the
+// t value of an axis's n-th border is t_max plus t_delta added n times, each
+// addition rounded: the repeated sum, not t_max + n * t_delta, which can
+// round differently and turn a tie the other way.
+//
+// leave_node(depth) uses that to move the walk, in one call, to the voxel
+// it would first enter outside the depth-`depth` node it is in, with the
+// t_max values it would have there: per axis it only adds t_delta the
+// number of times the walk would (a few predictable additions per border),
+// instead of choosing an axis and looking the voxel up at every step. A
+// segment or ray cast inside a node known to hold nothing blocking jumps over
+// it and visits exactly the voxels the plain walk visits outside it
+// (ray_walker_test.cpp checks this against walk_ray on degenerate rays).
+//
+// This file must not be compiled with floating-point contraction (FMA):
+// the sums would round differently from OctoMap's.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "core/assert.hpp"
+#include "integrate/ray_walker.hpp"  // octomap_norm
+#include "umbra/core/grid.hpp"
+#include "umbra/core/morton.hpp"
+#include "umbra/core/vec3.hpp"
+
+namespace umbra::detail {
+
+class ExactDda {
+ public:
+  /// How the half-voxel from the origin voxel's centre to its border is
+  /// rounded: computeRayKeys rounds it to float, castRay keeps it double.
+  enum class HalfVoxel { kFloat, kDouble };
+
+  /// At the voxel of `origin` (key `origin_key`), heading along the
+  /// normalised float `direction`.
+  ExactDda(const Grid& grid, Vec3f origin, Key origin_key, Vec3f direction, HalfVoxel half_voxel)
+      : key_{origin_key.x, origin_key.y, origin_key.z},
+        code_(morton::encode(origin_key)),
+        limit_(grid.keys_per_axis()) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const float d = direction[axis];
+      step_[axis] = d > 0.0f ? 1 : (d < 0.0f ? -1 : 0);
+      if (step_[axis] != 0) {
+        double border = grid.axis_center(origin_key[axis]);
+        const double half = step_[axis] * grid.resolution() * 0.5;
+        border += half_voxel == HalfVoxel::kFloat ? double(static_cast<float>(half)) : half;
+        t_max_[axis] = (border - origin[axis]) / d;
+        t_delta_[axis] = grid.resolution() / std::fabs(d);
+      } else {
+        t_max_[axis] = std::numeric_limits<double>::max();
+        t_delta_[axis] = std::numeric_limits<double>::max();
+      }
+    }
+  }
+
+  [[nodiscard]] std::uint64_t code() const { return code_; }
+  [[nodiscard]] Key key() const {
+    return {static_cast<std::uint32_t>(key_[0]), static_cast<std::uint32_t>(key_[1]),
+            static_cast<std::uint32_t>(key_[2])};
+  }
+  /// The ray parameter of the next border the walk crosses.
+  [[nodiscard]] double next_border() const { return std::min(std::min(t_max_[0], t_max_[1]), t_max_[2]); }
+
+  /// Into the next voxel; false (staying put) at the map's edge. `entered`
+  /// receives the ray parameter at which the ray enters it.
+  bool advance(double& entered) {
+    int dim;
+    if (t_max_[0] < t_max_[1]) {
+      dim = t_max_[0] < t_max_[2] ? 0 : 2;
+    } else {
+      dim = t_max_[1] < t_max_[2] ? 1 : 2;
+    }
+    const std::int64_t next = key_[dim] + step_[dim];
+    // A step of 0 on the chosen axis: no axis is left to move along.
+    if (step_[dim] == 0 || next < 0 || next >= limit_) return false;
+    entered = t_max_[dim];
+    key_[dim] = next;
+    t_max_[dim] += t_delta_[dim];
+    code_ = step_[dim] > 0 ? morton::increment(code_, dim) : morton::decrement(code_, dim);
+    return true;
+  }
+
+  /// What leave_node did.
+  enum class Left {
+    kOut,          // the walk is in the first voxel past the node; `entered` is where it entered it
+    kBeyondLimit,  // the walk crosses no border of the node's up to ray parameter `limit`: it ends inside
+    kMapEdge,      // the first voxel past the node is outside the map (the walk stays where it was)
+  };
+
+  /// As advance() repeated until the walk leaves the depth-`depth` node it
+  /// is in, without visiting the voxels in between (see the file comment).
+  /// A walk that stops once past `limit` (a segment's length, a cast's
+  /// range) passes `limit`, and the jump costs steps up to `limit` at most.
+  Left leave_node(int depth, double limit, double& entered) {
+    const std::int64_t size = std::int64_t{1} << depth;
+    // Per axis, the ray parameter of the border where the walk leaves the
+    // node: the steps to the node's face, each rounded as the walk rounds it.
+    double exit_t[3];
+    std::int64_t exit_steps[3];
+    int exit_axis = -1;
+    for (int axis = 2; axis >= 0; --axis) {  // the later axis first: it wins ties
+      exit_t[axis] = std::numeric_limits<double>::max();
+      exit_steps[axis] = 0;
+      if (step_[axis] == 0) continue;
+      const std::int64_t low = key_[axis] & ~(size - 1);
+      const std::int64_t steps = step_[axis] > 0 ? low + size - key_[axis] : key_[axis] - low + 1;
+      double t = t_max_[axis];
+      for (std::int64_t k = 1; k < steps && t <= limit; ++k) t += t_delta_[axis];
+      exit_t[axis] = t;
+      exit_steps[axis] = steps;
+      if (t <= limit && (exit_axis < 0 || t < exit_t[exit_axis])) exit_axis = axis;
+    }
+    if (exit_axis < 0) return Left::kBeyondLimit;
+    const double t_exit = exit_t[exit_axis];
+    const std::int64_t next = key_[exit_axis] + step_[exit_axis] * exit_steps[exit_axis];
+    if (next < 0 || next >= limit_) return Left::kMapEdge;
+    // The other axes step over every border that comes before the exit in
+    // the walk's order: a smaller t, or the same t on a later axis.
+    for (int axis = 0; axis < 3; ++axis) {
+      if (axis == exit_axis || step_[axis] == 0) continue;
+      double t = t_max_[axis];
+      std::int64_t steps = 0;
+      while (t < t_exit || (t == t_exit && axis > exit_axis)) {
+        t += t_delta_[axis];
+        ++steps;
+      }
+      UMBRA_ASSERT(steps < exit_steps[axis]);
+      t_max_[axis] = t;
+      key_[axis] += step_[axis] * steps;
+    }
+    key_[exit_axis] = next;
+    t_max_[exit_axis] = t_exit + t_delta_[exit_axis];
+    code_ = morton::encode(key());
+    entered = t_exit;
+    return Left::kOut;
+  }
+
+ private:
+  std::int64_t key_[3];
+  std::uint64_t code_;
+  std::int64_t limit_;
+  int step_[3];
+  double t_max_[3];
+  double t_delta_[3];
+};
+
+inline constexpr int kStopWalk = -1;
+
+/// The voxels of OctoMap's computeRayKeys(from, to): from the voxel of
+/// `from` up to, not including, the voxel of `to`, in walk order. visit(code)
+/// returns kStopWalk to end the walk, 0 to step on, or d >= 1 when the
+/// voxel lies in a depth-d node none of whose other voxels needs a visit:
+/// the walk then jumps to the first voxel past that node (it steps on
+/// voxel by voxel when the end voxel is in the node: it may stop there).
+template <typename Visit>
+void walk_segment_jumping(const Grid& grid, Vec3f from, Key from_key, Vec3f to, Key to_key, Visit&& visit) {
+  if (from_key == to_key) return;
+  const std::uint64_t end_code = morton::encode(to_key);
+  // Direction and length rounded as computeRayKeys rounds them.
+  Vec3f direction = to - from;
+  const auto length = static_cast<float>(octomap_norm(direction));
+  direction = {direction.x / length, direction.y / length, direction.z / length};
+  ExactDda dda(grid, from, from_key, direction, ExactDda::HalfVoxel::kFloat);
+  for (;;) {
+    const std::uint64_t code = dda.code();
+    const int depth = visit(code);
+    if (depth == kStopWalk) return;
+    double entered = 0.0;
+    if (depth >= 1 && (code >> (3 * depth)) != (end_code >> (3 * depth))) {
+      if (dda.leave_node(depth, length, entered) != ExactDda::Left::kOut) return;
+    } else if (!dda.advance(entered)) {
+      return;
+    }
+    // computeRayKeys stops at the end voxel, or once every next border lies
+    // beyond the segment's length (rounding can make it miss the end voxel).
+    if (dda.code() == end_code || dda.next_border() > length) return;
+  }
+}
+
+}  // namespace umbra::detail
