@@ -40,6 +40,7 @@ class ExactDda {
   /// rounded: computeRayKeys rounds it to float, castRay keeps it double.
   enum class HalfVoxel { kFloat, kDouble };
 
+  ExactDda() = default;
   /// At the voxel of `origin` (key `origin_key`), heading along the
   /// normalised float `direction`.
   ExactDda(const Grid& grid, Vec3f origin, Key origin_key, Vec3f direction, HalfVoxel half_voxel)
@@ -145,45 +146,68 @@ class ExactDda {
   }
 
  private:
-  std::int64_t key_[3];
-  std::uint64_t code_;
-  std::int64_t limit_;
-  int step_[3];
-  double t_max_[3];
-  double t_delta_[3];
+  std::int64_t key_[3] = {};
+  std::uint64_t code_ = 0;
+  std::int64_t limit_ = 0;
+  int step_[3] = {};
+  double t_max_[3] = {};
+  double t_delta_[3] = {};
 };
 
-inline constexpr int kStopWalk = -1;
+/// The voxels a segment check looks at: those of OctoMap's
+/// computeRayKeys(from, to), from the voxel of `from` up to, not including,
+/// the voxel of `to`, in walk order, then the voxel of `to` itself. After
+/// looking at code(), the caller says how far the walk may jump: next(d)
+/// with d >= 1 when the voxel lies in a depth-d node none of whose other
+/// voxels needs a look (the walk goes to the first voxel past that node; it
+/// steps on voxel by voxel when the end voxel is in the node), 0 otherwise.
+class SegmentWalk {
+ public:
+  SegmentWalk() = default;
+  SegmentWalk(const Grid& grid, Vec3f from, Key from_key, Vec3f to, Key to_key)
+      : end_code_(morton::encode(to_key)), code_(end_code_), at_end_(from_key == to_key) {
+    if (at_end_) return;
+    // Direction and length rounded as computeRayKeys rounds them.
+    Vec3f direction = to - from;
+    length_ = static_cast<float>(octomap_norm(direction));
+    direction = {direction.x / length_, direction.y / length_, direction.z / length_};
+    dda_ = ExactDda(grid, from, from_key, direction, ExactDda::HalfVoxel::kFloat);
+    code_ = dda_.code();
+  }
 
-/// The voxels of OctoMap's computeRayKeys(from, to): from the voxel of
-/// `from` up to, not including, the voxel of `to`, in walk order. visit(code)
-/// returns kStopWalk to end the walk, 0 to step on, or d >= 1 when the
-/// voxel lies in a depth-d node none of whose other voxels needs a visit:
-/// the walk then jumps to the first voxel past that node (it steps on
-/// voxel by voxel when the end voxel is in the node: it may stop there).
-template <typename Visit>
-void walk_segment_jumping(const Grid& grid, Vec3f from, Key from_key, Vec3f to, Key to_key, Visit&& visit) {
-  if (from_key == to_key) return;
-  const std::uint64_t end_code = morton::encode(to_key);
-  // Direction and length rounded as computeRayKeys rounds them.
-  Vec3f direction = to - from;
-  const auto length = static_cast<float>(octomap_norm(direction));
-  direction = {direction.x / length, direction.y / length, direction.z / length};
-  ExactDda dda(grid, from, from_key, direction, ExactDda::HalfVoxel::kFloat);
-  for (;;) {
-    const std::uint64_t code = dda.code();
-    const int depth = visit(code);
-    if (depth == kStopWalk) return;
-    double entered = 0.0;
-    if (depth >= 1 && (code >> (3 * depth)) != (end_code >> (3 * depth))) {
-      if (dda.leave_node(depth, length, entered) != ExactDda::Left::kOut) return;
-    } else if (!dda.advance(entered)) {
+  [[nodiscard]] std::uint64_t code() const { return code_; }
+  /// Whether code() is the end voxel (the last one).
+  [[nodiscard]] bool at_end() const { return at_end_; }
+  /// Whether the end voxel has been passed: nothing is left to look at.
+  [[nodiscard]] bool done() const { return done_; }
+
+  void next(int jump_depth) {
+    if (at_end_) {
+      done_ = true;
       return;
+    }
+    double entered = 0.0;
+    const int shift = 3 * jump_depth;
+    bool going;
+    if (jump_depth >= 1 && (code_ >> shift) != (end_code_ >> shift)) {
+      going = dda_.leave_node(jump_depth, length_, entered) == ExactDda::Left::kOut;
+    } else {
+      going = dda_.advance(entered);
     }
     // computeRayKeys stops at the end voxel, or once every next border lies
     // beyond the segment's length (rounding can make it miss the end voxel).
-    if (dda.code() == end_code || dda.next_border() > length) return;
+    going = going && dda_.code() != end_code_ && dda_.next_border() <= length_;
+    at_end_ = !going;
+    code_ = going ? dda_.code() : end_code_;
   }
-}
+
+ private:
+  ExactDda dda_;
+  std::uint64_t end_code_ = 0;
+  std::uint64_t code_ = 0;
+  double length_ = 0.0;  // OctoMap's float value
+  bool at_end_ = true;
+  bool done_ = false;
+};
 
 }  // namespace umbra::detail

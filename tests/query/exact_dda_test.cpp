@@ -1,4 +1,4 @@
-// ExactDda and walk_segment_jumping against a literal, key-based copy of
+// ExactDda and SegmentWalk against a literal, key-based copy of
 // OctoMap's computeRayKeys (tests/support/dense_grid). Jumps are checked
 // against the voxel-by-voxel walk: with an oracle that marks nodes of
 // depth 1 to 4 as "jump over me", the jumping walk must visit exactly the
@@ -55,10 +55,16 @@ std::vector<Key> jumping_walk(const Grid& grid, Vec3f from, Vec3f to, std::uint3
   std::vector<Key> keys;
   const Key from_key = grid.key(Vec3d(from));
   const Key to_key = grid.key(Vec3d(to));
-  detail::walk_segment_jumping(grid, from, from_key, to, to_key, [&](std::uint64_t code) {
-    keys.push_back(morton::decode(code));
-    return one_in == 0 ? 0 : marked_depth(keys.back(), seed, one_in);
-  });
+  detail::SegmentWalk walk(grid, from, from_key, to, to_key);
+  while (!walk.at_end()) {
+    keys.push_back(morton::decode(walk.code()));
+    walk.next(one_in == 0 ? 0 : marked_depth(keys.back(), seed, one_in));
+  }
+  // Then the end voxel, and nothing after it.
+  EXPECT_EQ(walk.code(), morton::encode(to_key));
+  EXPECT_FALSE(walk.done());
+  walk.next(0);
+  EXPECT_TRUE(walk.done());
   return keys;
 }
 
