@@ -103,49 +103,90 @@ class ExactDda {
   /// range) passes `limit`, and the jump costs steps up to `limit` at most.
   Left leave_node(int depth, double limit, double& entered) {
     const std::int64_t size = std::int64_t{1} << depth;
-    // Per axis, the ray parameter of the border where the walk leaves the
-    // node: the steps to the node's face, each rounded as the walk rounds it.
-    double exit_t[3];
-    std::int64_t exit_steps[3];
-    int exit_axis = -1;
-    for (int axis = 2; axis >= 0; --axis) {  // the later axis first: it wins ties
-      exit_t[axis] = std::numeric_limits<double>::max();
-      exit_steps[axis] = 0;
-      if (step_[axis] == 0) continue;
-      const std::int64_t low = key_[axis] & ~(size - 1);
-      const std::int64_t steps = step_[axis] > 0 ? low + size - key_[axis] : key_[axis] - low + 1;
-      double t = t_max_[axis];
-      for (std::int64_t k = 1; k < steps && t <= limit; ++k) t += t_delta_[axis];
-      exit_t[axis] = t;
-      exit_steps[axis] = steps;
-      if (t <= limit && (exit_axis < 0 || t < exit_t[exit_axis])) exit_axis = axis;
-    }
-    if (exit_axis < 0) return Left::kBeyondLimit;
-    const double t_exit = exit_t[exit_axis];
-    const std::int64_t next = key_[exit_axis] + step_[exit_axis] * exit_steps[exit_axis];
-    if (next < 0 || next >= limit_) return Left::kMapEdge;
-    // The other axes step over every border that comes before the exit in
-    // the walk's order: a smaller t, or the same t on a later axis.
+    std::int64_t exit_steps[3];  // per axis, the steps that take the walk out of the node (0: never)
     for (int axis = 0; axis < 3; ++axis) {
-      if (axis == exit_axis || step_[axis] == 0) continue;
-      double t = t_max_[axis];
-      std::int64_t steps = 0;
-      while (t < t_exit || (t == t_exit && axis > exit_axis)) {
-        t += t_delta_[axis];
-        ++steps;
-      }
-      UMBRA_ASSERT(steps < exit_steps[axis]);
-      t_max_[axis] = t;
-      key_[axis] += step_[axis] * steps;
+      const std::int64_t low = key_[axis] & ~(size - 1);
+      exit_steps[axis] = step_[axis] == 0 ? 0 : (step_[axis] > 0 ? low + size - key_[axis] : key_[axis] - low + 1);
     }
-    key_[exit_axis] = next;
-    t_max_[exit_axis] = t_exit + t_delta_[exit_axis];
-    code_ = morton::encode(key());
-    entered = t_exit;
-    return Left::kOut;
+    // Guess the axis that leaves first from t_max + (n - 1) * t_delta, then
+    // check the guess with the exact sums: the exact sums of the other axes
+    // are needed anyway, and those of a wrong guess are not (about 250
+    // additions per segment check on TUM at 2 cm computed for every axis,
+    // against about 100 this way).
+    int guess = -1;
+    double earliest = 0.0;
+    for (int axis = 2; axis >= 0; --axis) {  // the later axis first: it wins ties
+      if (step_[axis] == 0) continue;
+      const double t = t_max_[axis] + double(exit_steps[axis] - 1) * t_delta_[axis];
+      if (guess < 0 || t < earliest) {
+        guess = axis;
+        earliest = t;
+      }
+    }
+    Left left = Left::kOut;
+    if (leave_through(guess, exit_steps, limit, entered, left)) return left;
+    // A near tie the guess got wrong.
+    for (int axis = 2; axis >= 0; --axis) {
+      if (axis != guess && step_[axis] != 0 && leave_through(axis, exit_steps, limit, entered, left)) return left;
+    }
+    UMBRA_ASSERT(false && "one axis leaves the node first");
+    return Left::kBeyondLimit;
   }
 
  private:
+  /// leave_node if `axis` is the one that leaves the node first; false
+  /// (changing nothing) when another axis leaves it before.
+  bool leave_through(int axis, const std::int64_t (&exit_steps)[3], double limit, double& entered, Left& left) {
+    double t_exit = t_max_[axis];
+    for (std::int64_t k = 1; k < exit_steps[axis] && t_exit <= limit; ++k) t_exit += t_delta_[axis];
+    const bool beyond = t_exit > limit;
+    // The other axes step over every border that comes before the exit in
+    // the walk's order (a smaller t, or the same t on a later axis), or, when
+    // the exit lies beyond the limit, every border up to the limit. Reaching
+    // their own exit that way refutes `axis`.
+    double t_next[3];
+    std::int64_t steps[3] = {0, 0, 0};
+    for (int other = 0; other < 3; ++other) {
+      if (other == axis || step_[other] == 0) continue;
+      double t = t_max_[other];
+      std::int64_t n = 0;
+      if (beyond) {
+        while (n < exit_steps[other] && t <= limit) {
+          t += t_delta_[other];
+          ++n;
+        }
+      } else {
+        while (n < exit_steps[other] && (t < t_exit || (t == t_exit && other > axis))) {
+          t += t_delta_[other];
+          ++n;
+        }
+      }
+      if (n == exit_steps[other]) return false;
+      t_next[other] = t;
+      steps[other] = n;
+    }
+    if (beyond) {
+      left = Left::kBeyondLimit;
+      return true;
+    }
+    const std::int64_t next = key_[axis] + step_[axis] * exit_steps[axis];
+    if (next < 0 || next >= limit_) {
+      left = Left::kMapEdge;
+      return true;
+    }
+    for (int other = 0; other < 3; ++other) {
+      if (other == axis || step_[other] == 0) continue;
+      t_max_[other] = t_next[other];
+      key_[other] += step_[other] * steps[other];
+    }
+    key_[axis] = next;
+    t_max_[axis] = t_exit + t_delta_[axis];
+    code_ = morton::encode(key());
+    entered = t_exit;
+    left = Left::kOut;
+    return true;
+  }
+
   std::int64_t key_[3] = {};
   std::uint64_t code_ = 0;
   std::int64_t limit_ = 0;
