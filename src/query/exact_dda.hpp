@@ -16,7 +16,9 @@
 // instead of choosing an axis and looking the voxel up at every step. A
 // segment or ray cast inside a node known to hold nothing blocking jumps over
 // it and visits exactly the voxels the plain walk visits outside it
-// (ray_walker_test.cpp checks this against walk_ray on degenerate rays).
+// (tests/query/exact_dda_test.cpp checks this against a copy of
+// computeRayKeys, on rays whose crossings tie). SegmentWalk, below, is a
+// segment check's walk built on it.
 //
 // This file must not be compiled with floating-point contraction (FMA):
 // the sums would round differently from OctoMap's.
