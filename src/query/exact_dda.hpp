@@ -212,8 +212,9 @@ class SegmentWalk {
     if (at_end_) return;
     // Direction and length rounded as computeRayKeys rounds them.
     Vec3f direction = to - from;
-    length_ = static_cast<float>(octomap_norm(direction));
-    direction = {direction.x / length_, direction.y / length_, direction.z / length_};
+    const auto length = static_cast<float>(octomap_norm(direction));
+    direction = {direction.x / length, direction.y / length, direction.z / length};  // float division, as OctoMap
+    length_ = length;
     dda_ = ExactDda(grid, from, from_key, direction, ExactDda::HalfVoxel::kFloat);
     code_ = dda_.code();
   }
