@@ -254,6 +254,7 @@ bool OccupancyTree::contains_free(NodeRef node) const {
   return (inner_[node.depth][node.group].contains_free & bit(node.slot)) != 0;
 }
 
+
 // --- writing single voxels ---------------------------------------------------
 
 std::uint32_t OccupancyTree::descend_splitting(std::uint64_t code, Path& path) {
