@@ -186,6 +186,7 @@ void GainCounter::setup_pose(const Frustum& frustum) {
   setup.pixel = pixel;
   setup.near_plane = res * 1e-3;
   setup.candidates = true;
+  setup.maxima = sweeps_;  // only the sweeps read them
   image_.reset(setup);
 
   // Obstacles anywhere in the image's pyramid up to the range (also before

@@ -159,8 +159,9 @@ void ViewImage::finish() {
       nearest[i] = counts_[i] != 0 ? candidates_[i * kCandidates].near : std::numeric_limits<float>::infinity();
     }
   }
-  maxima_[0] = minima_[0];
   build(minima_, false);
+  if (!setup_.maxima) return;  // (the information gain's fast method sweeps nothing, so never reads them)
+  maxima_[0] = minima_[0];
   build(maxima_, true);
 }
 

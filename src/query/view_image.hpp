@@ -33,6 +33,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/assert.hpp"
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/vec3.hpp"
 
@@ -60,6 +61,7 @@ class ViewImage {
     double pixel;            // pixel edge, image units
     double near_plane;       // boxes are clipped at d.f = near_plane (> 0)
     bool candidates;         // keep candidate lists (else only the nearest distances)
+    bool maxima = true;      // build the pyramid of maxima (nearest_in_every_pixel)
   };
 
   /// Starts an empty image (nothing drawn: nearest is +infinity everywhere).
@@ -101,7 +103,10 @@ class ViewImage {
   [[nodiscard]] float nearest(const PixelRect& rect) const { return read(minima_, rect, false); }
   /// The greatest nearest-obstacle distance over the pixels of `rect` (an
   /// upper bound, for the same reason).
-  [[nodiscard]] float nearest_in_every_pixel(const PixelRect& rect) const { return read(maxima_, rect, true); }
+  [[nodiscard]] float nearest_in_every_pixel(const PixelRect& rect) const {
+    UMBRA_ASSERT(setup_.maxima);
+    return read(maxima_, rect, true);
+  }
   [[nodiscard]] float nearest(int x, int y) const { return minima_[0][index(x, y)]; }
   /// The candidates of a pixel, nearest first; `overflow` when more
   /// obstacles were drawn there (always, when the image keeps no lists).
