@@ -111,4 +111,42 @@ struct FrustumGeometry {
   double cos_half_h, sin_half_h, cos_half_v, sin_half_v;
 };
 
+// Inline: the information gain asks it of every node it walks (12% of a
+// fast 20 cm query's cycles as an out-of-line call).
+inline Overlap FrustumGeometry::overlap(const Aabb& box) const {
+  const Vec3d o = frustum.origin;
+  const double nearest2 = distance_squared(o, box);
+  const double farthest2 = farthest_distance_squared(o, box);
+  const double range_margin = 1e-9 * (frustum.max_range + 1.0);
+  const double beyond = frustum.max_range + range_margin;
+  if (nearest2 > beyond * beyond) return Overlap::outside;
+  // Squared distances against squared bounds, no sqrt (a sqrt per node was
+  // a third of this test; the ulps squaring moves are far inside range_margin).
+  const double before = frustum.min_range - range_margin;
+  if (before > 0.0 && farthest2 < before * before) return Overlap::outside;
+  const double within = frustum.min_range + range_margin;
+  const double short_of = frustum.max_range - range_margin;
+  bool all_inside = farthest2 <= short_of * short_of && nearest2 >= within * within;
+  // Each side plane's value over the box: its value at the centre plus or
+  // minus the half extents projected on the normal (the extremes over the
+  // eight corners, in four multiplications instead of eight dot products).
+  const Vec3d half = (box.max - box.min) * 0.5;
+  const Vec3d centre = box.min + half - o;
+  // The plane tests and the per-point atan2 test may round differently by a
+  // few ulps: decide only with a margin, leave the rest to contains(). The
+  // margin scales with the farthest point's distance, bounded here by the
+  // sum of its coordinates' magnitudes (>= the distance).
+  const double farthest_l1 = std::fabs(centre.x) + half.x + std::fabs(centre.y) + half.y + std::fabs(centre.z) + half.z;
+  const double margin = 1e-9 * (farthest_l1 + 1.0);
+  for (const Vec3d& normal : side) {
+    const double middle = normal.dot(centre);
+    const double reach = std::fabs(normal.x) * half.x + std::fabs(normal.y) * half.y + std::fabs(normal.z) * half.z;
+    const double lowest = middle - reach;
+    const double highest = middle + reach;
+    if (highest < -margin) return Overlap::outside;
+    if (lowest <= margin) all_inside = false;
+  }
+  return all_inside ? Overlap::inside : Overlap::partly;
+}
+
 }  // namespace umbra::detail
