@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/radix_sort.hpp"
+#include "integrate/end_voxels.hpp"
 #include "integrate/ray_walker.hpp"
 
 namespace umbra {
@@ -65,34 +66,6 @@ InsertStats& InsertStats::operator+=(const InsertStats& other) {
 }
 
 namespace {
-
-/// One voxel that end points fall in: its Morton code and the first point
-/// (in scan order) that fell in it.
-struct EndVoxel {
-  std::uint64_t code;
-  std::uint32_t point;
-};
-
-/// The end voxels of points [first, first + count) of a scan, with repeats
-/// in a row dropped (neighbouring points, pixels of a depth image or beams of
-/// a scan line, often share a voxel: a Kinect frame at 16 cm keeps 11k of its
-/// 257k points), and what was skipped.
-void end_voxels(const Grid& grid, std::span<const Vec3f> points, std::size_t first, std::size_t count,
-                std::vector<EndVoxel>& voxels, InsertStats& stats) {
-  voxels.clear();
-  voxels.reserve(count);
-  for (std::size_t i = first; i < first + count; ++i) {
-    const Vec3f& p = points[i];
-    if (!p.is_finite()) {
-      ++stats.non_finite;
-    } else if (auto key = grid.key_checked(p)) {
-      const std::uint64_t code = morton::encode(*key);
-      if (voxels.empty() || voxels.back().code != code) voxels.push_back({code, static_cast<std::uint32_t>(i)});
-    } else {
-      ++stats.out_of_bounds;
-    }
-  }
-}
 
 /// The colour samples of a scan: the points that give a hit, in scan order,
 /// then stably sorted by voxel (so each voxel blends its samples in order).
@@ -233,7 +206,8 @@ InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f
     // the voxel (fast: its rays then cross the voxels the simple
     // integrator's would; rays to centres cleared 2% of the surface voxels
     // differently from it on depth-camera frames at 2 cm). The voxels are
-    // found in parallel.
+    // found, sorted and made unique in parallel, a part of the scan per
+    // thread, and the parts merged (end_voxels.hpp).
     if (points.size() > std::numeric_limits<std::uint32_t>::max()) {
       throw std::invalid_argument("too many points in one scan: " + std::to_string(points.size()));
     }
@@ -242,14 +216,8 @@ InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f
     split(points.size(), threads, [&](std::size_t begin, std::size_t end, unsigned, std::size_t chunk) {
       end_voxels(grid, points, begin, end - begin, parts[chunk], part_stats[chunk]);
     });
-    std::vector<EndVoxel> voxels = std::move(parts[0]);
-    for (unsigned c = 1; c < threads; ++c) voxels.insert(voxels.end(), parts[c].begin(), parts[c].end());
     for (const InsertStats& s : part_stats) stats += s;
-    // Stable: the first point of a voxel stays first among its equals.
-    radix_sort(voxels, 3 * grid.depth_levels(), [](const EndVoxel& v) { return v.code; });
-    voxels.erase(std::unique(voxels.begin(), voxels.end(),
-                             [](const EndVoxel& a, const EndVoxel& b) { return a.code == b.code; }),
-                 voxels.end());
+    const std::vector<EndVoxel> voxels = merge_end_voxels(parts);
     centres.reserve(voxels.size());
     for (const EndVoxel& v : voxels) {
       centres.push_back(options.integrator == IntegratorKind::fast ? points[v.point]
