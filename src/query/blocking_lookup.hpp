@@ -73,6 +73,10 @@ class BlockingLookup {
     }
   }
 
+  /// After blocks() returned false: the depth of the node found to hold
+  /// nothing blocking around that voxel (a path may jump over it).
+  [[nodiscard]] int clear_depth() const { return static_cast<int>(clear_shift_ / 3); }
+
  private:
   QueryScope scope_;
   BlockingRule rule_;

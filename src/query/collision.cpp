@@ -17,9 +17,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "integrate/ray_walker.hpp"
 #include "map/map_access.hpp"
 #include "query/blocking_lookup.hpp"
+#include "query/exact_dda.hpp"
 #include "query/geometry.hpp"
 #include "query/query_walk.hpp"
 #include "umbra/map/occupancy_map.hpp"
@@ -33,6 +33,7 @@ using detail::NodeContext;
 using detail::child_key;
 using detail::Overlap;
 using detail::QueryScope;
+using detail::SegmentWalk;
 
 /// Finest keys [min, max] per axis of a region's bounding box.
 struct KeyBounds {
@@ -185,31 +186,34 @@ CollisionResult check_region(const OccupancyMap& map, const Shape& shape, const 
   });
 }
 
-CollisionResult check_segment(const OccupancyMap& map, const Segment& segment, const CollisionOptions& options) {
+/// A segment's walk; throws for a bad segment or one reaching outside the map.
+SegmentWalk segment_walk(const Grid& grid, const Segment& segment) {
   segment.validate();
-  const Grid& grid = map.grid();
   // The walk works on float points, as OctoMap's computeRayKeys.
   const Vec3f from(segment.from);
   const Vec3f to(segment.to);
   const std::optional<Key> from_key = grid.key_checked(from);
   const std::optional<Key> to_key = grid.key_checked(to);
   if (!from_key || !to_key) (void)grid.key(Vec3d(!from_key ? from : to));  // throws std::out_of_range naming it
+  return {grid, from, *from_key, to, *to_key};
+}
+
+CollisionResult check_segment(const OccupancyMap& map, const Segment& segment, const CollisionOptions& options) {
+  SegmentWalk walk = segment_walk(map.grid(), segment);
   return detail::MapAccess::read(map, [&](const OccupancyTree& tree) {
     const QueryScope scope = detail::scope_of(map, options.depth);
     BlockingLookup lookup(scope, rule_of(tree, options));
     CollisionResult result;
-    NodeRef blocking{};
-    std::uint64_t blocking_code = 0;
-    // Returns false to stop the walk at the first blocking voxel.
-    auto visit = [&](std::uint64_t code) {
-      if (!lookup.blocks(code, &blocking)) return true;
-      result.free = false;
-      blocking_code = code;
-      return false;
-    };
-    walk_ray(grid, from, *from_key, to, *to_key, visit);
-    if (result.free) visit(morton::encode(*to_key));
-    if (!result.free) result.blocking = detail::make_node(tree, grid, blocking, blocking_code);
+    // Stops at the first blocking voxel; jumps over each node found to hold
+    // nothing blocking (from 2^3 voxels up).
+    for (; !walk.done(); walk.next(lookup.clear_depth())) {
+      NodeRef blocking{};
+      if (lookup.blocks(walk.code(), &blocking)) {
+        result.free = false;
+        result.blocking = detail::make_node(tree, map.grid(), blocking, walk.code());
+        break;
+      }
+    }
     return result;
   });
 }

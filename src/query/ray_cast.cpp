@@ -5,7 +5,8 @@
 // from the origin voxel's border, ties to the later axis), so that they hit
 // the same voxel as OctoMap does on the same map. Looking voxels up goes
 // through BlockingLookup: inside a node known to hold nothing that stops
-// the ray, a step costs no lookup.
+// the ray, a step costs no lookup, and a cast jumps over such a node of
+// 2^3 voxels or more in one step (ExactDda::leave_node, exact).
 //
 // cast_ray measures range along the ray (the distance at which it enters a
 // voxel); cast_ray_octomap keeps OctoMap's rules: the origin voxel is
@@ -21,61 +22,14 @@
 #include "integrate/ray_walker.hpp"
 #include "map/map_access.hpp"
 #include "query/blocking_lookup.hpp"
+#include "query/exact_dda.hpp"
 #include "query/query_walk.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {
 namespace {
 
-/// OctoMap's ray stepping state.
-class RayStepper {
- public:
-  RayStepper(const Grid& grid, Vec3f origin, Key origin_key, Vec3f direction)
-      : key_{origin_key.x, origin_key.y, origin_key.z}, limit_(grid.keys_per_axis()) {
-    for (int axis = 0; axis < 3; ++axis) {
-      const float d = direction[axis];
-      step_[axis] = d > 0.0f ? 1 : (d < 0.0f ? -1 : 0);
-      if (step_[axis] != 0) {
-        const double border = grid.axis_center(origin_key[axis]) + double(step_[axis] * grid.resolution() * 0.5);
-        t_max_[axis] = (border - origin[axis]) / d;
-        t_delta_[axis] = grid.resolution() / std::fabs(d);
-      } else {
-        t_max_[axis] = std::numeric_limits<double>::max();
-        t_delta_[axis] = std::numeric_limits<double>::max();
-      }
-    }
-  }
-
-  [[nodiscard]] Key key() const {
-    return {static_cast<std::uint32_t>(key_[0]), static_cast<std::uint32_t>(key_[1]),
-            static_cast<std::uint32_t>(key_[2])};
-  }
-
-  /// Into the next voxel; false (staying put) at the map's edge. `entered`
-  /// receives the ray parameter at which the ray enters it.
-  bool advance(double& entered) {
-    int dim;
-    if (t_max_[0] < t_max_[1]) {
-      dim = t_max_[0] < t_max_[2] ? 0 : 2;
-    } else {
-      dim = t_max_[1] < t_max_[2] ? 1 : 2;
-    }
-    const std::int64_t next = key_[dim] + step_[dim];
-    // A step of 0 on the chosen axis: no axis is left to move along.
-    if (step_[dim] == 0 || next < 0 || next >= limit_) return false;
-    entered = t_max_[dim];
-    key_[dim] = next;
-    t_max_[dim] += t_delta_[dim];
-    return true;
-  }
-
- private:
-  std::int64_t key_[3];
-  std::int64_t limit_;
-  int step_[3];
-  double t_max_[3];
-  double t_delta_[3];
-};
+using detail::ExactDda;
 
 /// The float origin and normalised float direction OctoMap casts with.
 struct CastStart {
@@ -118,13 +72,14 @@ RayHit OccupancyMap::cast_ray(Vec3d origin, Vec3d direction, const RayCastOption
   return detail::MapAccess::read(*this, [&](const OccupancyTree& tree) {
     const detail::QueryScope scope = detail::scope_of(*this, options.depth);
     detail::BlockingLookup lookup(scope, {tree.thresholds(), options.stop_at_unknown});
-    RayStepper stepper(grid_, start.origin, start.origin_key, start.direction);
+    ExactDda stepper(grid_, start.origin, start.origin_key, start.direction, ExactDda::HalfVoxel::kDouble);
     const bool limited = options.max_range > 0.0;
+    const double limit = limited ? options.max_range : std::numeric_limits<double>::infinity();
     double entered = 0.0;
     RayHit hit;
     for (;;) {
       if (limited && entered > options.max_range) return hit;
-      const std::uint64_t code = morton::encode(stepper.key());
+      const std::uint64_t code = stepper.code();
       NodeRef node{};
       if (lookup.blocks(code, &node)) {
         hit.hit = true;
@@ -133,7 +88,13 @@ RayHit OccupancyMap::cast_ray(Vec3d origin, Vec3d direction, const RayCastOption
         hit.point = Vec3d(start.origin) + Vec3d(start.direction) * entered;
         return hit;
       }
-      if (!stepper.advance(entered)) return hit;
+      // Inside a node holding nothing that stops the ray (from 2^3 voxels
+      // up), the cast jumps to the first voxel past it.
+      if (lookup.clear_depth() >= 1) {
+        if (stepper.leave_node(lookup.clear_depth(), limit, entered) != ExactDda::Left::kOut) return hit;
+      } else if (!stepper.advance(entered)) {
+        return hit;
+      }
     }
   });
 }
@@ -143,7 +104,7 @@ bool OccupancyMap::cast_ray_octomap(Vec3f origin, Vec3f direction, Vec3f& end, b
   const CastStart start = prepare(grid_, Vec3d(origin), Vec3d(direction));
   return detail::MapAccess::read(*this, [&](const OccupancyTree& tree) {
     const LogOddsThresholds& t = tree.thresholds();
-    RayStepper stepper(grid_, start.origin, start.origin_key, start.direction);
+    ExactDda stepper(grid_, start.origin, start.origin_key, start.direction, ExactDda::HalfVoxel::kDouble);
     const bool limited = max_range > 0.0;
     const double max_range_squared = max_range * max_range;
     auto state_of = [&](Key key) { return t.classify(tree.find(morton::encode(key), 0).log_odds); };

@@ -254,10 +254,6 @@ bool OccupancyTree::contains_free(NodeRef node) const {
   return (inner_[node.depth][node.group].contains_free & bit(node.slot)) != 0;
 }
 
-bool OccupancyTree::contains_unknown(NodeRef node) const {
-  if (node.depth == 0) return thresholds_.is_unknown(log_odds(node));
-  return (inner_[node.depth][node.group].contains_unknown & bit(node.slot)) != 0;
-}
 
 // --- writing single voxels ---------------------------------------------------
 

@@ -147,7 +147,11 @@ class OccupancyTree {
     return has_color() ? colors_[node.depth][node.group].weight[node.slot] : 0;
   }
   [[nodiscard]] bool contains_free(NodeRef node) const;
-  [[nodiscard]] bool contains_unknown(NodeRef node) const;
+  // Inline: a segment check asks it at every level of every descent.
+  [[nodiscard]] bool contains_unknown(NodeRef node) const {
+    if (node.depth == 0) return thresholds_.is_unknown(leaves_[node.group].log_odds[node.slot]);
+    return (inner_[node.depth][node.group].contains_unknown >> node.slot & 1u) != 0;
+  }
   /// True when the node has eight childless children of one value (only
   /// possible while automatic pruning is off).
   [[nodiscard]] bool all_children_same(NodeRef node) const {
