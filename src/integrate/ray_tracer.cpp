@@ -108,13 +108,10 @@ void RayTracer::add_end(const ScanContext& scan, const PreparedRay& ray) {
   if (ray.hit && !scan.hits_first) batch_.add_hit(ray.end_code);
 }
 
-void RayTracer::add_hits(const ScanContext& scan, std::span<const PreparedRay> rays) {
+void RayTracer::add_hits(const ScanContext& scan, std::span<const std::vector<std::uint64_t>> hit_parts) {
   std::vector<std::uint64_t> hits;  // the finest voxels holding a hit
-  for (const PreparedRay& ray : rays) {
-    if (!ray.hit || (scan.box_keys && !scan.box_keys->contains(ray.end_key))) continue;
-    batch_.add_hit(ray.end_code);
-    hits.push_back(ray.end_code);
-  }
+  for (const std::vector<std::uint64_t>& part : hit_parts) hits.insert(hits.end(), part.begin(), part.end());
+  for (const std::uint64_t code : hits) batch_.add_hit(code);
   if (scan.clear_depth == 0) return;
   // Coarse nodes next to a surface are not cleared whole either: a ray that
   // grazes a wall would otherwise clear wall voxels this scan did not hit,

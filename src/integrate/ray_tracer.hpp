@@ -89,15 +89,19 @@ struct PreparedRay {
 /// The ray to `point`, or nothing (counted in `stats` when given) when it updates nothing.
 std::optional<PreparedRay> prepare_ray(const ScanContext& scan, Vec3f point, InsertStats* stats);
 
-class RayTracer {
+// Aligned to a cache line: the tracers of a scan are allocated one after
+// the other, and their hot members (the batch's path cache) must not share a
+// line with the neighbour's.
+class alignas(64) RayTracer {
  public:
   /// Empties the batch for a scan of a map with `depth_levels`.
   void start(int depth_levels);
   /// Traces the rays to `ends` (points, or voxel centres) into the batch.
   void trace(const ScanContext& scan, std::span<const Vec3f> ends, InsertStats& stats);
-  /// The fast integrator's first pass: the hits of `rays`, and the marks that
-  /// keep the coarse nodes next to them from being cleared whole.
-  void add_hits(const ScanContext& scan, std::span<const PreparedRay> rays);
+  /// The fast integrator's first pass: the hits of a scan (finest codes, in
+  /// consecutive parts), and the marks that keep the coarse nodes next to
+  /// them from being cleared whole.
+  void add_hits(const ScanContext& scan, std::span<const std::vector<std::uint64_t>> hit_parts);
   /// The fast integrator: `rays`, whose ends all lie in one coarse node.
   void trace_group(const ScanContext& scan, std::span<const PreparedRay> rays, OccupancyTree::Cursor& cursor);
 

@@ -207,7 +207,9 @@ class GroupPool {
   }
 
   /// One worker's share of a concurrent phase: the chunk it hands out from.
-  struct Slab {
+  /// A cache line each: the workers' slabs lie side by side and are written
+  /// on every allocation.
+  struct alignas(64) Slab {
     std::uint32_t next = 0;
     std::uint32_t end = 0;
     std::vector<std::uint32_t> released;

@@ -1,5 +1,8 @@
 // Insertion with several threads gives exactly the map of one thread, for
-// every integrator, with colour and with a bounding box.
+// every integrator, with colour and with a bounding box. The parallel paths
+// covered: end voxels found and sorted per part and merged, the hits added
+// while the rays are grouped, the rays traced per worker, the batches
+// merged, the tree updated in parallel.
 #include <cstdlib>
 #include <random>
 
@@ -65,6 +68,14 @@ TEST(Threads, EveryThreadCountBuildsTheSameMap) {
             const float r = i % 10 == 0 ? 6.0f : 3.0f + 0.05f * u(rng);
             points.push_back({r * std::cos(a), r * std::sin(a), 1.5f * u(rng)});
             colors.push_back({static_cast<std::uint8_t>(rng()), static_cast<std::uint8_t>(rng()), 7});
+          }
+          // Points near the first ones again, at the end of the scan: their
+          // voxels get points in the first and the last part of the scan
+          // (whose end voxels are sorted on different threads and merged),
+          // and the fast integrator's ray goes to the first point.
+          for (int i = 0; i < 300; ++i) {
+            points.push_back(points[static_cast<std::size_t>(i)] + Vec3f{0.01f * u(rng), 0.01f * u(rng), 0.01f * u(rng)});
+            colors.push_back({static_cast<std::uint8_t>(rng()), 9, 7});
           }
           if (with_color) {
             map.insert_point_cloud({0.3f * scan, 0.1f, 0.0f}, points, colors, options);
