@@ -524,17 +524,21 @@ TEST(ErrorsAndLimits, AProcessLimitOnThreadsGivesAWarningNotAHang) {
   GTEST_SKIP() << "ThreadSanitizer starts threads of its own, which a process limit of a few tasks refuses";
 #endif
   if (::geteuid() != 0 || test::run_command("setpriv --version && prlimit --version").exit_code != 0) {
-    GTEST_SKIP() << "needs root, setpriv and prlimit to run the program as nobody under a process limit";
+    GTEST_SKIP() << "needs root, setpriv and prlimit to run the program as another user under a process limit";
   }
   const fs::path dir = test::scratch_dir();
   fs::permissions(dir, fs::perms::all);
   write_xyz(dir / "room.xyz", room_points(20'000));
-  // nobody's tasks now, plus the program and two threads.
-  const CommandResult count = test::run_command("ps -L -u 65534 --no-headers 2>/dev/null | wc -l");
+  // A user of this test's own (not nobody: other tests run nobody's
+  // processes, and the limit counts all of the user's tasks; ctest -j2 ran
+  // two side by side and this one failed): its tasks now, plus the program
+  // and two threads.
+  const std::string user = "60123";
+  const CommandResult count = test::run_command("ps -L -u " + user + " --no-headers 2>/dev/null | wc -l");
   const int allowed = std::atoi(count.output.c_str()) + 3;
   // (LeakSanitizer's exit check needs a thread of its own, which the limit refuses: off for this run.)
   const CommandResult limited = test::run_command(
-      "ASAN_OPTIONS=detect_leaks=0 timeout 120 prlimit --nproc=" + std::to_string(allowed) + " setpriv --reuid=65534 --regid=65534 --clear-groups " +
+      "ASAN_OPTIONS=detect_leaks=0 timeout 120 prlimit --nproc=" + std::to_string(allowed) + " setpriv --reuid=" + user + " --regid=" + user + " --clear-groups " +
       cli() + " build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "map.umb") + " --threads 8");
   EXPECT_EQ(limited.exit_code, 0) << limited.output;  // timeout's 124 would mean a hang
   EXPECT_TRUE(contains(limited.output, "umbra: warning: only ")) << limited.output;
