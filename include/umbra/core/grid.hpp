@@ -33,6 +33,8 @@ class Grid {
   static void validate_resolution(double resolution);
 
   [[nodiscard]] double resolution() const { return resolution_; }
+  /// 1 / resolution: coordinates are multiplied by it to find their keys.
+  [[nodiscard]] double inverse_resolution() const { return inverse_resolution_; }
   [[nodiscard]] int depth_levels() const { return depth_levels_; }
   /// Edge length of a node at `depth`.
   [[nodiscard]] double node_size(int depth) const { return resolution_ * double(1u << depth); }
