@@ -250,11 +250,13 @@ InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f
       part.reserve(end - begin);
       hits.reserve(end - begin);
       for (std::size_t i = begin; i < end; ++i) {
-        if (const std::optional<PreparedRay> ray = prepare_ray(scan, ends[i], &part_stats)) {
-          part.push_back(*ray);
-          part_stats.hits += ray->hit;
-          if (ray->hit && (!scan.box_keys || scan.box_keys->contains(ray->end_key))) hits.push_back(ray->end_code);
+        PreparedRay& ray = part.emplace_back();  // prepared in place: a copy of a fresh ray stalled (prepare_ray)
+        if (!prepare_ray(scan, ends[i], &part_stats, ray)) {
+          part.pop_back();
+          continue;
         }
+        part_stats.hits += ray.hit;
+        if (ray.hit && (!scan.box_keys || scan.box_keys->contains(ray.end_key))) hits.push_back(ray.end_code);
       }
       ray_parts[chunk] = std::move(part);
       hit_parts[chunk] = std::move(hits);

@@ -86,8 +86,9 @@ struct PreparedRay {
   bool miss_end;  ///< the end voxel gets a miss (the ray was clipped there)
 };
 
-/// The ray to `point`, or nothing (counted in `stats` when given) when it updates nothing.
-std::optional<PreparedRay> prepare_ray(const ScanContext& scan, Vec3f point, InsertStats* stats);
+/// The ray to `point` into `ray`, or false (counted in `stats` when given)
+/// when it updates nothing (then `ray` holds garbage).
+bool prepare_ray(const ScanContext& scan, Vec3f point, InsertStats* stats, PreparedRay& ray);
 
 // Aligned to a cache line: the tracers of a scan are allocated one after
 // the other, and their hot members (the batch's path cache) must not share a
