@@ -53,7 +53,13 @@ class BlockingLookup {
       // which the codes differ: depth (msb / 3) + 1 and up.
       const std::uint64_t diff = code ^ path_code_;
       const int shared = diff == 0 ? 0 : (63 - std::countl_zero(diff)) / 3 + 1;
-      if (shared <= ref.depth) ref = path_[static_cast<std::size_t>(std::max(shared, path_low_))];
+      if (shared <= ref.depth) {
+        const int start = std::max(shared, path_low_);
+        ref = path_[static_cast<std::size_t>(start)];
+        // A node above the last one looked at was found to hold something
+        // blocking and to have children: go straight to the child.
+        if (start > path_low_) ref = tree.child(ref, morton::slot(code, ref.depth - 1));
+      }
     }
     path_code_ = code;
     for (;;) {

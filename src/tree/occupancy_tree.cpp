@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "tree/group_lanes.hpp"
+
 namespace umbra {
 namespace {
 
@@ -136,29 +138,16 @@ void OccupancyTree::expand(int depth, std::uint32_t group, unsigned slot) {
 }
 
 OccupancyTree::ChildrenSummary OccupancyTree::summarize_children(int depth, std::uint32_t child) const {
-  ChildrenSummary summary{};
-  summary.same = true;
   if (depth == 1) {
-    const auto& values = leaves_[child].log_odds;
-    summary.max = values[0];
-    for (const float v : values) {
-      summary.max = std::max(summary.max, v);
-      summary.any_free |= thresholds_.is_free(v);
-      summary.any_unknown |= thresholds_.is_unknown(v);
-      summary.same &= v == values[0];
-    }
-    return summary;
+    const detail::LaneSummary lanes = detail::summarize_lanes(leaves_[child].log_odds, thresholds_);
+    return {lanes.max, lanes.free != 0, lanes.unknown != 0, lanes.same};
   }
   // Inner children carry their own maximum and indicator bits.
   const InnerGroup& children = inner_[depth - 1][child];
-  summary.max = children.log_odds[0];
-  for (unsigned i = 0; i < 8; ++i) {
-    summary.max = std::max(summary.max, children.log_odds[i]);
-    summary.same &= children.child[i] == kNoGroup && children.log_odds[i] == children.log_odds[0];
-  }
-  summary.any_free = children.contains_free != 0;
-  summary.any_unknown = children.contains_unknown != 0;
-  return summary;
+  const detail::LaneSummary lanes = detail::summarize_lanes(children.log_odds, thresholds_);
+  bool childless = true;
+  for (const std::uint32_t c : children.child) childless &= c == kNoGroup;
+  return {lanes.max, children.contains_free != 0, children.contains_unknown != 0, lanes.same && childless};
 }
 
 void OccupancyTree::refresh(int depth, std::uint32_t group, unsigned slot, bool allow_prune) {
@@ -473,14 +462,7 @@ void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& t
       continue;
     }
     if (inner_[1][group].child[slot] == kNoGroup) expand(1, group, slot);
-    auto& values = leaves_[inner_[1][group].child[slot]].log_odds;
-    for (unsigned i = 0; i < 8; ++i) {
-      if (hits & bit(i)) {
-        values[i] = range_.add(values[i], hit);
-      } else if (misses & bit(i)) {
-        values[i] = range_.add(values[i], miss);
-      }
-    }
+    detail::update_lanes(leaves_[inner_[1][group].child[slot]].log_odds, hits, misses, hit, miss, range_);
     refresh(1, group, slot, auto_prune_);
   }
 }
