@@ -1,6 +1,7 @@
 // Eight-lane arithmetic on a node group's values: the summary of eight
 // children (maximum, which are free, unknown, all one value) and the update
-// of eight leaves by a brick's hit and miss bits.
+// of eight leaves by a brick's hit and miss bits, which returns the summary
+// of the updated leaves straight from the registers.
 //
 // Applying a scan's batch spends a third of its time in these two loops
 // (perf, discrete integrator, 3DTK at 2 cm: apply_brick 17%,
@@ -46,9 +47,10 @@ inline LaneSummary summarize_lanes_scalar(const std::array<float, 8>& v, const L
 }
 
 /// v[i] = range.add(v[i], hit) where hit bit i is set, else range.add(v[i],
-/// miss) where miss bit i is set; other values untouched.
-inline void update_lanes_scalar(std::array<float, 8>& v, std::uint8_t hits, std::uint8_t misses, float hit,
-                                float miss, const LogOddsRange& range) {
+/// miss) where miss bit i is set; other values untouched. Returns the
+/// summary of the new values (the caller's node needs it next).
+inline LaneSummary update_lanes_scalar(std::array<float, 8>& v, std::uint8_t hits, std::uint8_t misses, float hit,
+                                       float miss, const LogOddsRange& range, const LogOddsThresholds& t) {
   for (unsigned i = 0; i < 8; ++i) {
     if (hits >> i & 1u) {
       v[i] = range.add(v[i], hit);
@@ -56,13 +58,13 @@ inline void update_lanes_scalar(std::array<float, 8>& v, std::uint8_t hits, std:
       v[i] = range.add(v[i], miss);
     }
   }
+  return summarize_lanes_scalar(v, t);
 }
 
 #if defined(__SSE2__)
 
-inline LaneSummary summarize_lanes(const std::array<float, 8>& v, const LogOddsThresholds& t) {
-  const __m128 lo = _mm_loadu_ps(v.data());
-  const __m128 hi = _mm_loadu_ps(v.data() + 4);
+/// summarize_lanes of the values in two registers (0-3 and 4-7).
+inline LaneSummary summarize_registers(__m128 lo, __m128 hi, const LogOddsThresholds& t) {
   __m128 m = _mm_max_ps(lo, hi);
   m = _mm_max_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
   m = _mm_max_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
@@ -71,7 +73,7 @@ inline LaneSummary summarize_lanes(const std::array<float, 8>& v, const LogOddsT
   const auto bits = [](__m128 lo_mask, __m128 hi_mask) {
     return static_cast<std::uint8_t>(_mm_movemask_ps(lo_mask) | _mm_movemask_ps(hi_mask) << 4);
   };
-  const __m128 first = _mm_set1_ps(v[0]);
+  const __m128 first = _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(0, 0, 0, 0));
   LaneSummary s;
   s.max = _mm_cvtss_f32(m);
   s.free = bits(_mm_cmplt_ps(lo, free), _mm_cmplt_ps(hi, free));
@@ -81,8 +83,12 @@ inline LaneSummary summarize_lanes(const std::array<float, 8>& v, const LogOddsT
   return s;
 }
 
-inline void update_lanes(std::array<float, 8>& v, std::uint8_t hits, std::uint8_t misses, float hit, float miss,
-                         const LogOddsRange& range) {
+inline LaneSummary summarize_lanes(const std::array<float, 8>& v, const LogOddsThresholds& t) {
+  return summarize_registers(_mm_loadu_ps(v.data()), _mm_loadu_ps(v.data() + 4), t);
+}
+
+inline LaneSummary update_lanes(std::array<float, 8>& v, std::uint8_t hits, std::uint8_t misses, float hit,
+                                float miss, const LogOddsRange& range, const LogOddsThresholds& t) {
   // Lane i of a mask is all ones when bit i of the byte is set.
   const __m128i lane_bits_lo = _mm_setr_epi32(1, 2, 4, 8);
   const __m128i lane_bits_hi = _mm_setr_epi32(16, 32, 64, 128);
@@ -102,10 +108,13 @@ inline void update_lanes(std::array<float, 8>& v, std::uint8_t hits, std::uint8_
     // add(): sum < min ? min : (sum > max ? max : sum); maxps(a, b) is a > b ? a : b.
     const __m128 sum = _mm_add_ps(old, delta);
     const __m128 clamped = _mm_min_ps(max_v, _mm_max_ps(min_v, sum));
-    _mm_storeu_ps(values, _mm_or_ps(_mm_and_ps(touched, clamped), _mm_andnot_ps(touched, old)));
+    const __m128 updated = _mm_or_ps(_mm_and_ps(touched, clamped), _mm_andnot_ps(touched, old));
+    _mm_storeu_ps(values, updated);
+    return updated;
   };
-  update(v.data(), lane_bits_lo);
-  update(v.data() + 4, lane_bits_hi);
+  const __m128 lo = update(v.data(), lane_bits_lo);
+  const __m128 hi = update(v.data() + 4, lane_bits_hi);
+  return summarize_registers(lo, hi, t);
 }
 
 #else
@@ -113,9 +122,9 @@ inline void update_lanes(std::array<float, 8>& v, std::uint8_t hits, std::uint8_
 inline LaneSummary summarize_lanes(const std::array<float, 8>& v, const LogOddsThresholds& t) {
   return summarize_lanes_scalar(v, t);
 }
-inline void update_lanes(std::array<float, 8>& v, std::uint8_t hits, std::uint8_t misses, float hit, float miss,
-                         const LogOddsRange& range) {
-  update_lanes_scalar(v, hits, misses, hit, miss, range);
+inline LaneSummary update_lanes(std::array<float, 8>& v, std::uint8_t hits, std::uint8_t misses, float hit,
+                                float miss, const LogOddsRange& range, const LogOddsThresholds& t) {
+  return update_lanes_scalar(v, hits, misses, hit, miss, range, t);
 }
 
 #endif

@@ -151,10 +151,16 @@ OccupancyTree::ChildrenSummary OccupancyTree::summarize_children(int depth, std:
 }
 
 void OccupancyTree::refresh(int depth, std::uint32_t group, unsigned slot, bool allow_prune) {
+  const std::uint32_t child = inner_[depth][group].child[slot];
+  UMBRA_ASSERT(child != kNoGroup);
+  refresh_from(depth, group, slot, summarize_children(depth, child), allow_prune);
+}
+
+void OccupancyTree::refresh_from(int depth, std::uint32_t group, unsigned slot, const ChildrenSummary& summary,
+                                 bool allow_prune) {
   InnerGroup& node = inner_[depth][group];
   const std::uint32_t child = node.child[slot];
   UMBRA_ASSERT(child != kNoGroup);
-  const ChildrenSummary summary = summarize_children(depth, child);
   const float max = summary.max;
   const bool any_free = summary.any_free;
   const bool any_unknown = summary.any_unknown;
@@ -462,8 +468,9 @@ void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& t
       continue;
     }
     if (inner_[1][group].child[slot] == kNoGroup) expand(1, group, slot);
-    detail::update_lanes(leaves_[inner_[1][group].child[slot]].log_odds, hits, misses, hit, miss, range_);
-    refresh(1, group, slot, auto_prune_);
+    const detail::LaneSummary leaves = detail::update_lanes(leaves_[inner_[1][group].child[slot]].log_odds, hits,
+                                                            misses, hit, miss, range_, thresholds_);
+    refresh_from(1, group, slot, {leaves.max, leaves.free != 0, leaves.unknown != 0, leaves.same}, auto_prune_);
   }
 }
 

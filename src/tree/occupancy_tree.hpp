@@ -274,6 +274,8 @@ class OccupancyTree {
   [[nodiscard]] ChildrenSummary summarize_children(int depth, std::uint32_t child) const;
   /// Recomputes a node with children from them; prunes when allowed.
   void refresh(int depth, std::uint32_t group, unsigned slot, bool allow_prune);
+  /// refresh() with the children's summary already known.
+  void refresh_from(int depth, std::uint32_t group, unsigned slot, const ChildrenSummary& summary, bool allow_prune);
   void apply_group(int depth, std::uint32_t group, const UpdateBatch& batch, std::uint32_t batch_group,
                    float hit, float miss);
   void apply_in_parallel(const UpdateBatch& batch, float hit, float miss, ThreadPool& pool);

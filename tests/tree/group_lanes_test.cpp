@@ -78,19 +78,26 @@ TEST(GroupLanes, UpdateEqualsTheScalarLoopBitForBit) {
     std::array<float, 8> scalar = lanes;
     const auto hits = static_cast<std::uint8_t>(byte(rng));
     const auto misses = static_cast<std::uint8_t>(byte(rng));
-    update_lanes(lanes, hits, misses, hit, miss, kRange);
-    update_lanes_scalar(scalar, hits, misses, hit, miss, kRange);
+    const LaneSummary from_lanes = update_lanes(lanes, hits, misses, hit, miss, kRange, kThresholds);
+    const LaneSummary from_scalar = update_lanes_scalar(scalar, hits, misses, hit, miss, kRange, kThresholds);
     for (unsigned i = 0; i < 8; ++i) {
       ASSERT_EQ(std::bit_cast<std::uint32_t>(lanes[i]), std::bit_cast<std::uint32_t>(scalar[i]))
           << "trial " << trial << " lane " << i << " hits " << int(hits) << " misses " << int(misses);
     }
+    // The summary returned is that of the new values.
+    const LaneSummary fresh = summarize_lanes_scalar(scalar, kThresholds);
+    ASSERT_EQ(std::bit_cast<std::uint32_t>(from_lanes.max), std::bit_cast<std::uint32_t>(fresh.max)) << trial;
+    ASSERT_EQ(from_lanes.free, fresh.free) << trial;
+    ASSERT_EQ(from_lanes.unknown, fresh.unknown) << trial;
+    ASSERT_EQ(from_lanes.same, fresh.same) << trial;
+    ASSERT_EQ(from_scalar.max, fresh.max) << trial;
   }
 }
 
 TEST(GroupLanes, ScalarUpdateIsOctoMapsRule) {
   std::array<float, 8> v = {0.0f, 0.0f, 3.4f, -1.9f, 1.0f, 1.0f, 1.0f, 1.0f};
   // hit on 0, 2 and 6 (6 also has a miss: the hit wins), miss on 1, 3 and 6.
-  update_lanes(v, 0b0100'0101, 0b0100'1010, 0.85f, -0.4f, kRange);
+  update_lanes(v, 0b0100'0101, 0b0100'1010, 0.85f, -0.4f, kRange, kThresholds);
   EXPECT_EQ(v[0], 0.85f);
   EXPECT_EQ(v[1], -0.4f);
   EXPECT_EQ(v[2], kRange.max);  // clamped
