@@ -348,7 +348,11 @@ TEST(MapRenderSlice, CoarseLayerShowsTheMaximumOfItsVoxels) {
 // --- the demo building against per-voxel lookups --------------------------------------
 
 const OccupancyMap& demo_map() {
-  static const OccupancyMap map = test::demo_lidar_map(MapConfig{kResolution});
+  static const OccupancyMap map = [] {
+    MapConfig config;
+    config.resolution = kResolution;
+    return test::demo_lidar_map(config);
+  }();
   return map;
 }
 

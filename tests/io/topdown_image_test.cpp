@@ -255,7 +255,9 @@ Rgb reference_pixel(const OccupancyMap& map, const Image& image, const TopdownOp
 }
 
 TEST(TopdownImage, DemoSceneMapMatchesPerVoxelReference) {
-  const OccupancyMap map = test::demo_lidar_map(MapConfig{kResolution});
+  MapConfig config;
+  config.resolution = kResolution;
+  const OccupancyMap map = test::demo_lidar_map(config);
   TopdownOptions options;
   // Window limits between voxel centres, so that no centre lies on a limit.
   options.min_z = -0.22;  // the top of the floor slab
