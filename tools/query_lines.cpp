@@ -10,6 +10,8 @@
 #include <string>
 #include <system_error>
 
+#include "printable_text.hpp"
+
 namespace umbra::cli {
 
 std::optional<LineQuery> line_query_named(std::string_view name) {
@@ -56,26 +58,6 @@ const char* layout_of(LineQuery kind) {
 namespace {
 
 bool is_separator(char c) { return c == ' ' || c == '\t' || c == '\r' || c == ','; }
-
-/// A word as it may be quoted in a message: at most 40 characters, bytes
-/// outside printable ASCII as \xNN (a line may hold anything, NUL included).
-std::string printable(std::string_view word) {
-  constexpr std::size_t kMaxShown = 40;
-  std::string out;
-  for (std::size_t i = 0; i < word.size() && i < kMaxShown; ++i) {
-    const auto c = static_cast<unsigned char>(word[i]);
-    if (c >= 0x20 && c < 0x7f) {
-      out += static_cast<char>(c);
-    } else {
-      static const char kHex[] = "0123456789abcdef";
-      out += "\\x";
-      out += kHex[c >> 4];
-      out += kHex[c & 15];
-    }
-  }
-  if (word.size() > kMaxShown) out += "... (" + std::to_string(word.size()) + " characters)";
-  return out;
-}
 
 }  // namespace
 
