@@ -21,6 +21,8 @@
 // are skipped. The lines' reader, parser and answering are query_lines.cpp
 // (fuzzed by fuzz/fuzz_query_lines.cpp); the input is read through
 // descriptor_input.hpp, which tells when a read would wait.
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <istream>
@@ -227,7 +229,8 @@ int run_query(const QueryOptions& options) {
 
   std::unique_ptr<DescriptorInput> input;
   try {
-    input = options.input == "-" ? std::make_unique<DescriptorInput>(0) : std::make_unique<DescriptorInput>(options.input);
+    input = options.input == "-" ? std::make_unique<DescriptorInput>(STDIN_FILENO)
+                                 : std::make_unique<DescriptorInput>(options.input);
   } catch (const std::runtime_error& e) {
     throw std::runtime_error(name + ": " + e.what());
   }

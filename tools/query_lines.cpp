@@ -1,6 +1,7 @@
 // The input lines of `umbra query` (query_lines.hpp): a reader of one line
 // at a time into a fixed buffer, a hand-written word splitter over
-// std::from_chars (no locale, no allocation but the values), and the dispatch of a checked line to the library's is_free / cast_ray /
+// std::from_chars (no locale, no allocation but the values), and the
+// dispatch of a checked line to the library's is_free / cast_ray /
 // information_gain.
 #include "query_lines.hpp"
 
