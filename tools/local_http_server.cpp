@@ -191,13 +191,13 @@ void LocalHttpServer::serve(std::FILE* log, const std::atomic<bool>& stop) {
       // until one of ours ends, rather than the loop spinning on it.
       std::unique_lock lock(mutex_);
       connection_ended_.wait_for(lock, kStopCheck);
-    } else if (errno != EINTR && errno != EAGAIN && errno != EWOULDBLOCK && errno != ECONNABORTED) {
+    } else if (errno == EBADF || errno == EINVAL || errno == ENOTSOCK || errno == EFAULT) {  // the listener broke
       const int error = errno;
-      std::unique_lock lock(mutex_);  // let the open connections end before the server goes
+      std::unique_lock lock(mutex_);  // the connections use this object: let them end first
       connection_ended_.wait(lock, [this] { return open_connections_ == 0; });
       errno = error;
       fail("accept failed");
-    }
+    }  // else a client's own network error (accept(2) passes them on) or EINTR: on to the next
   }
   std::unique_lock lock(mutex_);
   connection_ended_.wait(lock, [this] { return open_connections_ == 0; });
