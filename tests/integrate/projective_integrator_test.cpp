@@ -100,11 +100,18 @@ TEST(ProjectiveIntegrator, TreeWalkClearsExactlyTheRulesVoxels) {
     const PinholeCamera camera{40.0 + trial, 42.0, 23.5 + 0.3 * (trial % 4), 17.5};
     ProjectiveFrame frame;
     frame.set(image, camera, random_pose(rng, 0.8));
-    const double max_range = trial % 4 == 1 ? 1.7 : -1.0;
+    const double max_range = trial % 4 == 1 || trial % 4 == 3 ? 1.7 : -1.0;
     const double margin = trial % 2 == 0 ? 0.0 : 0.5 * grid.resolution();
     std::optional<KeyBox> box;
     if (trial % 5 == 2) box = KeyBox{{40, 30, 50}, {90, 100, 77}};
-    const ProjectiveRule rule(grid, frame, max_range, margin, box);
+    ProjectiveRule rule(grid, frame, max_range, margin, box);
+    // A range this short applies voxel by voxel (range_depth 0); also try it
+    // per node of 4 and 8 voxels, as longer ranges do.
+    if (trial % 4 == 3) {
+      ASSERT_EQ(rule.range_depth, 0);
+      rule.range_depth = 2 + trial % 8 / 4;
+      rule.max_range_squared = 0.0f;
+    }
     const ProjectiveTracer tracer(rule);
 
     UpdateBatch walked(kDepthLevels);
