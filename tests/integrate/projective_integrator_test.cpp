@@ -50,9 +50,10 @@ Pose random_pose(std::mt19937& rng, double t) {
 }
 
 /// A depth image of a bumpy surface at a random distance, with holes (no
-/// reading), a few readings far beyond it and noise.
+/// reading), sometimes a few readings far beyond it, and noise.
 std::vector<float> random_depths(std::mt19937& rng, int width, int height) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double far_share = u(rng) < 0.5 ? 0.0 : 0.02 * u(rng);
   const double base = 0.6 + 2.0 * u(rng);
   const double tilt_u = (u(rng) - 0.5) * 0.04;
   const double tilt_v = (u(rng) - 0.5) * 0.04;
@@ -64,7 +65,7 @@ std::vector<float> random_depths(std::mt19937& rng, int width, int height) {
       z += 0.01 * (u(rng) - 0.5);
       if (u(rng) < 0.03) z = 0.0;        // a single missing reading
       if (px > width / 2 && px < width / 2 + 6 && v > 5 && v < 20) z = 0.0;  // a hole
-      if (u(rng) < 0.02) z = 8.0;        // far behind
+      if (u(rng) < far_share) z = 8.0;   // far behind
       depth[static_cast<std::size_t>(v) * width + px] = static_cast<float>(std::max(z, 0.0));
     }
   }
@@ -91,7 +92,7 @@ TEST(ProjectiveIntegrator, TreeWalkClearsExactlyTheRulesVoxels) {
   std::mt19937 rng(7);
   constexpr int kDepthLevels = 7;  // 128^3 voxels: brute force over all of them
   int cases_with_misses = 0;
-  for (int trial = 0; trial < 24; ++trial) {
+  for (int trial = 0; trial < 32; ++trial) {
     const Grid grid(trial % 3 == 0 ? 0.05 : 0.03, kDepthLevels);
     constexpr int kWidth = 48;
     constexpr int kHeight = 36;
@@ -122,7 +123,7 @@ TEST(ProjectiveIntegrator, TreeWalkClearsExactlyTheRulesVoxels) {
     EXPECT_EQ(walked_leaves, expected_leaves) << "trial " << trial;
     cases_with_misses += expected_leaves.size() > 1 ? 1 : 0;
   }
-  EXPECT_GE(cases_with_misses, 20);  // the scenes do clear something
+  EXPECT_GE(cases_with_misses, 26);  // the scenes do clear something
 }
 
 TEST(ProjectiveIntegrator, AvxEqualsPlain) {
