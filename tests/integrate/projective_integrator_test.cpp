@@ -96,11 +96,19 @@ TEST(ProjectiveIntegrator, TreeWalkClearsExactlyTheRulesVoxels) {
     const Grid grid(trial % 3 == 0 ? 0.05 : 0.03, kDepthLevels);
     constexpr int kWidth = 48;
     constexpr int kHeight = 36;
-    const std::vector<float> depths = random_depths(rng, kWidth, kHeight);
+    std::vector<float> depths = random_depths(rng, kWidth, kHeight);
+    Pose pose = random_pose(rng, 0.8);
+    if (trial % 8 == 4) {
+      // A flat wall facing a camera that looks along the map's z axis, 2 mm
+      // in front of the last layer of voxel centres of depth-3 nodes.
+      pose = Pose::from_translation_quaternion(0.013, -0.021, 0.007, 1, 0, 0, 0);
+      const double wall = (23 + 0.5) * grid.resolution() - 0.007 - 0.002;
+      std::fill(depths.begin(), depths.end(), static_cast<float>(wall));
+    }
     const DepthImage image = DepthImage::metres(depths, kWidth, kHeight);
     const PinholeCamera camera{40.0 + trial, 42.0, 23.5 + 0.3 * (trial % 4), 17.5};
     ProjectiveFrame frame;
-    frame.set(image, camera, random_pose(rng, 0.8));
+    frame.set(image, camera, pose);
     const double max_range = trial % 4 == 1 || trial % 4 == 3 ? 1.7 : -1.0;
     const double margin = trial % 2 == 0 ? 0.0 : 0.5 * grid.resolution();
     std::optional<KeyBox> box;
