@@ -42,9 +42,18 @@ bool prepare_ray(const ScanContext& scan, Vec3f point, InsertStats* stats, Prepa
   const Vec3f offset = point - scan.origin;
   const double range = octomap_norm(offset);
   if (scan.max_range > 0.0 && range > scan.max_range) {
-    // OctoMap: origin + normalized(direction) * (float)max_range, no hit.
+    // OctoMap: origin + normalized(direction) * (float)max_range, no hit
+    // (range > max_range > 0 here: the division is by a positive length).
+    // Except for a point so far away (beyond about 1.8e19 m) that the float
+    // squared length overflows: OctoMap's normalized() divides by infinity,
+    // gets a zero direction and updates nothing; here the direction comes
+    // from double, and the ray is cut at max_range like any other.
     const auto length = static_cast<float>(range);
-    const Vec3f direction = range > 0.0 ? Vec3f{offset.x / length, offset.y / length, offset.z / length} : offset;
+    Vec3f direction{offset.x / length, offset.y / length, offset.z / length};
+    if (!std::isfinite(range)) {
+      const Vec3d exact = Vec3d(point) - Vec3d(scan.origin);
+      direction = Vec3f(exact / exact.norm());
+    }
     ray.end = scan.origin + direction * static_cast<float>(scan.max_range);
     ray.hit = false;
     count(&InsertStats::truncated);
