@@ -257,6 +257,17 @@ void RayTracer::trace_group(const ScanContext& scan, std::span<const PreparedRay
     for (int axis = 0; axis < 3; ++axis) {
       low[axis] = node_index(grid, std::min(a[axis], b[axis]) - spread, depth);
       high[axis] = node_index(grid, std::max(a[axis], b[axis]) + spread, depth);
+      // A group of rays that runs along a node border (one ray along a face,
+      // such as x = 0 from a sensor at x = 0): the shrinking put low above
+      // high, and the empty box counted as cleared, so that nothing was
+      // cleared along the whole ray. Such rays lie in the node their
+      // coordinate rounds into, as in the voxel walk. (A crossing shorter
+      // than the shrinking, where the guide only grazes a node's edge or
+      // corner, still clears nothing: which side the voxel walk takes
+      // there is rounding.)
+      if (low[axis] > high[axis] && s_out - s_in > 2e-6 * grid.resolution() / guide_length) {
+        low[axis] = high[axis] = node_index(grid, 0.5 * (a[axis] + b[axis]), depth);
+      }
     }
     bool all_cleared = true;
     for (std::uint32_t z = low[2]; z <= high[2] && all_cleared; ++z) {
