@@ -30,6 +30,8 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <type_traits>
 
 #include "umbra/core/grid.hpp"
@@ -73,6 +75,19 @@ inline RayDirection ray_direction(Vec3f from, Vec3f to) {
   const double norm = exact.norm();
   if (!(norm > 0.0)) return {{0.0f, 0.0f, 0.0f}, 0.0f};  // the same point: no direction
   return {Vec3f(exact / norm), static_cast<float>(norm)};
+}
+
+/// The finest key of a ray's end that a caller gave in double and the walk
+/// uses rounded to float (`rounded`), as OctoMap's rays are; throws
+/// std::out_of_range naming `what` and saying so, since the float value
+/// (-3276.800048828125 for -3276.8) can lie outside the map when the given
+/// one does not.
+inline Key key_of_rounded(const Grid& grid, Vec3f rounded, const char* what) {
+  try {
+    return grid.key(Vec3d(rounded));
+  } catch (const std::out_of_range& e) {
+    throw std::out_of_range(std::string(what) + ", rounded to float as OctoMap's rays are: " + e.what());
+  }
 }
 
 namespace detail {
