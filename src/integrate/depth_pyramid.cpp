@@ -7,7 +7,7 @@
 
 namespace umbra {
 
-void DepthPyramid::build(const float* depth, int width, int height) {
+void DepthPyramid::build(const float* nearest, const float* farthest, int width, int height) {
   UMBRA_ASSERT(width >= 1 && height >= 1);
   std::size_t count = 1;
   for (int w = width, h = height; w > 1 || h > 1; w = (w + 1) / 2, h = (h + 1) / 2) ++count;
@@ -16,8 +16,8 @@ void DepthPyramid::build(const float* depth, int width, int height) {
   base.width = width;
   base.height = height;
   const std::size_t pixels = std::size_t(width) * std::size_t(height);
-  base.min.assign(depth, depth + pixels);
-  base.max.assign(depth, depth + pixels);
+  base.min.assign(nearest, nearest + pixels);
+  base.max.assign(farthest, farthest + pixels);
   for (std::size_t l = 1; l < count; ++l) {
     const Level& below = levels_[l - 1];
     Level& level = levels_[l];

@@ -20,12 +20,33 @@
 //
 // The window level is chosen per brick (the 4 x 4 x 4 voxels of a depth-2
 // node, the unit the rule is evaluated in): from the camera-frame depth
-// z_ref of the brick's centre, w = (fx * resolution / 2) / z_ref is half the
+// z_ref of the brick's centre, w = (min(fx, fy) resolution / 2) / z_ref is half the
 // width a voxel projects to, in pixels; l = 0 when w < 1 (the voxel's own
 // pixel), else l = bit_width(floor(w)), at most the pyramid's top level
 // (also when z_ref <= 0). The 2 x 2 cells of level l nearest to (u, v) are
 // those from floor(u / 2^l - 1/2) and floor(v / 2^l - 1/2); cells outside the
 // level hold no reading. At level 0 the pixel must lie in the image.
+//
+// Known obstacles. A voxel the map holds as occupied (before this scan) is
+// cleared only when one of the image's rays really passes through it and
+// ends beyond it (a segment-cube test in double against the rays of the
+// pixels its cube projects onto), as OctoMap's ray would clear it: the
+// rule's view of free space is the whole cone of a pixel in front of its
+// reading, and a surface seen at a grazing angle from elsewhere can lie in
+// that cone while no ray of this scan crosses it. (The fast integrator
+// never clears known obstacles wholesale either.) Without this, a LiDAR
+// scan binned at its ring spacing cleared 3% of the floor the simple
+// integrator keeps.
+//
+// Several readings a pixel. The images of a LiDAR scan (scan_images.hpp)
+// can hold several points in a pixel, and keep the nearest of each half
+// pixel too (depth_halves): at level 0 a voxel reads its half pixel's
+// nearest where that has a point, else its pixel's nearest. The space a ray
+// passing beside a nearer point reaches is then cleared in half the pixels
+// it would be lost in (on the 3DTK scans at 5 cm the simple integrator's
+// free voxels left unknown went from 6.1% to 4.4%). The pyramid's maxima
+// come from the halves (their nearest readings), so the windows of larger
+// voxels see them too.
 //
 // Range. With max_range set, v is within range when every voxel centre of
 // its depth-`range_depth` ancestor is within max_range of the camera (a test
@@ -53,6 +74,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "umbra/core/grid.hpp"
@@ -64,11 +86,17 @@
 
 namespace umbra {
 
+class OccupancyTree;
+
 struct ProjectiveFrame {
   int width = 0;
   int height = 0;
   std::vector<float> depth;  ///< metres, row by row; 0: no reading
-  DepthPyramid pyramid;      ///< of `depth`
+  /// Images of scans (scan_images.hpp): the nearest reading of each half
+  /// pixel, (2 width) x (2 height), 0 where none; `depth` holds each pixel's
+  /// nearest. Empty for depth images (one reading a pixel).
+  std::vector<float> depth_halves;
+  DepthPyramid pyramid;      ///< of `depth` (its maxima of depth_halves' where there are)
 
   double fx = 0.0;
   double fy = 0.0;
@@ -89,7 +117,18 @@ struct ProjectiveFrame {
             rotation[1][0] * d.x + rotation[1][1] * d.y + rotation[1][2] * d.z,
             rotation[2][0] * d.x + rotation[2][1] * d.y + rotation[2][2] * d.z};
   }
-  [[nodiscard]] std::size_t memory_bytes() const { return depth.capacity() * sizeof(float) + pyramid.memory_bytes(); }
+  /// The image's rays: those of pixel p end at ray_ends[ray_order[k]] for k
+  /// in [pixel_rays[p], pixel_rays[p + 1]). ray_ends is not owned.
+  std::span<const Vec3f> ray_ends;
+  std::vector<std::uint32_t> pixel_rays;
+  std::vector<std::uint32_t> ray_order;
+  /// Sets the rays: ray i ends at ends[i] and its pixel is pixels[i].
+  void set_rays(std::span<const Vec3f> ends, std::span<const std::uint32_t> pixels);
+
+  [[nodiscard]] std::size_t memory_bytes() const {
+    return (depth.capacity() + depth_halves.capacity()) * sizeof(float) + pyramid.memory_bytes() +
+           (pixel_rays.capacity() + ray_order.capacity()) * sizeof(std::uint32_t);
+  }
 };
 
 /// Everything the rule reads for one scan, in the float form it is evaluated in.
@@ -106,12 +145,16 @@ struct ProjectiveRule {
   double max_range = -1.0;         ///< <= 0: unlimited
   int range_depth = 0;             ///< max_range applies to nodes of this depth, 0 or >= 2 (file comment)
   float max_range_squared = 0.0f;  ///< range_depth 0: the per-voxel test's bound
-  float half_voxel_pixels = 0.0f;  ///< fx * resolution / 2: w = this / z
+  float half_voxel_pixels = 0.0f;  ///< min(fx, fy) * resolution / 2: w = this / z
   float centre_dz = 0.0f;          ///< camera-frame z of the brick's centre minus its first voxel's
   int top_level = 0;               ///< the pyramid's top level
   /// Camera-frame offset of brick voxel i (Morton index, 0..63) from the brick's first voxel.
   std::array<std::array<float, 64>, 3> offset_table{};
   std::optional<KeyBox> box_keys;  ///< only voxels in it change
+  /// The map before this scan (known obstacles: see the file comment), or
+  /// none (then no voxel is held as an obstacle).
+  const OccupancyTree* tree = nullptr;
+  float occupied_log_odds = 0.0f;  ///< above this, a voxel is an obstacle
 
   ProjectiveRule(const Grid& grid, const ProjectiveFrame& frame, double max_range, double margin,
                  const std::optional<KeyBox>& box_keys);
@@ -134,8 +177,13 @@ struct ProjectiveRule {
   /// The window level of a brick whose first voxel is at `origin` (camera frame).
   [[nodiscard]] int window_level(Vec3f origin) const;
 
+  /// Whether one of the image's rays passes through finest voxel `code` and
+  /// ends beyond it (see the file comment).
+  [[nodiscard]] bool ray_crosses(std::uint64_t code) const;
+
+
   /// The voxels of the brick the rule clears (bit i: voxel brick + i; the
-  /// box not applied), voxel by voxel: the definition.
+  /// box and known obstacles not applied), voxel by voxel: the definition.
   [[nodiscard]] std::uint64_t cleared_plain(std::uint64_t brick) const;
   /// The same, eight voxels at a time where the CPU has AVX2 (bit for bit
   /// the same: a test compares them).

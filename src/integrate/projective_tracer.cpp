@@ -176,9 +176,19 @@ ProjectiveTracer::Decision ProjectiveTracer::classify(std::uint64_t code, int de
   return Decision::split;
 }
 
+bool ProjectiveTracer::holds_obstacle(std::uint64_t code, int depth) const {
+  return cursor_ && cursor_->max_log_odds(code, depth) > rule_.occupied_log_odds;
+}
+
 void ProjectiveTracer::trace_brick(std::uint64_t brick, UpdateBatch& batch) const {
   std::uint64_t voxels = rule_.cleared(brick);
   if (voxels != 0 && rule_.box_keys) voxels &= brick_voxels_in_box(*rule_.box_keys, brick);
+  if (voxels != 0 && holds_obstacle(brick, 2)) {
+    for (std::uint64_t rest = voxels; rest != 0; rest &= rest - 1) {
+      const unsigned i = static_cast<unsigned>(std::countr_zero(rest));
+      if (holds_obstacle(brick + i, 0) && !rule_.ray_crosses(brick + i)) voxels &= ~(std::uint64_t{1} << i);
+    }
+  }
   if (voxels != 0) batch.add_misses_in_brick(brick, voxels);
 }
 
@@ -187,6 +197,7 @@ void ProjectiveTracer::trace(std::uint64_t code, int depth, UpdateBatch& batch) 
     case Decision::none:
       return;
     case Decision::all:
+      if (holds_obstacle(code, depth)) break;  // split: its obstacles are cleared only where rays cross them
       batch.add_miss_node(code, depth);
       return;
     case Decision::split:
