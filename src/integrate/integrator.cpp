@@ -131,6 +131,29 @@ KeyBox key_box(const Grid& grid, const Aabb& box) {
 }
 
 
+/// A hit for the end voxel `code` of the discrete integrator's ray from
+/// `origin`: unless its centre lies beyond max_range, or (with a box) the
+/// ray to it is clipped by the box or the voxel lies outside the box's keys
+/// (counted in `stats`). False when it had one already.
+bool add_end_voxel_hit(const Grid& grid, Vec3f origin, std::uint64_t code, double max_range,
+                       const std::optional<Aabb>& box, const std::optional<KeyBox>& box_keys, UpdateBatch& batch,
+                       InsertStats& stats) {
+  const Key key = morton::decode(code);
+  const Vec3f centre = grid.center_f(key);
+  if (max_range > 0.0 && octomap_norm(centre - origin) > max_range) {
+    ++stats.truncated;
+    return false;
+  }
+  if (box) {
+    const auto part = box->clip(Vec3d(origin), Vec3d(centre));
+    if (!part || part->second < 1.0 || !box_keys->contains(key)) {
+      ++stats.outside_box;
+      return false;
+    }
+  }
+  return batch.add_hit(code);
+}
+
 /// The discrete integrator's hits for a scan's points: the voxel of every
 /// point in the map whose centre lies within max_range of the origin (and,
 /// with a box, in it: the discrete integrator's ray to that centre is not
@@ -150,23 +173,56 @@ void add_end_voxel_hits(const Grid& grid, Vec3f origin, std::span<const Vec3f> p
         ++(code == kNonFiniteCode ? stats.non_finite : stats.out_of_bounds);
         continue;
       }
-      if (code == last) continue;  // neighbouring pixels share voxels: most repeats come in a row
+      if (code == last) continue;  // neighbouring points share voxels: most repeats come in a row
       last = code;
-      const Key key = morton::decode(code);
-      const Vec3f centre = grid.center_f(key);
-      if (max_range > 0.0 && octomap_norm(centre - origin) > max_range) {
-        ++stats.truncated;
+      if (add_end_voxel_hit(grid, origin, code, max_range, box, box_keys, batch, stats)) ++stats.hits;
+    }
+  }
+  stats.rays = stats.hits;
+}
+
+/// The same for the points of a depth image (`pixels`: each point's pixel,
+/// rising, in an image `width` pixels wide), each voxel decided once: a
+/// point whose voxel is its left or upper neighbour's is dropped (at 2 cm
+/// a Kinect pixel shares its voxel with both in most of the image), the
+/// rest sorted and made unique, then added in Morton order (the batch's
+/// cached path then serves most of them).
+void add_image_hits(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
+                    std::span<const std::uint32_t> pixels, int width, double max_range, const std::optional<Aabb>& box,
+                    const std::optional<KeyBox>& box_keys, UpdateBatch& batch, InsertStats& stats,
+                    std::vector<std::uint64_t>& candidates, std::vector<std::uint64_t>& row) {
+  constexpr std::size_t kBlock = 1024;
+  std::array<std::uint64_t, kBlock> codes;
+  candidates.clear();
+  row.assign(static_cast<std::size_t>(width), kNonFiniteCode);  // the code last seen in each column
+  std::uint64_t left = kNonFiniteCode;
+  std::uint32_t left_pixel = ~std::uint32_t{0};
+  for (std::size_t block = 0; block < points.size(); block += kBlock) {
+    const std::size_t size = std::min(kBlock, points.size() - block);
+    voxel_codes(grid, points.subspan(block, size), codes.data());
+    for (std::size_t j = 0; j < size; ++j) {
+      const std::uint64_t code = codes[j];
+      const std::uint32_t pixel = pixels[block + j];
+      const std::size_t column = pixel % static_cast<std::uint32_t>(width);
+      const bool beside = pixel == left_pixel + 1 && column != 0;
+      left_pixel = pixel;
+      if (code >= kOutsideCode) {
+        ++(code == kNonFiniteCode ? stats.non_finite : stats.out_of_bounds);
+        left = code;
+        row[column] = code;
         continue;
       }
-      if (box) {
-        const auto part = box->clip(Vec3d(origin), Vec3d(centre));
-        if (!part || part->second < 1.0 || !box_keys->contains(key)) {
-          ++stats.outside_box;
-          continue;
-        }
-      }
-      if (batch.add_hit(code)) ++stats.hits;
+      // Any repeat dropped here is one already kept: only the first
+      // occurrence of a code reaches the candidates without a twin before it.
+      if (!(beside && code == left) && code != row[column]) candidates.push_back(code);
+      left = code;
+      row[column] = code;
     }
+  }
+  radix_sort(candidates, 3 * grid.depth_levels(), [](std::uint64_t code) { return code; });
+  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  for (const std::uint64_t code : candidates) {
+    if (add_end_voxel_hit(grid, origin, code, max_range, box, box_keys, batch, stats)) ++stats.hits;
   }
   stats.rays = stats.hits;
 }
@@ -188,7 +244,8 @@ std::size_t Integrator::memory_bytes() const {
   if (pool_) bytes += sizeof(ThreadPool) + pool_->size() * sizeof(std::thread);
   for (const auto& tracer : tracers_) bytes += sizeof(RayTracer) + tracer->memory_bytes();
   return bytes + frame_.memory_bytes() + scan_images_.memory_bytes() + image_points_.capacity() * sizeof(Vec3f) +
-         image_pixels_.capacity() * sizeof(std::uint32_t);
+         image_pixels_.capacity() * sizeof(std::uint32_t) +
+         (hit_candidates_.capacity() + hit_row_.capacity()) * sizeof(std::uint64_t);
 }
 
 InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f origin,
@@ -420,7 +477,8 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   ensure_workers(threads);
   stats.threads = threads > 1 ? pool_->size() : 1;
   for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
-  add_end_voxel_hits(grid, origin, points, options.max_range, box, box_keys, tracers_[0]->batch(), stats);
+  add_image_hits(grid, origin, points, pixels, image.width(), options.max_range, box, box_keys, tracers_[0]->batch(),
+                 stats, hit_candidates_, hit_row_);
   frame_.set(image, camera, pose);
   frame_.set_rays(points, pixels);
   trace_projective_misses(tree, grid, options, box_keys, std::span<const ProjectiveFrame>(&frame_, 1), threads);

@@ -122,6 +122,8 @@ class Integrator {
   ScanImages scan_images_;
   std::vector<Vec3f> image_points_;
   std::vector<std::uint32_t> image_pixels_;
+  std::vector<std::uint64_t> hit_candidates_;  // add_image_hits' scratch
+  std::vector<std::uint64_t> hit_row_;
 };
 
 }  // namespace umbra

@@ -42,10 +42,15 @@ void ProjectiveFrame::set(const DepthImage& image, const PinholeCamera& camera, 
 
 void ProjectiveFrame::set_rays(std::span<const Vec3f> ends, std::span<const std::uint32_t> pixels) {
   ray_ends = ends;
-  // A counting sort of the rays by pixel.
   pixel_rays.assign(std::size_t(width) * std::size_t(height) + 1, 0);
   for (const std::uint32_t pixel : pixels) ++pixel_rays[pixel + 1];
   for (std::size_t p = 1; p < pixel_rays.size(); ++p) pixel_rays[p] += pixel_rays[p - 1];
+  // A depth image's rays come in pixel order already (back_project): then
+  // no order is kept. Otherwise, a counting sort of the rays by pixel.
+  if (std::is_sorted(pixels.begin(), pixels.end())) {
+    ray_order.clear();
+    return;
+  }
   ray_order.resize(pixels.size());
   std::vector<std::uint32_t> next(pixel_rays.begin(), pixel_rays.end() - 1);
   for (std::size_t i = 0; i < pixels.size(); ++i) ray_order[next[pixels[i]]++] = static_cast<std::uint32_t>(i);
@@ -80,8 +85,7 @@ ProjectiveRule::ProjectiveRule(const Grid& grid_in, const ProjectiveFrame& frame
   }
 }
 
-ProjectiveRule::CentreDistances ProjectiveRule::centre_distances(std::uint64_t code, int depth) const {
-  const Key first = morton::decode(code);
+ProjectiveRule::CentreDistances ProjectiveRule::centre_distances(Key first, int depth) const {
   const double span = ((1u << depth) - 1) * grid->resolution();
   CentreDistances result{0.0, 0.0};
   for (std::size_t a = 0; a < 3; ++a) {
@@ -95,14 +99,14 @@ ProjectiveRule::CentreDistances ProjectiveRule::centre_distances(std::uint64_t c
   return result;
 }
 
-bool ProjectiveRule::within_range(std::uint64_t code) const {
+bool ProjectiveRule::within_range(Key voxel) const {
   if (max_range <= 0.0 || range_depth == 0) return true;
-  const std::uint64_t node = code & ~((std::uint64_t{1} << (3 * range_depth)) - 1);
+  const std::uint32_t low = ~((std::uint32_t{1} << range_depth) - 1);
+  const Key node{voxel.x & low, voxel.y & low, voxel.z & low};
   return centre_distances(node, range_depth).farthest_squared <= max_range * max_range;
 }
 
-Vec3f ProjectiveRule::brick_origin(std::uint64_t brick) const {
-  const Key k = morton::decode(brick);
+Vec3f ProjectiveRule::brick_origin(Key k) const {
   const Vec3d centre{grid->axis_center(k.x), grid->axis_center(k.y), grid->axis_center(k.z)};
   return Vec3f(frame->to_camera(centre));
 }
@@ -179,7 +183,8 @@ bool ProjectiveRule::ray_crosses(std::uint64_t code) const {
     for (int u = u0; u <= u1; ++u) {
       const std::size_t pixel = std::size_t(v) * std::size_t(frame->width) + std::size_t(u);
       for (std::uint32_t k = frame->pixel_rays[pixel]; k < frame->pixel_rays[pixel + 1]; ++k) {
-        if (segment_crosses(frame->origin, Vec3d(frame->ray_ends[frame->ray_order[k]]), max_range, lo, hi)) {
+        const std::uint32_t ray = frame->ray_order.empty() ? k : frame->ray_order[k];
+        if (segment_crosses(frame->origin, Vec3d(frame->ray_ends[ray]), max_range, lo, hi)) {
           return true;
         }
       }
@@ -189,8 +194,9 @@ bool ProjectiveRule::ray_crosses(std::uint64_t code) const {
 }
 
 std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
-  if (!within_range(brick)) return 0;
-  const Vec3f base = brick_origin(brick);
+  const Key first = morton::decode(brick);
+  if (!within_range(first)) return 0;
+  const Vec3f base = brick_origin(first);
   const int level = window_level(base);
   const float* cells = level == 0 ? frame->depth.data() : frame->pyramid.window_max(level);
   const int cells_wide = frame->pyramid.width(level);
@@ -233,13 +239,15 @@ std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
 }
 
 std::uint64_t ProjectiveRule::cleared(std::uint64_t brick) const {
+  const Key first = morton::decode(brick);
+  return within_range(first) ? cleared_in_range(brick, first) : 0;
+}
+
+std::uint64_t ProjectiveRule::cleared_in_range(std::uint64_t brick, Key first) const {
   static const bool avx2 = detail::projective_avx2_available();  // the CPU does not change
   if (!avx2) return cleared_plain(brick);
-  if (!within_range(brick)) return 0;
-  const Vec3f base = brick_origin(brick);
-  const int level = window_level(base);
-  std::uint64_t result = detail::projective_cleared_avx2(*this, base, level);
-  return result;
+  const Vec3f base = brick_origin(first);
+  return detail::projective_cleared_avx2(*this, base, window_level(base));
 }
 
 }  // namespace umbra

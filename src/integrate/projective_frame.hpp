@@ -117,8 +117,9 @@ struct ProjectiveFrame {
             rotation[1][0] * d.x + rotation[1][1] * d.y + rotation[1][2] * d.z,
             rotation[2][0] * d.x + rotation[2][1] * d.y + rotation[2][2] * d.z};
   }
-  /// The image's rays: those of pixel p end at ray_ends[ray_order[k]] for k
-  /// in [pixel_rays[p], pixel_rays[p + 1]). ray_ends is not owned.
+  /// The image's rays: those of pixel p end at ray_ends[ray_order[k]] (at
+  /// ray_ends[k] when ray_order is empty) for k in [pixel_rays[p],
+  /// pixel_rays[p + 1]). ray_ends is not owned.
   std::span<const Vec3f> ray_ends;
   std::vector<std::uint32_t> pixel_rays;
   std::vector<std::uint32_t> ray_order;
@@ -160,20 +161,21 @@ struct ProjectiveRule {
                  const std::optional<KeyBox>& box_keys);
 
   /// Whether every voxel centre of the depth-`range_depth` node holding
-  /// voxel `code` is within max_range of the camera (true without a range,
-  /// or with range_depth 0: then the voxels are tested one by one).
-  [[nodiscard]] bool within_range(std::uint64_t code) const;
+  /// finest voxel `voxel` is within max_range of the camera (true without a
+  /// range, or with range_depth 0: then the voxels are tested one by one).
+  [[nodiscard]] bool within_range(Key voxel) const;
   /// Whether every voxel centre of the depth-`depth` node `code` is within
   /// max_range (`farthest`), and whether none is (`nearest`), in double.
   struct CentreDistances {
     double nearest_squared;
     double farthest_squared;
   };
-  [[nodiscard]] CentreDistances centre_distances(std::uint64_t code, int depth) const;
+  /// (For the depth-`depth` node whose first voxel is `first`.)
+  [[nodiscard]] CentreDistances centre_distances(Key first, int depth) const;
 
-  /// Camera-frame centre of the first voxel of the brick `brick` (a code
-  /// with its low 6 bits clear), in float as the rule uses it.
-  [[nodiscard]] Vec3f brick_origin(std::uint64_t brick) const;
+  /// Camera-frame centre of voxel `first` (a brick's first voxel), in
+  /// float as the rule uses it.
+  [[nodiscard]] Vec3f brick_origin(Key first) const;
   /// The window level of a brick whose first voxel is at `origin` (camera frame).
   [[nodiscard]] int window_level(Vec3f origin) const;
 
@@ -188,6 +190,8 @@ struct ProjectiveRule {
   /// The same, eight voxels at a time where the CPU has AVX2 (bit for bit
   /// the same: a test compares them).
   [[nodiscard]] std::uint64_t cleared(std::uint64_t brick) const;
+  /// cleared() for a brick known to be within range, whose first voxel is `first`.
+  [[nodiscard]] std::uint64_t cleared_in_range(std::uint64_t brick, Key first) const;
 };
 
 namespace detail {

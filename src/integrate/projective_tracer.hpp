@@ -51,7 +51,9 @@ class ProjectiveTracer {
   [[nodiscard]] Decision classify(std::uint64_t code, int depth) const;
 
   /// Adds the misses of the depth-`depth` node `code` (depth >= 2) to `batch`.
-  void trace(std::uint64_t code, int depth, UpdateBatch& batch) const;
+  void trace(std::uint64_t code, int depth, UpdateBatch& batch) const {
+    trace_node(code, morton::decode(code), depth, batch);
+  }
 
   /// The depth-`depth` nodes (in Morton order) below the node `code` whose
   /// subtrees hold all the rule's work: split nodes are opened down to
@@ -65,8 +67,12 @@ class ProjectiveTracer {
   void collect(std::uint64_t code, int depth, int task_depth, std::vector<Task>& tasks) const;
 
  private:
+  /// classify() and trace() of a node whose first voxel's key is `first`
+  /// (the walk keeps keys, so that nodes are not decoded).
+  [[nodiscard]] Decision classify_node(Key first, int depth) const;
+  void trace_node(std::uint64_t code, Key first, int depth, UpdateBatch& batch) const;
   /// A split brick: the voxels it clears, in the box.
-  void trace_brick(std::uint64_t brick, UpdateBatch& batch) const;
+  void trace_brick(std::uint64_t brick, Key first, UpdateBatch& batch) const;
   /// Whether the map holds an obstacle in the depth-`depth` node `code`.
   [[nodiscard]] bool holds_obstacle(std::uint64_t code, int depth) const;
 

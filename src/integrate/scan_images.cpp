@@ -109,7 +109,11 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
     face.pyramid.build(face.depth.data(), farthest.data(), face.width, face.height);
     // The image's rays, by pixel (set_rays numbers them in the order given).
     face.set_rays(points, ray_pixels[k]);
-    for (std::uint32_t& ray : face.ray_order) ray = ray_points[k][ray];
+    if (face.ray_order.empty()) {
+      face.ray_order.assign(ray_points[k].begin(), ray_points[k].end());
+    } else {
+      for (std::uint32_t& ray : face.ray_order) ray = ray_points[k][ray];
+    }
   }
 }
 
