@@ -25,6 +25,8 @@ using bag_detail::RecordSite;
 namespace {
 
 constexpr std::string_view kMagic = "#ROSBAG V2.0\n";
+/// Reads of at most this many bytes go through one buffer of the file.
+constexpr std::uint64_t kWindowBytes = std::uint64_t{64} << 10;
 /// Decompressed chunks read() keeps, in bytes (at least one chunk is always kept).
 constexpr std::uint64_t kCacheBytes = std::uint64_t{256} << 20;
 /// read() gives up when it has decompressed this many times the bytes of the distinct chunks it needed (plus
@@ -77,16 +79,29 @@ struct BagFile::State {
   std::uint64_t decompressed = 0;  ///< bytes decompressed by read(), all told
   std::uint64_t distinct = 0;      ///< bytes of the distinct chunks read() decompressed
   std::vector<bool> seen;          ///< per chunk: decompressed at least once
+  std::vector<std::uint8_t> window;  ///< bytes of the file from window_byte on (see read_bytes)
+  std::uint64_t window_byte = 0;
 
   [[nodiscard]] RecordSite site(std::uint64_t byte) const { return {&name, byte, 0, nullptr}; }
 
   std::vector<std::uint8_t> read_bytes(std::uint64_t byte, std::uint64_t size, const char* what) {
     detail::require_memory(name, std::string("reading ") + what + " at byte " + std::to_string(byte), size);
     std::vector<std::uint8_t> bytes(size);
-    if (file.read_at(byte, bytes.data(), bytes.size()) != bytes.size()) {
-      throw site(byte).error(std::string("the file ends inside ") + what + " (it changed while being read?)");
+    if (size <= kWindowBytes) {
+      // Record headers, lengths and index data: small reads near each other, served from one window.
+      if (byte < window_byte || byte - window_byte + size > window.size()) {
+        window.resize(static_cast<std::size_t>(std::min<std::uint64_t>(kWindowBytes, file.size() - std::min(byte, file.size()))));
+        window.resize(file.read_at(byte, window.data(), window.size()));
+        window_byte = byte;
+      }
+      if (byte - window_byte + size <= window.size()) {
+        std::copy_n(window.begin() + static_cast<std::ptrdiff_t>(byte - window_byte), size, bytes.begin());
+        return bytes;
+      }
+    } else if (file.read_at(byte, bytes.data(), bytes.size()) == bytes.size()) {
+      return bytes;
     }
-    return bytes;
+    throw site(byte).error(std::string("the file ends inside ") + what + " (it changed while being read?)");
   }
 
   /// The record at `byte`, which must end by `limit`. Reads its header; the data stays in the file.
@@ -116,8 +131,8 @@ struct BagFile::State {
     const std::string first(magic.begin(), magic.end());
     if (first != kMagic) {
       if (first.rfind("#ROSBAG V", 0) == 0) {
-        throw site(0).error("ROS bag format '" + io_detail::quote(first.substr(9, first.find('\n') - 9)) +
-                            "' is not read (only format 2.0, written by ROS since 2010)");
+        throw site(0).error("ROS bag format " + io_detail::quote(first.substr(9, first.find('\n') - 9)) +
+                            " is not read (only format 2.0, written by ROS since 2010)");
       }
       throw site(0).error("not a ROS bag: the file does not start with '#ROSBAG V2.0'");
     }
@@ -186,8 +201,8 @@ struct BagFile::State {
     Chunk chunk{record.byte, record.data_byte, record.data_size, record.fields.u32("size"),
                 record.fields.text("compression")};
     if (chunk.compression != "none" && chunk.compression != "bz2" && chunk.compression != "lz4") {
-      throw site(record.byte).error("the chunk's compression '" + io_detail::quote(chunk.compression) +
-                                    "' is none of none, bz2, lz4");
+      throw site(record.byte).error("the chunk's compression " + io_detail::quote(chunk.compression) +
+                                    " is none of none, bz2, lz4");
     }
     if (chunk.compression == "none" && chunk.size != chunk.data_size) {
       throw site(record.byte).error("the uncompressed chunk declares " + std::to_string(chunk.size) +

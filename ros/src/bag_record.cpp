@@ -57,7 +57,7 @@ RecordFields::RecordFields(std::span<const std::uint8_t> bytes, const RecordSite
     }
     const std::string name = field.substr(0, equals);
     if (!fields_.emplace(name, field.substr(equals + 1)).second) {
-      throw here.error("the header field '" + io_detail::quote(name) + "' appears twice");
+      throw here.error("the header field " + io_detail::quote(name) + " appears twice");
     }
   }
 }

@@ -111,7 +111,7 @@ class RosbagSource final : public RosbagScanSource {
     std::set<std::string> cloud_topics;
     std::set<std::string> all_topics;
     for (const BagConnection& connection : bag_->connections()) {
-      all_topics.insert(io_detail::quote(connection.topic) + " (" + io_detail::quote(connection.type) + ")");
+      all_topics.insert(connection.topic + " (" + connection.type + ")");
       if (connection.type == kPointCloud2) cloud_topics.insert(connection.topic);
     }
     if (requested.empty()) {
