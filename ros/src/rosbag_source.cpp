@@ -4,6 +4,7 @@
 // transforms' time span) and answers the cloud-to-map lookups.
 #include "umbra_ros/rosbag_source.hpp"
 
+#include <console_bridge/console.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <tf2/buffer_core.h>
 #include <tf2/exceptions.h>
@@ -42,6 +43,20 @@ ros::Time stamp_of(const MessageHeader& header, const std::string& name) {
   }
   return {header.stamp_sec, header.stamp_nsec};
 }
+
+/// While it lives, what tf2 logs (through console_bridge: the only place it says why it refuses a transform)
+/// is kept here instead of printed.
+class Tf2Log final : public console_bridge::OutputHandler {
+ public:
+  Tf2Log() { console_bridge::useOutputHandler(this); }
+  Tf2Log(const Tf2Log&) = delete;
+  Tf2Log& operator=(const Tf2Log&) = delete;
+  ~Tf2Log() override { console_bridge::restorePreviousOutputHandler(); }
+  void log(const std::string& text, console_bridge::LogLevel, const char*, int) override {
+    if (first.empty()) first = text.substr(0, 300);
+  }
+  std::string first;  ///< the first message, cut to 300 characters (tf2 prints doubles with all their digits)
+};
 
 class RosbagSource final : public RosbagScanSource {
  public:
@@ -179,6 +194,9 @@ class RosbagSource final : public RosbagScanSource {
       parsed.push_back(std::move(p));
     }
     buffer_ = std::make_unique<tf2::BufferCore>(cache_time(first_sec, last_sec));
+    std::size_t total = 0;
+    std::size_t refused = 0;
+    const Tf2Log tf2_log;
     for (const Parsed& p : parsed) {
       for (const SerializedTransform& t : p.transforms) {
         geometry_msgs::TransformStamped transform;
@@ -194,15 +212,22 @@ class RosbagSource final : public RosbagScanSource {
         transform.transform.rotation.w = t.rotation[3];
         try {
           // tf2 refuses (returns false, logs why) NaN, unnormalised quaternions and frames it cannot use.
+          ++total;
           if (buffer_->setTransform(transform, "bag", p.is_static)) {
             tf_frames_.insert(transform.header.frame_id);
             tf_frames_.insert(transform.child_frame_id);
+          } else {
+            ++refused;
           }
         } catch (const std::exception& e) {  // ros::Time arithmetic out of range inside tf2
           throw bag_->error(p.message, p.label + ": tf2 cannot hold the transform " + transform.header.frame_id +
                                            " -> " + transform.child_frame_id + ": " + e.what());
         }
       }
+    }
+    if (refused > 0) {
+      warnings_.push_back(path_ + ": tf2 refused " + std::to_string(refused) + " of the bag's " + std::to_string(total) +
+                          " transforms (first: " + tf2_log.first + ")");
     }
   }
 

@@ -85,8 +85,13 @@ std::vector<std::uint8_t> compress(const std::vector<std::uint8_t>& data, const 
     return out;
   }
   if (compression == "lz4") {
-    std::vector<std::uint8_t> out(LZ4F_compressFrameBound(data.size(), nullptr));
-    const std::size_t size = LZ4F_compressFrame(out.data(), out.size(), data.data(), data.size(), nullptr);
+    // What roslz4 accepts: independent blocks, no block checksums, a content checksum, no content size.
+    LZ4F_preferences_t preferences{};
+    preferences.frameInfo.blockSizeID = LZ4F_max64KB;
+    preferences.frameInfo.blockMode = LZ4F_blockIndependent;
+    preferences.frameInfo.contentChecksumFlag = LZ4F_contentChecksumEnabled;
+    std::vector<std::uint8_t> out(LZ4F_compressFrameBound(data.size(), &preferences));
+    const std::size_t size = LZ4F_compressFrame(out.data(), out.size(), data.data(), data.size(), &preferences);
     if (LZ4F_isError(size)) throw std::runtime_error("lz4 compression failed");
     out.resize(size);
     return out;
