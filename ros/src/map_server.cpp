@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cloud_message.hpp"
+#include "crash_log.hpp"
 #include "map_messages.hpp"
 
 namespace umbra::ros_io {
@@ -77,6 +78,7 @@ void MapServer::insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
   const std::string name = "cloud in frame '" + cloud->header.frame_id + "' at " + std::to_string(cloud->header.stamp.toSec());
   // Whatever goes wrong with one cloud (a malformed message, a transform tf2 cannot give, an error inside the
   // integrator) is logged and the cloud dropped: the node keeps its map and goes on with the next one.
+  set_crash_context("inserting the " + name);
   try {
     const std::string cloud_frame = tf2_frame(cloud->header.frame_id);
     RigidTransform to_map;
@@ -111,19 +113,24 @@ void MapServer::insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
     }
   } catch (const FormatError& e) {  // its message starts with the cloud's name
     ROS_ERROR("umbra_server: cannot insert the %s", e.what());
+    set_crash_context("");
     return;
   } catch (const std::exception& e) {
     ROS_ERROR("umbra_server: cannot insert the %s: %s", name.c_str(), e.what());
+    set_crash_context("");
     return;
   } catch (...) {
     ROS_ERROR("umbra_server: cannot insert the %s: an exception of unknown type", name.c_str());
+    set_crash_context("");
     return;
   }
+  set_crash_context("publishing the map after the " + name);
   try {
     publish_all(cloud->header.stamp);
   } catch (const std::exception& e) {
     ROS_ERROR("umbra_server: cannot publish the map after the %s: %s", name.c_str(), e.what());
   }
+  set_crash_context("");
 }
 
 void MapServer::publish_all(const ros::Time& stamp) {
