@@ -1,7 +1,7 @@
 // umbra_fuzz_seeds OUTDIR: writes the seed corpora of the fuzz targets.
 //
 // One folder per target (OUTDIR/octomap_bt, octomap_ot, umb, umb_body,
-// graph, xyz, xyz_bz2, ply, pcd, kitti, query_lines) with a handful of small, valid files made by
+// graph, xyz, xyz_bz2, ply, pcd, kitti, query_lines, and rosbag in ROS builds) with a handful of small, valid files made by
 // umbra's own writers or spelled out here: empty maps, single voxels, a few
 // random voxels, colour, an unpruned tree, a coarse map of the simulated
 // office; point clouds in every encoding each reader supports; `umbra query`
@@ -25,6 +25,9 @@
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/sim/lidar.hpp"
 #include "umbra/sim/scene.hpp"
+#ifdef UMBRA_FUZZ_ROSBAG_SEEDS
+#include "bag_writer.hpp"
+#endif
 
 namespace {
 
@@ -235,6 +238,17 @@ void query_line_seeds(const fs::path& out) {
 
 }  // namespace
 
+/// rosbag: the tests' small bag (clouds, /tf, /tf_static, another type) in each compression the reader knows.
+void rosbag_seeds(const fs::path& out) {
+#ifdef UMBRA_FUZZ_ROSBAG_SEEDS
+  for (const char* compression : {"none", "bz2", "lz4"}) {
+    write(out / "rosbag" / (std::string("small-") + compression + ".bag"), umbra::test::small_bag(compression).bytes);
+  }
+#else
+  (void)out;
+#endif
+}
+
 int main(int argc, char** argv) {
   if (argc != 2) {
     std::fprintf(stderr, "usage: %s OUTDIR\n", argv[0]);
@@ -250,6 +264,7 @@ int main(int argc, char** argv) {
     pcd_seeds(out);
     kitti_seeds(out);
     query_line_seeds(out);
+    rosbag_seeds(out);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "umbra_fuzz_seeds: %s\n", e.what());
     return 1;

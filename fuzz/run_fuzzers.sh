@@ -4,8 +4,8 @@
 #
 #   fuzz/run_fuzzers.sh [--build DIR] [--seconds N | --runs N] [--jobs J] [TARGET...]
 #
-# TARGET: octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines (default:
-# all). Defaults: --build build-fuzz (under the source folder), --seconds 10;
+# TARGET: octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines rosbag (default:
+# all; rosbag only where the build found ROS, otherwise it is skipped with a message). Defaults: --build build-fuzz (under the source folder), --seconds 10;
 # --runs N stops each target after N inputs instead. Each target starts from
 # the generated seeds and the corpus kept in the repository (fuzz/corpus/TARGET);
 # new inputs go to DIR/corpus/TARGET (kept between runs, so longer runs build
@@ -32,7 +32,7 @@ while [[ $# -gt 0 ]]; do
     *) targets+=("$1"); shift ;;
   esac
 done
-[[ ${#targets[@]} -gt 0 ]] || targets=(octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines)
+[[ ${#targets[@]} -gt 0 ]] || targets=(octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines rosbag)
 
 cxx="${UMBRA_FUZZ_CXX:-clang++}"
 if ! command -v "$cxx" > /dev/null 2>&1 || ! "$cxx" --version 2>/dev/null | grep -qi clang; then
@@ -63,6 +63,10 @@ rm -rf "$seeds"
 status=0
 for target in "${targets[@]}"; do
   binary="$build_dir/fuzz/umbra_fuzz_$target"
+  if [[ "$target" == rosbag && ! -x "$binary" ]]; then
+    echo "== rosbag: skipped (the fuzz build found no ROS 1; scripts/common.sh lists the Debian packages)"
+    continue
+  fi
   [[ -x "$binary" ]] || { echo "unknown target '$target'"; exit 2; }
   corpus="$build_dir/corpus/$target"
   mkdir -p "$corpus" "$build_dir/crashes"
@@ -71,6 +75,7 @@ for target in "${targets[@]}"; do
     octomap_*) dict=(-dict="$source_dir/fuzz/octomap.dict") ;;
     ply) dict=(-dict="$source_dir/fuzz/ply.dict") ;;
     pcd) dict=(-dict="$source_dir/fuzz/pcd.dict") ;;
+    rosbag) dict=(-dict="$source_dir/fuzz/rosbag.dict") ;;
   esac
   kept=()
   [[ -d "$source_dir/fuzz/corpus/$target" ]] && kept=("$source_dir/fuzz/corpus/$target")
