@@ -85,7 +85,9 @@ struct BagFile::State {
   [[nodiscard]] RecordSite site(std::uint64_t byte) const { return {&name, byte, 0, nullptr}; }
 
   std::vector<std::uint8_t> read_bytes(std::uint64_t byte, std::uint64_t size, const char* what) {
-    detail::require_memory(name, std::string("reading ") + what + " at byte " + std::to_string(byte), size);
+    if (size > memory_limit()) {
+      detail::require_memory(name, std::string("reading ") + what + " at byte " + std::to_string(byte), size);
+    }
     std::vector<std::uint8_t> bytes(size);
     if (size <= kWindowBytes) {
       // Record headers, lengths and index data: small reads near each other, served from one window.
@@ -266,14 +268,7 @@ struct BagFile::State {
       throw site(record.byte).error("chunk info version " + std::to_string(version) + " (only version 1 is read)");
     }
     const std::uint64_t chunk_byte = record.fields.u64("chunk_pos");
-    const bool found = std::binary_search(chunks.begin(), chunks.end(), chunk_byte,
-                                          [](const auto& a, const auto& b) {
-                                            if constexpr (std::is_same_v<std::decay_t<decltype(a)>, Chunk>) {
-                                              return a.byte < b;
-                                            } else {
-                                              return a < b.byte;
-                                            }
-                                          });
+    const bool found = std::ranges::binary_search(chunks, chunk_byte, {}, &Chunk::byte);  // chunks are in file order
     if (!found) {
       throw site(record.byte).error("the chunk info names a chunk at byte " + std::to_string(chunk_byte) +
                                     ", where no chunk record starts");

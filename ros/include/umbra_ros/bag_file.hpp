@@ -30,9 +30,11 @@
 // opened; MemoryLimitError when a chunk needs more than memory_limit().
 //
 // Cost: opening reads every record header and the index (12 bytes per
-// message); read() decompresses each chunk about once when messages are
-// read in time order (a chunk whose messages interleave in time with those
-// of more than kCachedChunks others is decompressed again).
+// message), small reads through one 64 KiB window of the file; read()
+// decompresses each chunk about once when messages are read in time order
+// (up to 256 MiB of decompressed chunks are kept for chunks that overlap in
+// time; reading that would decompress the same chunks over and over, 16
+// times their size, is refused with a FormatError rather than left to run).
 #pragma once
 
 #include <cstdint>
@@ -75,9 +77,6 @@ struct BagMessage {
 
 class BagFile {
  public:
-  /// Decompressed chunks kept for read().
-  static constexpr std::size_t kCachedChunks = 4;
-
   /// Opens `path` and reads its structure (see the file comment).
   explicit BagFile(const std::filesystem::path& path);
   BagFile(const BagFile&) = delete;
