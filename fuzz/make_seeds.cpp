@@ -1,13 +1,14 @@
 // umbra_fuzz_seeds OUTDIR: writes the seed corpora of the fuzz targets.
 //
 // One folder per target (OUTDIR/octomap_bt, octomap_ot, umb, umb_body,
-// graph, xyz, xyz_bz2, ply, pcd, kitti, query_lines, and rosbag in ROS builds) with a handful of small, valid files made by
+// graph, xyz, xyz_bz2, ply, pcd, kitti, query_lines) with a handful of small, valid files made by
 // umbra's own writers or spelled out here: empty maps, single voxels, a few
 // random voxels, colour, an unpruned tree, a coarse map of the simulated
 // office; point clouds in every encoding each reader supports; `umbra query`
 // input lines of every kind, good and bad. Nothing comes
 // from ../shared/data. Every file is a few bytes to ~10 KB so that the
 // fuzzers mutate quickly. Cost: well under a second.
+// In builds with ROS also OUTDIR/rosbag: the tests' small bag in each compression.
 #include <bzlib.h>
 
 #include <bit>
@@ -219,6 +220,17 @@ void kitti_seeds(const fs::path& out) {
 /// `umbra query` input lines: byte 0 holds the settings (fuzz_query_lines.cpp:
 /// kind in bits 0-1, unknown-is-free bit 2, depth bits 3-4, radius bits 5-7),
 /// then good lines of the kind, a comment, a blank line and a few bad ones.
+/// rosbag: the tests' small bag (clouds, /tf, /tf_static, another type) in each compression the reader knows.
+void rosbag_seeds(const fs::path& out) {
+#ifdef UMBRA_FUZZ_ROSBAG_SEEDS
+  for (const char* compression : {"none", "bz2", "lz4"}) {
+    write(out / "rosbag" / (std::string("small-") + compression + ".bag"), umbra::test::small_bag(compression).bytes);
+  }
+#else
+  (void)out;
+#endif
+}
+
 void query_line_seeds(const fs::path& out) {
   const char* const lines[] = {
       "0.5 0.2 0.1 0.3\n1 1 1 0.05\n# comment\n\n-2,0,0.5,1\n0.1 0.2 nan 1\n500 0 0 0.1\n",       // sphere
@@ -238,17 +250,6 @@ void query_line_seeds(const fs::path& out) {
 
 }  // namespace
 
-/// rosbag: the tests' small bag (clouds, /tf, /tf_static, another type) in each compression the reader knows.
-void rosbag_seeds(const fs::path& out) {
-#ifdef UMBRA_FUZZ_ROSBAG_SEEDS
-  for (const char* compression : {"none", "bz2", "lz4"}) {
-    write(out / "rosbag" / (std::string("small-") + compression + ".bag"), umbra::test::small_bag(compression).bytes);
-  }
-#else
-  (void)out;
-#endif
-}
-
 int main(int argc, char** argv) {
   if (argc != 2) {
     std::fprintf(stderr, "usage: %s OUTDIR\n", argv[0]);
@@ -263,8 +264,8 @@ int main(int argc, char** argv) {
     ply_seeds(out);
     pcd_seeds(out);
     kitti_seeds(out);
-    query_line_seeds(out);
     rosbag_seeds(out);
+    query_line_seeds(out);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "umbra_fuzz_seeds: %s\n", e.what());
     return 1;
