@@ -6,15 +6,17 @@
 // 0-1 the kind (sphere, box, line, raycast), bit 2 --unknown free, bits 3-4
 // --depth 0..3, bits 5-7 --radius from a list that includes what CLI11's
 // NonNegativeNumber lets through (inf, nan, 1e300). The rest is the text
-// of the input file, any number of lines, read with read_query_lines. Not
-// covered yet: `gain` lines (added to `umbra query` after this target).
+// of the input file, any number of lines, read one by one with
+// QueryLineReader (the command's streaming reader). Not covered yet: `gain`
+// lines (added to `umbra query` after this target).
 //
 // Crashes (the rule): any exception other than the std::invalid_argument /
 // std::out_of_range the answering turns into a per-line problem, a failed
 // UMBRA_ASSERT, a sanitizer report. Properties of what is accepted: a good
-// line holds exactly the kind's count of finite numbers and a bad one says
-// why; line numbers rise; a NaN or infinite capsule radius is refused; a
-// region free at a coarser depth is free at depth 0 (coarse answers are
+// line holds exactly the kind's count of finite numbers and a bad one holds
+// none (a line over kMaxQueryLineBytes included); line numbers rise; the
+// reader stops only at the end of the input; a NaN or infinite capsule
+// radius is refused; a region free at a coarser depth is free at depth 0 (coarse answers are
 // conservative); a raycast hit at depth 0 is the centre of an occupied
 // voxel. The map (8 depth levels at 0.1 m, so +-12.8 m: easy to leave)
 // holds free, occupied and unknown space: one scan of a half shell.
@@ -77,24 +79,22 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const CollisionOptions& collision = settings.collision;
   const double radius = settings.radius;
   std::istringstream in(std::string(reinterpret_cast<const char*>(data) + 1, size - 1));
-  const QueryLines lines = read_query_lines(in, kind);
+  QueryLineReader reader(in, kind);
 
   std::size_t last = 0;
-  for (const BadQueryLine& line : lines.bad) {
-    require(line.number > last, "bad lines come in order, numbered from 1");
-    require(!line.problem.empty(), "a bad line says what is wrong");
-    last = line.number;
-  }
-  last = 0;
   LineQuerySettings finest = settings;
   finest.collision.depth = 0;
-  for (const QueryLine& line : lines.good) {
-    require(line.number > last, "good lines come in order, numbered from 1");
-    last = line.number;
-    require(line.values.size() == numbers_of(kind), "a good line holds exactly the kind's count of numbers");
-    for (const double v : line.values) require(std::isfinite(v), "a good line holds only finite numbers");
+  while (const QueryLine* line = reader.next()) {
+    require(line->number > last, "lines come in order, numbered from 1");
+    last = line->number;
+    if (!line->good()) {
+      require(line->values.empty(), "a bad line holds no values");
+      continue;
+    }
+    require(line->values.size() == numbers_of(kind), "a good line holds exactly the kind's count of numbers");
+    for (const double v : line->values) require(std::isfinite(v), "a good line holds only finite numbers");
 
-    const QueryAnswer answer = answer_query_line(map, kind, line.values, settings);
+    const QueryAnswer answer = answer_query_line(map, kind, line->values, settings);
     require(answer.ok != !answer.problem.empty(), "an answer or a problem, never both");
     if (kind == LineQuery::line && !(std::isfinite(radius) && radius >= 0.0)) {
       require(!answer.ok, "a NaN or infinite capsule radius is refused");
@@ -105,9 +105,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         require(map.state(answer.point) == OccupancyState::occupied, "a raycast hits an occupied voxel's centre");
       }
     } else if (!answer.yes && collision.depth > 0) {
-      const QueryAnswer fine = answer_query_line(map, kind, line.values, finest);
+      const QueryAnswer fine = answer_query_line(map, kind, line->values, finest);
       require(fine.ok && !fine.yes, "free at a coarser depth is free at depth 0");
     }
   }
+  require(in.eof(), "the reader stops only at the end of the input");
   return 0;
 }

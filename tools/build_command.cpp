@@ -310,7 +310,15 @@ int run_build(const BuildOptions& options) {
       row.read_seconds = seconds_since(read_start);
       const auto insert_start = std::chrono::steady_clock::now();
       try {
-        if (options.color && !scan.colors.empty()) {
+        if (insert.integrator == IntegratorKind::projective && scan.image) {
+          // A depth image goes in as an image: the projective integrator reads it.
+          const bool coloured = options.color && !scan.image->colors.empty();
+          uncoloured += options.color && !coloured ? 1 : 0;
+          row.stats = map.insert_depth_image(scan.image->view(), scan.image->camera, scan.image->pose,
+                                             coloured ? std::span<const Rgb>(scan.image->colors)
+                                                      : std::span<const Rgb>(),
+                                             insert);
+        } else if (options.color && !scan.colors.empty()) {
           row.stats = map.insert_point_cloud(scan.origin, scan.points, scan.colors, insert);
         } else {
           uncoloured += options.color ? 1 : 0;
@@ -402,9 +410,10 @@ Command add_build_command(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(1, 21));
   command->add_option("--integrator", options->integrator,
-                      "simple, discrete (OctoMap's discretize=true) or fast (coarse free-space clearing)")
+                      "simple, discrete (OctoMap's discretize=true), fast (coarse free-space clearing) or "
+                      "projective (free space from depth images, or range images of scans)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"simple", "discrete", "fast"}));
+      ->check(CLI::IsMember({"simple", "discrete", "fast", "projective"}));
   command->add_option("--clear-depth", options->clear_depth,
                       "fast: depth of the nodes free space is cleared with (-1: nodes closest to 16 cm)")
       ->capture_default_str()

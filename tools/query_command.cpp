@@ -9,24 +9,32 @@
 //             (--hfov, --vfov, --min-range, --max-range, --method exact|fast)
 //   nodes     (no input) --state S [--box ..|--sphere ..] [--count] -> "x y z size state" per node
 //
-// All lines are read and checked first, then answered in one timed loop,
-// then printed, so that the timing on stderr's last line (one JSON object)
-// is the answering alone. A bad line (not the right count of numbers, a
-// number that is not finite, a shape outside the map) is reported on stderr
-// with its line number and gets no answer; the exit code is then 1. Blank
-// lines and lines starting with '#' are skipped. The lines' parser and the
-// answering are query_lines.cpp (fuzzed by fuzz/fuzz_query_lines.cpp).
+// Lines are answered as they arrive, in bounded memory: the lines the input
+// holds ready (up to 4096) are read and checked, answered in one timed loop,
+// then printed, and the answers are flushed whenever the next read could
+// wait, so a program may write a query and wait for its answer. The timing
+// on stderr's last line (one JSON object) is the answering alone, summed
+// over these loops. A bad line (not the right count of numbers, a number
+// that is not finite, a line over 64 KiB, a shape outside the map) is
+// reported on stderr with its line number, in line order, and gets no
+// answer; the exit code is then 1. Blank lines and lines starting with '#'
+// are skipped. The lines' reader, parser and answering are query_lines.cpp
+// (fuzzed by fuzz/fuzz_query_lines.cpp); the input is read through
+// descriptor_input.hpp, which tells when a read would wait.
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
-#include <fstream>
-#include <iostream>
+#include <istream>
 #include <memory>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
+#include "descriptor_input.hpp"
 #include "options.hpp"
 #include "query_lines.hpp"
 #include "umbra/io/map_formats.hpp"
@@ -105,6 +113,89 @@ int print_nodes(const OccupancyMap& map, const QueryOptions& options) {
   return 0;
 }
 
+/// The lines read since the last answers: as many as the input holds ready,
+/// up to kLines, so that a file is answered in long timed loops (two clock
+/// readings per batch) and a writer waiting for an answer gets it at once.
+/// Bad lines keep their place, so that every message comes in line order.
+class LineBatch {
+ public:
+  static constexpr std::size_t kLines = 4096;
+
+  explicit LineBatch(std::size_t numbers) : numbers_(numbers) {
+    values_.reserve(kLines * numbers);
+    lines_.reserve(kLines);
+  }
+
+  /// Reads the next lines; false when the input ended (the batch may still hold lines).
+  bool read(QueryLineReader& reader) {
+    lines_.clear();
+    values_.clear();
+    do {
+      const QueryLine* line = reader.next();
+      if (line == nullptr) return false;
+      lines_.push_back({line->number, line->problem});
+      values_.insert(values_.end(), line->values.begin(), line->values.end());
+    } while (lines_.size() < kLines && reader.input_ready());
+    return true;
+  }
+
+  struct Line {
+    std::size_t number;
+    std::string problem;  ///< why the line is bad; empty for a good one
+  };
+  [[nodiscard]] const std::vector<Line>& lines() const { return lines_; }
+  /// The values of the good lines, numbers_of(kind) each, in order.
+  [[nodiscard]] std::span<const double> values(std::size_t good_index) const {
+    return std::span<const double>(values_).subspan(good_index * numbers_, numbers_);
+  }
+
+ private:
+  std::size_t numbers_;
+  std::vector<Line> lines_;
+  std::vector<double> values_;
+};
+
+struct QueryTotals {
+  std::size_t answered = 0;  ///< good lines given to the library
+  std::size_t bad = 0;       ///< lines refused by the parser or the library
+  double seconds = 0.0;      ///< time spent answering, reading and printing left out
+};
+
+/// Answers the good lines of the batch in one timed loop (into `answers`,
+/// reused from batch to batch), then prints the answers on stdout and the
+/// problems on stderr, in line order.
+void answer_and_print(const OccupancyMap& map, LineQuery kind, const LineQuerySettings& settings,
+                      const std::string& name, const LineBatch& batch, std::vector<QueryAnswer>& answers,
+                      QueryTotals& totals) {
+  answers.clear();
+  std::size_t good = 0;
+  for (const LineBatch::Line& line : batch.lines()) good += line.problem.empty() ? 1 : 0;
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < good; ++i) answers.push_back(answer_query_line(map, kind, batch.values(i), settings));
+  totals.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  totals.answered += good;
+
+  std::size_t next = 0;
+  for (const LineBatch::Line& line : batch.lines()) {
+    if (!line.problem.empty()) {
+      std::fprintf(stderr, "umbra: %s line %zu: %s\n", name.c_str(), line.number, line.problem.c_str());
+      ++totals.bad;
+      continue;
+    }
+    const QueryAnswer& a = answers[next++];
+    if (!a.ok) {
+      std::fprintf(stderr, "umbra: %s line %zu: %s\n", name.c_str(), line.number, a.problem.c_str());
+      ++totals.bad;
+    } else if (kind == LineQuery::gain) {
+      std::printf("%llu %.10g\n", static_cast<unsigned long long>(a.gain.unknown_voxels), a.gain.volume);
+    } else if (kind == LineQuery::raycast && a.yes) {
+      std::printf("1 %.10g %.10g %.10g\n", a.point.x, a.point.y, a.point.z);
+    } else {
+      std::printf("%d\n", a.yes ? 1 : 0);
+    }
+  }
+}
+
 int run_query(const QueryOptions& options) {
   const OccupancyMap map = load_any_map(options.map_path);
   if (options.depth < 0 || options.depth > map.depth_levels()) {
@@ -127,22 +218,6 @@ int run_query(const QueryOptions& options) {
   const std::optional<LineQuery> kind = line_query_named(options.kind);
   if (!kind) throw std::logic_error("unknown query kind " + options.kind);  // CLI11 checked the name
   const std::string name = options.input == "-" ? "standard input" : options.input;
-  QueryLines lines;
-  try {
-    if (options.input == "-") {
-      lines = read_query_lines(std::cin, *kind);
-    } else {
-      std::ifstream in(options.input);
-      if (!in) throw std::runtime_error("cannot be opened for reading");
-      lines = read_query_lines(in, *kind);
-    }
-  } catch (const std::runtime_error& e) {
-    throw std::runtime_error(name + ": " + e.what());
-  }
-  for (const BadQueryLine& line : lines.bad) {
-    std::fprintf(stderr, "umbra: %s line %zu: %s\n", name.c_str(), line.number, line.problem.c_str());
-  }
-  std::size_t bad = lines.bad.size();
   LineQuerySettings settings;
   settings.collision = {options.unknown == "free", options.depth};
   settings.radius = options.radius;
@@ -152,30 +227,34 @@ int run_query(const QueryOptions& options) {
   settings.max_range = options.max_range;
   settings.method = options.method == "fast" ? GainMethod::fast : GainMethod::exact;
 
-  std::vector<QueryAnswer> answers;
-  answers.reserve(lines.good.size());
-  const auto start = std::chrono::steady_clock::now();
-  for (const QueryLine& line : lines.good) {
-    answers.push_back(answer_query_line(map, *kind, line.values, settings));
+  std::unique_ptr<DescriptorInput> input;
+  try {
+    input = options.input == "-" ? std::make_unique<DescriptorInput>(STDIN_FILENO)
+                                 : std::make_unique<DescriptorInput>(options.input);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(name + ": " + e.what());
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-  for (std::size_t i = 0; i < answers.size(); ++i) {
-    const QueryAnswer& a = answers[i];
-    if (!a.ok) {
-      std::fprintf(stderr, "umbra: %s line %zu: %s\n", name.c_str(), lines.good[i].number, a.problem.c_str());
-      ++bad;
-    } else if (*kind == LineQuery::gain) {
-      std::printf("%llu %.10g\n", static_cast<unsigned long long>(a.gain.unknown_voxels), a.gain.volume);
-    } else if (*kind == LineQuery::raycast && a.yes) {
-      std::printf("1 %.10g %.10g %.10g\n", a.point.x, a.point.y, a.point.z);
-    } else {
-      std::printf("%d\n", a.yes ? 1 : 0);
+  std::istream stream(input.get());
+  QueryLineReader reader(stream, *kind);
+  LineBatch batch(numbers_of(*kind));
+  std::vector<QueryAnswer> answers;
+  QueryTotals totals;
+  bool ended = false;
+  while (!ended) {
+    try {
+      ended = !batch.read(reader);
+    } catch (const std::runtime_error& e) {
+      const std::string reason = input->read_error().empty() ? "" : ": " + input->read_error();
+      answer_and_print(map, *kind, settings, name, batch, answers, totals);  // what came before the failure
+      std::fflush(stdout);
+      throw std::runtime_error(name + ": " + e.what() + reason);
     }
+    answer_and_print(map, *kind, settings, name, batch, answers, totals);
+    if (!reader.input_ready()) std::fflush(stdout);  // the next read may wait for the writer: let it see its answers
   }
   std::fflush(stdout);
-  print_timing(options.kind, answers.size(), seconds);
-  return bad > 0 ? 1 : 0;
+  print_timing(options.kind, totals.answered, totals.seconds);
+  return totals.bad > 0 ? 1 : 0;
 }
 
 }  // namespace

@@ -1,14 +1,18 @@
-// The input lines of `umbra query` (query_lines.hpp): a hand-written word
-// splitter over std::from_chars (no locale, no allocation but the values),
-// and the dispatch of a checked line to the library's is_free / cast_ray /
+// The input lines of `umbra query` (query_lines.hpp): a reader of one line
+// at a time into a fixed buffer, a hand-written word splitter over
+// std::from_chars (no locale, no allocation but the values), and the
+// dispatch of a checked line to the library's is_free / cast_ray /
 // information_gain.
 #include "query_lines.hpp"
 
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <system_error>
+
+#include "printable_text.hpp"
 
 namespace umbra::cli {
 
@@ -57,26 +61,6 @@ namespace {
 
 bool is_separator(char c) { return c == ' ' || c == '\t' || c == '\r' || c == ','; }
 
-/// A word as it may be quoted in a message: at most 40 characters, bytes
-/// outside printable ASCII as \xNN (a line may hold anything, NUL included).
-std::string printable(std::string_view word) {
-  constexpr std::size_t kMaxShown = 40;
-  std::string out;
-  for (std::size_t i = 0; i < word.size() && i < kMaxShown; ++i) {
-    const auto c = static_cast<unsigned char>(word[i]);
-    if (c >= 0x20 && c < 0x7f) {
-      out += static_cast<char>(c);
-    } else {
-      static const char kHex[] = "0123456789abcdef";
-      out += "\\x";
-      out += kHex[c >> 4];
-      out += kHex[c & 15];
-    }
-  }
-  if (word.size() > kMaxShown) out += "... (" + std::to_string(word.size()) + " characters)";
-  return out;
-}
-
 }  // namespace
 
 std::optional<std::string> parse_query_line(std::string_view text, LineQuery kind, std::vector<double>& values) {
@@ -113,24 +97,49 @@ std::optional<std::string> parse_query_line(std::string_view text, LineQuery kin
   return std::nullopt;
 }
 
-QueryLines read_query_lines(std::istream& in, LineQuery kind) {
-  QueryLines lines;
-  std::string text;
-  std::size_t number = 0;
-  std::vector<double> values;
-  while (std::getline(in, text)) {
-    ++number;
-    const std::size_t first = text.find_first_not_of(" \t\r");
-    if (first == std::string::npos || text[first] == '#') continue;
-    if (auto problem = parse_query_line(text, kind, values)) {
-      lines.bad.push_back({number, std::move(*problem)});
-      continue;
+QueryLineReader::QueryLineReader(std::istream& in, LineQuery kind)
+    : in_(in), kind_(kind), text_(kMaxQueryLineBytes + 1, '\0') {}
+
+const QueryLine* QueryLineReader::next() {
+  for (;;) {
+    // istream::getline into a buffer of fixed size: it stops after
+    // kMaxQueryLineBytes bytes (failbit, newline not reached) instead of
+    // growing a string for as long as the input has no newline.
+    in_.getline(text_.data(), static_cast<std::streamsize>(text_.size()));
+    if (in_.bad()) {
+      throw std::runtime_error("the input could not be read (after line " + std::to_string(number_) + ")");
     }
-    lines.good.push_back({number, values});
+    const auto count = static_cast<std::size_t>(in_.gcount());
+    const bool too_long = in_.fail() && !in_.eof() && count == kMaxQueryLineBytes;
+    if (in_.fail() && !too_long) return nullptr;  // nothing left: failbit with nothing extracted
+    // The newline, when one ended the line, is counted but not stored.
+    const std::size_t length = too_long || in_.eof() ? count : count - 1;
+    const std::string_view text(text_.data(), length);
+    ++number_;
+    line_.number = number_;
+    line_.problem.clear();
+    const std::size_t first = text.find_first_not_of(" \t\r");
+    const bool comment = first != std::string_view::npos && text[first] == '#';
+    if (too_long) {
+      in_.clear();
+      in_.ignore(std::numeric_limits<std::streamsize>::max(), '\n');  // the rest of the line, kept nowhere
+      if (in_.bad()) {
+        throw std::runtime_error("the input could not be read (in line " + std::to_string(number_) + ")");
+      }
+      if (comment) continue;
+      const auto rest = static_cast<std::size_t>(in_.gcount()) - (in_.eof() ? 0 : 1);
+      line_.values.clear();
+      line_.problem = "the line holds " + std::to_string(length + rest) + " bytes, more than the " +
+                      std::to_string(kMaxQueryLineBytes) + " a query line may hold";
+      return &line_;
+    }
+    if (first == std::string_view::npos || comment) continue;
+    if (auto problem = parse_query_line(text, kind_, line_.values)) line_.problem = std::move(*problem);
+    return &line_;
   }
-  if (in.bad()) throw std::runtime_error("the input could not be read (after line " + std::to_string(number) + ")");
-  return lines;
 }
+
+bool QueryLineReader::input_ready() const { return in_.good() && in_.rdbuf()->in_avail() > 0; }
 
 QueryAnswer answer_query_line(const OccupancyMap& map, LineQuery kind, std::span<const double> v,
                               const LineQuerySettings& settings) {

@@ -1,10 +1,11 @@
 // The input lines of `umbra query` (sphere, box, line, raycast, gain): what a line
-// must hold, reading and checking every line of an input, and answering one
-// checked line against a map. Kept apart from the command (query_command.cpp)
-// so that the libFuzzer target fuzz/fuzz_query_lines.cpp feeds lines through
-// exactly this code without the command-line parser. Cost: reading is one
-// pass over the text, one allocation per good line (its values); answering is
-// the library's query.
+// must hold, reading and checking the lines of an input one by one, and
+// answering one checked line against a map. Kept apart from the command
+// (query_command.cpp) so that the libFuzzer target fuzz/fuzz_query_lines.cpp
+// feeds lines through exactly this code without the command-line parser.
+// Cost: reading is one pass over the text with no allocation per line (one
+// buffer of kMaxQueryLineBytes, the values and the message of a bad line
+// reused); answering is the library's query.
 #pragma once
 
 #include <cstddef>
@@ -36,27 +37,48 @@ const char* layout_of(LineQuery kind);
 /// `values` filled.
 std::optional<std::string> parse_query_line(std::string_view text, LineQuery kind, std::vector<double>& values);
 
-/// A line that was read: its number (from 1) and its values.
+/// The longest line a query may be, in bytes without its newline: far more
+/// than any layout needs (7 numbers), small enough that a file with no
+/// newline cannot fill the memory. A longer line is bad; a longer comment
+/// is skipped.
+inline constexpr std::size_t kMaxQueryLineBytes = 65536;
+
+/// One line that was read: its number (from 1), and its values when it is
+/// good or what is wrong with it when it is not.
 struct QueryLine {
   std::size_t number = 0;
-  std::vector<double> values;
+  std::vector<double> values;  ///< numbers_of(kind) values when good, empty when bad
+  std::string problem;         ///< empty when good
+  [[nodiscard]] bool good() const { return problem.empty(); }
 };
 
-/// A line that was refused: its number and why.
-struct BadQueryLine {
-  std::size_t number = 0;
-  std::string problem;
-};
+/// The lines of an input, one at a time, so that `umbra query` answers a
+/// line as soon as it arrives and holds at most one line (and a buffer)
+/// whatever the input's length. Blank lines and lines starting with '#'
+/// (after blanks) are skipped.
+class QueryLineReader {
+ public:
+  QueryLineReader(std::istream& in, LineQuery kind);
 
-struct QueryLines {
-  std::vector<QueryLine> good;
-  std::vector<BadQueryLine> bad;
-};
+  /// The next line that is not blank or a comment, or nullptr at the end of
+  /// the input; valid until the next call. Throws std::runtime_error when
+  /// the stream fails to read (bad lines are not errors: they come back
+  /// with their problem).
+  const QueryLine* next();
 
-/// Every line of `in`, in order; blank lines and lines starting with '#'
-/// (after blanks) are skipped. Throws std::runtime_error when the stream
-/// fails to read (not for bad lines: those go to `bad`).
-QueryLines read_query_lines(std::istream& in, LineQuery kind);
+  /// Whether the stream holds more input that next() can read without
+  /// waiting (buffered, or ready in the file or pipe). False means that
+  /// next() may wait for a writer, or that the input ended: answers waiting
+  /// to be printed should be flushed first. From std::streambuf::in_avail().
+  [[nodiscard]] bool input_ready() const;
+
+ private:
+  std::istream& in_;
+  LineQuery kind_;
+  std::string text_;  ///< kMaxQueryLineBytes + 1 bytes, reused for every line
+  QueryLine line_;
+  std::size_t number_ = 0;
+};
 
 /// One answer: collides / hit, the centre of the voxel hit (raycast), the
 /// gain, or the reason there is no answer (the library's

@@ -17,6 +17,7 @@
 
 #include "bindings.hpp"
 #include "numpy_arrays.hpp"
+#include "umbra/map/insert_options.hpp"  // max_threads()
 #include "umbra/query/information_gain.hpp"
 #include "umbra/query/shapes.hpp"
 
@@ -32,6 +33,13 @@ struct GainRecord {
 
 GainOptions gain_options(const std::string& method, int fast_depth, int threads) {
   if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0: all cores), got " + std::to_string(threads));
+  // The bound insert() has (InsertOptions): thousands of threads would end
+  // the interpreter when the system refuses them.
+  if (static_cast<unsigned>(threads) > max_threads()) {
+    throw std::invalid_argument("threads must be at most " + std::to_string(max_threads()) +
+                                " (4 per hardware thread, at least 16; umbra's max_threads()), got " +
+                                std::to_string(threads));
+  }
   GainOptions options;
   if (method == "exact") {
     options.method = GainMethod::exact;

@@ -283,6 +283,8 @@ void bind_ray_casts(MapClass& map) {
       .def(
           "cast_rays_octomap",
           [](const OccupancyMap& m, py::handle origins, py::handle directions, bool ignore_unknown, double max_range) {
+            // OctoMap reads a NaN range as unlimited (NaN > 0 is false); cast_ray refuses it, and so does this.
+            if (std::isnan(max_range)) throw std::invalid_argument("ray cast: max_range is NaN");
             const RowArray o(origins, "origins");
             const RowArray d(directions, "directions");
             const std::size_t n = batch_count({{o.name(), o.count()}, {d.name(), d.count()}});

@@ -1,6 +1,7 @@
 #include "numpy_arrays.hpp"
 
 #include <algorithm>
+#include <type_traits>
 #include <utility>
 
 namespace umbra::python {
@@ -8,16 +9,70 @@ namespace {
 
 using Float64 = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
+std::string type_name(py::handle object) { return py::str(py::type::of(object).attr("__name__")); }
+
+/// What `convert` (a numpy conversion) returns, its failure raised as an
+/// error that names the argument: MemoryError when the copy did not fit
+/// (numpy's message says how much it wanted), else TypeError with
+/// `refusal`. The conversions run through pybind11's constructors, which
+/// keep numpy's error (array_t::ensure would clear it).
+template <typename Convert>
+auto converted(const char* name, const std::string& refusal, const Convert& convert) -> decltype(convert()) {
+  try {
+    return convert();
+  } catch (py::error_already_set& e) {
+    if (!e.matches(PyExc_MemoryError)) throw py::type_error(refusal);
+    const std::string message =
+        std::string(name) + ": not enough memory to convert it: " + std::string(py::str(e.value()));
+    PyErr_SetString(PyExc_MemoryError, message.c_str());
+    throw py::error_already_set();
+  }
+}
+
+/// The object as a numpy array, converted only when it is not one already.
+py::array any_array(py::handle object, const char* name, const std::string& refusal) {
+  return converted(name, refusal, [&] { return py::array(py::reinterpret_borrow<py::object>(object)); });
+}
+
 /// The object as a C-contiguous array of T (a view when it already is one).
+/// Numbers only: numpy would turn complex numbers into their real parts
+/// (with a warning only) and strings into the numbers they spell.
 template <typename Array>
 Array as_array(py::handle object, const char* name) {
-  Array array = Array::ensure(object);
-  if (!array) {
-    PyErr_Clear();
-    throw py::type_error(std::string(name) + " must be an array of numbers, got " +
-                         std::string(py::str(py::type::of(object).attr("__name__"))));
+  const std::string refusal = std::string(name) + " must be an array of numbers, got " + type_name(object);
+  const py::array any = any_array(object, name, refusal);
+  const char kind = any.dtype().kind();
+  if (kind == 'c') {
+    throw py::type_error(std::string(name) + " must hold real numbers, got dtype " + std::string(py::str(any.dtype())));
   }
-  return array;
+  if (kind != 'b' && kind != 'i' && kind != 'u' && kind != 'f' && kind != 'O') {
+    throw py::type_error(std::string(name) + " must be an array of numbers, got dtype " +
+                         std::string(py::str(any.dtype())));
+  }
+  return converted(name, refusal, [&] { return Array(any); });
+}
+
+/// Integer colours of any integer dtype as a new uint8 array, each checked
+/// against [0, 255] as the integer it is (a uint64 above 2^63 is no
+/// negative number).
+template <typename Wide>
+py::array_t<std::uint8_t, py::array::c_style> narrow_colors(const py::array& any, const char* name) {
+  using WideArray = py::array_t<Wide, py::array::c_style | py::array::forcecast>;
+  const WideArray wide = converted(name, std::string(name) + " must be an array of integers in [0, 255]",
+                                   [&] { return WideArray(any); });
+  py::array_t<std::uint8_t, py::array::c_style> narrow({wide.shape(0), py::ssize_t{3}});
+  const Wide* in = wide.data();
+  std::uint8_t* out = narrow.mutable_data();
+  for (py::ssize_t i = 0; i < wide.size(); ++i) {
+    bool negative = false;
+    if constexpr (std::is_signed_v<Wide>) negative = in[i] < 0;
+    if (negative || in[i] > 255) {
+      throw py::value_error(std::string(name) + "[" + std::to_string(i / 3) + "] holds " + std::to_string(in[i]) +
+                            ", outside [0, 255]");
+    }
+    out[i] = static_cast<std::uint8_t>(in[i]);
+  }
+  return narrow;
 }
 
 }  // namespace
@@ -100,11 +155,7 @@ ScanPoints::ScanPoints(py::handle object, const char* name)
 }
 
 ColorArray::ColorArray(py::handle object, const char* name) {
-  py::array any = py::array::ensure(object);
-  if (!any) {
-    PyErr_Clear();
-    throw py::type_error(std::string(name) + " must be an array of integers in [0, 255]");
-  }
+  const py::array any = any_array(object, name, std::string(name) + " must be an array of integers in [0, 255]");
   const char kind = any.dtype().kind();
   if (kind != 'u' && kind != 'i') {
     throw py::type_error(std::string(name) + " must hold integers in [0, 255] (uint8), got dtype " +
@@ -114,19 +165,11 @@ ColorArray::ColorArray(py::handle object, const char* name) {
     throw py::value_error(std::string(name) + " must be an array of shape (N, 3), got shape " + shape_text(any));
   }
   if (any.dtype().is(py::dtype::of<std::uint8_t>())) {
-    array_ = py::array_t<std::uint8_t, py::array::c_style>::ensure(any);
+    using Bytes = py::array_t<std::uint8_t, py::array::c_style>;
+    array_ = converted(name, std::string(name) + " must be an array of integers in [0, 255]",
+                       [&] { return Bytes(any); });
   } else {
-    const auto wide = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(any);
-    array_ = py::array_t<std::uint8_t, py::array::c_style>({wide.shape(0), py::ssize_t{3}});
-    const std::int64_t* in = wide.data();
-    std::uint8_t* out = array_.mutable_data();
-    for (py::ssize_t i = 0; i < wide.size(); ++i) {
-      if (in[i] < 0 || in[i] > 255) {
-        throw py::value_error(std::string(name) + "[" + std::to_string(i / 3) + "] holds " + std::to_string(in[i]) +
-                              ", outside [0, 255]");
-      }
-      out[i] = static_cast<std::uint8_t>(in[i]);
-    }
+    array_ = kind == 'u' ? narrow_colors<std::uint64_t>(any, name) : narrow_colors<std::int64_t>(any, name);
   }
   count_ = static_cast<std::size_t>(array_.shape(0));
   data_ = reinterpret_cast<const Rgb*>(array_.data());

@@ -8,10 +8,12 @@
 //  - the arguments of a batch of shapes are (N, 3) rows or one (3,) row
 //    broadcast to all N, and (N,) values or one scalar; N is their common
 //    count and the answers are (N,);
-//  - anything numeric is accepted and converted to float64 (float32 for the
+//  - anything real is accepted and converted to float64 (float32 for the
 //    points of a scan); a float64 C-contiguous array is read in place.
 // Bad shapes raise ValueError naming the argument and the shape found;
-// non-numeric input raises TypeError.
+// non-numeric input (complex numbers and strings included) raises
+// TypeError; a conversion whose copy does not fit in memory raises
+// MemoryError naming the argument.
 //
 // Cost: a view is free when the dtype and layout already match, else one
 // copy of the array (an (N, 3) float64 copy of 1,000,000 points takes a
@@ -116,8 +118,8 @@ class ScanPoints {
 };
 
 /// Colours, (N, 3) of integers in [0, 255] (uint8 is read in place).
-/// Throws ValueError for another shape or a value out of range, TypeError
-/// for a non-integer dtype.
+/// Throws ValueError for another shape or a value out of range (named as
+/// the integer it is, whatever its dtype), TypeError for a non-integer dtype.
 class ColorArray {
  public:
   ColorArray(py::handle object, const char* name);

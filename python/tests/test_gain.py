@@ -136,6 +136,14 @@ def test_gain_errors(office):
         office.information_gains([[5, 5, 1], [5, 5, 1]], [0, 1, 2], 0, 90, 60, 0, 3)
     with pytest.raises(ValueError, match="threads"):
         office.information_gains([f], threads=-1)
+    # The bound insert() has: thousands of threads used to end the interpreter.
+    with pytest.raises(ValueError, match=r"threads must be at most \d+ \(4 per hardware thread, at least 16.*got 2000"):
+        office.information_gains([f], threads=2000)
+    with pytest.raises(ValueError, match="threads must be at most"):
+        office.information_gains([5, 5, 1], 0, 0, 90, 60, 0, 3, threads=2000)
+    with pytest.raises(ValueError, match="threads must be at most"):
+        umbra.OccupancyMap(0.1).insert(np.zeros((1, 3)), (0, 0, 0), threads=2000)
+    assert len(office.information_gains([f, f], threads=16)) == 2  # 16 is always allowed, as for insert()
 
 
 def test_gain_falls_as_the_map_fills():

@@ -228,6 +228,12 @@ def test_insertion_with_colours_averages_per_voxel():
         (lambda m: m.insert(np.zeros((4, 3)), (np.nan, 0, 0)), ValueError, "origin"),
         (lambda m: m.insert(np.zeros((2, 3)), (0, 0, 0), np.zeros((2, 3), dtype=np.uint8)), ValueError, "made without colour"),
         (lambda m: m.insert("points", (0, 0, 0)), TypeError, "points must be an array of numbers"),
+        (lambda m: m.insert(np.zeros((4, 3), dtype=np.complex128), (0, 0, 0)), TypeError,
+         "points must hold real numbers, got dtype complex128"),
+        (lambda m: m.insert([[1j, 0, 0]], (0, 0, 0)), TypeError, "points must hold real numbers"),
+        (lambda m: m.insert(np.zeros((4, 3)), (0, 0, 1j)), TypeError, "origin must hold real numbers"),
+        (lambda m: m.insert(np.array([["1", "2", "3"]]), (0, 0, 0)), TypeError,
+         "points must be an array of numbers, got dtype <U1"),
     ],
 )
 def test_insertion_errors(call, error, message):
@@ -247,6 +253,27 @@ def test_colour_errors():
         m.insert(points, (1, 1, 1), np.array([[0, 0, 0], [0, 0, 256]]))
     with pytest.raises(ValueError, match=r"colors must be an array of shape \(N, 3\)"):
         m.insert(points, (1, 1, 1), np.zeros((2, 4), dtype=np.uint8))
+    # Named as the integers they are, whatever their dtype.
+    for value in (2**63, 2**64 - 1, 256):
+        with pytest.raises(ValueError, match=rf"colors\[1\] holds {value}, outside \[0, 255\]"):
+            m.insert(points, (1, 1, 1), np.array([[0, 0, 0], [0, value, 0]], dtype=np.uint64))
+    with pytest.raises(ValueError, match=rf"colors\[0\] holds {-2**63}, outside \[0, 255\]"):
+        m.insert(points, (1, 1, 1), np.array([[-2**63, 0, 0], [0, 0, 0]], dtype=np.int64))
+    assert m.node_counts().total == 1, "the map is unchanged after an error"
+    m.insert(points, (1, 1, 1), np.array([[255, 0, 7], [255, 0, 7]], dtype=np.uint64))  # one voxel: no average
+    np.testing.assert_array_equal(m.nodes(points[:1])["color"][0], [255, 0, 7])
+
+
+def test_a_copy_that_does_not_fit_is_a_memory_error():
+    # A broadcast view of 10^12 points costs nothing; its float64 copy would need 22 TiB.
+    huge = np.broadcast_to(np.zeros(3, dtype=np.float32), (10**12, 3))
+    m = umbra.OccupancyMap(0.1, color=True)
+    for call, name in ((lambda: m.states(huge), "points"), (lambda: m.spheres_free(huge, 0.1), "centers")):
+        with pytest.raises(MemoryError, match=name + ": not enough memory to convert it"):
+            call()
+    wide = np.broadcast_to(np.zeros(3, dtype=np.int32), (10**12, 3))
+    with pytest.raises(MemoryError, match="colors: not enough memory to convert it"):
+        m.insert(np.zeros((1, 3)), (1, 1, 1), wide)
 
 
 # --- single voxels --------------------------------------------------------------------------------------

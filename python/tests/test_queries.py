@@ -360,6 +360,11 @@ def test_octomap_ray_casts(wall):
     np.testing.assert_allclose(end[1], [-1.05, 0.05, 0.05], atol=1e-6)  # stopped at the first unknown voxel
     hit, _ = wall.cast_rays_octomap([0.05, 0.05, 0.05], [1.0, 0, 0], max_range=1.0)
     assert not hit[0]
+    # A NaN range is refused as cast_ray refuses it (OctoMap would read it as unlimited).
+    for cast in (lambda: wall.cast_rays_octomap([0.05, 0.05, 0.05], [1.0, 0, 0], max_range=np.nan),
+                 lambda: wall.cast_rays([0.05, 0.05, 0.05], [1.0, 0, 0], max_range=np.nan)):
+        with pytest.raises(ValueError, match="max_range is NaN"):
+            cast()
 
 
 def test_frustum_contains(rng):

@@ -6,7 +6,9 @@
 #include <stdexcept>
 
 #include "core/radix_sort.hpp"
+#include "core/voxel_codes.hpp"
 #include "integrate/end_voxels.hpp"
+#include "integrate/projective_tracer.hpp"
 #include "integrate/ray_order.hpp"
 #include "integrate/ray_walker.hpp"
 
@@ -19,7 +21,8 @@ IntegratorKind parse_integrator_kind(const std::string& name) {
   if (name == "simple") return IntegratorKind::simple;
   if (name == "discrete") return IntegratorKind::discrete;
   if (name == "fast") return IntegratorKind::fast;
-  throw std::invalid_argument("unknown integrator '" + name + "' (expected simple, discrete or fast)");
+  if (name == "projective") return IntegratorKind::projective;
+  throw std::invalid_argument("unknown integrator '" + name + "' (expected simple, discrete, fast or projective)");
 }
 
 const char* to_string(IntegratorKind kind) {
@@ -27,6 +30,7 @@ const char* to_string(IntegratorKind kind) {
     case IntegratorKind::simple: return "simple";
     case IntegratorKind::discrete: return "discrete";
     case IntegratorKind::fast: return "fast";
+    case IntegratorKind::projective: return "projective";
   }
   return "?";
 }
@@ -38,6 +42,9 @@ void InsertOptions::validate(int depth_levels) const {
                                 "], got " + std::to_string(clear_depth));
   }
   if (fine_steps < 0) throw std::invalid_argument("fine_steps must be >= 0, got " + std::to_string(fine_steps));
+  if (!(surface_margin >= 0.0 && std::isfinite(surface_margin))) {
+    throw std::invalid_argument("surface_margin must be finite and >= 0, got " + std::to_string(surface_margin));
+  }
   if (threads > max_threads()) {
     throw std::invalid_argument("threads must be at most " + std::to_string(max_threads()) + " (4 per hardware thread, " +
                                 std::to_string(hardware_threads()) + " here; at least 16), got " +
@@ -115,6 +122,47 @@ KeyBox key_box(const Grid& grid, const Aabb& box) {
   return {grid.key(clamp(box.min)), grid.key(clamp(box.max))};
 }
 
+
+/// The discrete integrator's hits for a scan's points: the voxel of every
+/// point in the map whose centre lies within max_range of the origin (and,
+/// with a box, in it: the discrete integrator's ray to that centre is not
+/// clipped), each voxel once.
+void add_end_voxel_hits(const Grid& grid, Vec3f origin, std::span<const Vec3f> points, double max_range,
+                        const std::optional<Aabb>& box, const std::optional<KeyBox>& box_keys, UpdateBatch& batch,
+                        InsertStats& stats) {
+  constexpr std::size_t kBlock = 1024;
+  std::array<std::uint64_t, kBlock> codes;
+  std::uint64_t last = kNonFiniteCode;
+  for (std::size_t block = 0; block < points.size(); block += kBlock) {
+    const std::size_t size = std::min(kBlock, points.size() - block);
+    voxel_codes(grid, points.subspan(block, size), codes.data());
+    for (std::size_t j = 0; j < size; ++j) {
+      const std::uint64_t code = codes[j];
+      if (code >= kOutsideCode) {
+        ++(code == kNonFiniteCode ? stats.non_finite : stats.out_of_bounds);
+        continue;
+      }
+      if (code == last) continue;  // neighbouring pixels share voxels: most repeats come in a row
+      last = code;
+      const Key key = morton::decode(code);
+      const Vec3f centre = grid.center_f(key);
+      if (max_range > 0.0 && octomap_norm(centre - origin) > max_range) {
+        ++stats.truncated;
+        continue;
+      }
+      if (box) {
+        const auto part = box->clip(Vec3d(origin), Vec3d(centre));
+        if (!part || part->second < 1.0 || !box_keys->contains(key)) {
+          ++stats.outside_box;
+          continue;
+        }
+      }
+      if (batch.add_hit(code)) ++stats.hits;
+    }
+  }
+  stats.rays = stats.hits;
+}
+
 }  // namespace
 
 Integrator::Integrator() = default;
@@ -131,7 +179,8 @@ std::size_t Integrator::memory_bytes() const {
   std::size_t bytes = tracers_.capacity() * sizeof(tracers_[0]);
   if (pool_) bytes += sizeof(ThreadPool) + pool_->size() * sizeof(std::thread);
   for (const auto& tracer : tracers_) bytes += sizeof(RayTracer) + tracer->memory_bytes();
-  return bytes;
+  return bytes + frame_.memory_bytes() + image_points_.capacity() * sizeof(Vec3f) +
+         image_pixels_.capacity() * sizeof(std::uint32_t);
 }
 
 InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f origin,
@@ -310,6 +359,97 @@ InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f
   if (!colors.empty()) pending_colors_ = color_samples(grid, origin, points, colors, options, scan.box_keys);
   pending_threads_ = threads;
   return stats;
+}
+
+InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid, const DepthImage& image,
+                                    const PinholeCamera& camera, const Pose& pose, std::span<const Rgb> colors,
+                                    const InsertOptions& options, const std::optional<Aabb>& box) {
+  discard();
+  options.validate(grid.depth_levels());
+  camera.validate();
+  if (!colors.empty() && colors.size() != image.pixel_count()) {
+    throw std::invalid_argument("one colour per pixel expected: " + std::to_string(colors.size()) + " colours, " +
+                                std::to_string(image.pixel_count()) + " pixels");
+  }
+  if (!colors.empty() && !tree.has_color()) throw std::invalid_argument("colours given to a map without colour");
+  if (!pose.is_rigid()) {
+    throw std::invalid_argument("the camera pose must be a rotation and a translation (an orthonormal 3x3 part with "
+                                "determinant 1, all finite)");
+  }
+  // The image's points and their pixels, in buffers kept between scans:
+  // fresh ones cost a page fault per 4 KiB on every frame (27 ms of a
+  // Kinect frame's 1 ms on the development machine).
+  std::vector<Vec3f>& points = image_points_;
+  std::vector<std::uint32_t>& pixels = image_pixels_;
+  back_project(image, camera, pose, points, &pixels);
+  std::vector<Rgb> point_colors;
+  if (!colors.empty()) {
+    point_colors.reserve(points.size());
+    for (const std::uint32_t pixel : pixels) point_colors.push_back(colors[pixel]);
+  }
+  const Vec3f origin = pose.translation();
+  // A map of one depth level has no bricks (the projective rule's unit): it
+  // takes the image's points as the discrete integrator does.
+  if (options.integrator != IntegratorKind::projective || grid.depth_levels() < 2) {
+    InsertOptions point_options = options;
+    if (point_options.integrator == IntegratorKind::projective) point_options.integrator = IntegratorKind::discrete;
+    return trace(tree, grid, origin, points, point_colors, point_options, box);
+  }
+  if (box) box->validate();
+  (void)grid.key(Vec3d(origin));  // throws std::out_of_range with the coordinate and the extent
+  std::optional<KeyBox> box_keys;
+  if (box) box_keys = key_box(grid, *box);
+
+  InsertStats stats;
+  stats.points = image.pixel_count();
+  stats.non_finite = 0;
+  const unsigned threads = options.threads == 0 ? ThreadPool::hardware_threads() : options.threads;
+  ensure_workers(threads);
+  stats.threads = threads > 1 ? pool_->size() : 1;
+  for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
+  add_end_voxel_hits(grid, origin, points, options.max_range, box, box_keys, tracers_[0]->batch(), stats);
+  frame_.set(image, camera, pose);
+  trace_projective_misses(grid, options, box_keys, threads);
+  if (!point_colors.empty()) {
+    InsertOptions discrete = options;
+    discrete.integrator = IntegratorKind::discrete;
+    pending_colors_ = color_samples(grid, origin, points, point_colors, discrete, box_keys);
+  }
+  pending_threads_ = threads;
+  return stats;
+}
+
+void Integrator::trace_projective_misses(const Grid& grid, const InsertOptions& options,
+                                         const std::optional<KeyBox>& box_keys, unsigned threads) {
+  const ProjectiveRule rule(grid, frame_, options.max_range, options.surface_margin * grid.resolution(), box_keys);
+  const ProjectiveTracer tracer(rule);
+  const int root_depth = grid.depth_levels();
+  if (threads == 1) {
+    tracer.trace(0, root_depth, tracers_[0]->batch());
+    return;
+  }
+  // Subtrees for the threads: the nodes the walk opens, down to the first
+  // depth that yields 16 per thread (several per thread balance uneven ones).
+  std::vector<ProjectiveTracer::Task> tasks;
+  for (int depth = root_depth - 1; depth >= 2; --depth) {
+    tasks.clear();
+    tracer.collect(0, root_depth, depth, tasks);
+    if (tasks.size() >= std::size_t{threads} * 16) break;
+  }
+  pool_->run(tasks.size(), [&](std::size_t i, unsigned worker) {
+    const ProjectiveTracer::Task& task = tasks[i];
+    UpdateBatch& batch = tracers_[worker]->batch();
+    if (task.decision == ProjectiveTracer::Decision::all) {
+      batch.add_miss_node(task.code, task.depth);
+    } else {
+      tracer.trace(task.code, task.depth, batch);
+    }
+  });
+  UpdateBatch& merged = tracers_[0]->batch();
+  for (unsigned w = 1; w < threads; ++w) {
+    merged.merge(tracers_[w]->batch(), /*with_hits=*/false);  // the hits are all in tracers_[0]'s
+    tracers_[w]->start(grid.depth_levels());
+  }
 }
 
 void Integrator::apply(OccupancyTree& tree, const SensorModel& sensor) {

@@ -53,8 +53,10 @@
 #include "umbra/core/log_odds.hpp"
 #include "core/thread_pool.hpp"
 #include "umbra/core/vec3.hpp"
+#include "integrate/projective_frame.hpp"
 #include "integrate/ray_tracer.hpp"
 #include "tree/occupancy_tree.hpp"
+#include "umbra/map/depth_image.hpp"
 #include "umbra/map/insert_options.hpp"
 
 namespace umbra {
@@ -75,6 +77,17 @@ class Integrator {
   InsertStats trace(const OccupancyTree& tree, const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
                     std::span<const Rgb> colors, const InsertOptions& options,
                     const std::optional<Aabb>& box = std::nullopt);
+  /// The same for a depth image taken from `pose` (camera to map) with
+  /// `camera`; `colors` is empty or holds one colour per pixel. The
+  /// projective integrator takes its misses from the image
+  /// (projective_tracer.hpp) and its hits from the image's points, as the
+  /// discrete integrator would; the other integrators get the points
+  /// (back_project). Throws as trace(), and std::invalid_argument for bad
+  /// intrinsics, a pose that is not rigid or a colour count that is not the
+  /// pixel count.
+  InsertStats trace_image(const OccupancyTree& tree, const Grid& grid, const DepthImage& image,
+                          const PinholeCamera& camera, const Pose& pose, std::span<const Rgb> colors,
+                          const InsertOptions& options, const std::optional<Aabb>& box = std::nullopt);
   /// Writes the pending update of the last trace() into `tree` (the same
   /// tree, unchanged since) and forgets it.
   void apply(OccupancyTree& tree, const SensorModel& sensor);
@@ -86,12 +99,21 @@ class Integrator {
 
  private:
   void ensure_workers(unsigned threads);
+  /// The projective integrator's misses for the frame in frame_, into the
+  /// tracers' batches (merged into tracers_[0]'s).
+  void trace_projective_misses(const Grid& grid, const InsertOptions& options, const std::optional<KeyBox>& box_keys,
+                               unsigned threads);
 
   std::unique_ptr<ThreadPool> pool_;
   std::vector<std::unique_ptr<RayTracer>> tracers_;  // one per worker
   // Pending between trace() and apply(): the merged batch is tracers_[0]'s.
   unsigned pending_threads_ = 0;  // 0: nothing pending
   std::vector<OccupancyTree::ColorSample> pending_colors_;
+  // The projective integrator's image and the points of the last depth
+  // image, kept between scans (their buffers are reused).
+  ProjectiveFrame frame_;
+  std::vector<Vec3f> image_points_;
+  std::vector<std::uint32_t> image_pixels_;
 };
 
 }  // namespace umbra

@@ -28,6 +28,7 @@
 #include <string_view>
 #include <vector>
 
+#include "umbra/core/pose.hpp"
 #include "umbra/core/vec3.hpp"
 #include "umbra/io/scan_source.hpp"
 
@@ -211,40 +212,8 @@ double load_scalar(const unsigned char* data, ScalarType type, bool big_endian);
 /// token is not a number of that kind (integers must be integers in range).
 bool parse_scalar(std::string_view token, ScalarType type, double& value);
 
-/// A 3x4 transform [R | t] in double: world = R p + t.
-struct Pose {
-  std::array<std::array<double, 4>, 3> m{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}}};
-
-  /// From a translation and a quaternion (w, x, y, z), normalised here.
-  /// Throws std::invalid_argument for a non-finite value or a zero quaternion.
-  static Pose from_translation_quaternion(double tx, double ty, double tz, double qw, double qx, double qy,
-                                          double qz);
-
-  [[nodiscard]] Vec3f translation() const {
-    return {static_cast<float>(m[0][3]), static_cast<float>(m[1][3]), static_cast<float>(m[2][3])};
-  }
-  [[nodiscard]] bool is_identity() const;
-  /// Determinant of the 3x3 part: 1 for a rotation, 0 when it flattens space.
-  [[nodiscard]] double determinant() const;
-
-  [[nodiscard]] Vec3f apply(Vec3f p) const {
-    const double x = p.x;
-    const double y = p.y;
-    const double z = p.z;
-    return {static_cast<float>(m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3]),
-            static_cast<float>(m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3]),
-            static_cast<float>(m[2][0] * x + m[2][1] * y + m[2][2] * z + m[2][3])};
-  }
-  /// Same, for a point given in double.
-  [[nodiscard]] Vec3f apply(double x, double y, double z) const {
-    return {static_cast<float>(m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3]),
-            static_cast<float>(m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3]),
-            static_cast<float>(m[2][0] * x + m[2][1] * y + m[2][2] * z + m[2][3])};
-  }
-
-  /// this * other (apply `other` first).
-  [[nodiscard]] Pose operator*(const Pose& other) const;
-};
+/// The rigid (or affine) 3x4 transform of the readers: the public umbra::Pose.
+using umbra::Pose;
 
 /// Bytes the points of a scan take in a Scan: 12 a point, 15 with colour.
 std::uint64_t point_bytes(std::uint64_t points, bool colour);

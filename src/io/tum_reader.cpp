@@ -43,7 +43,9 @@ using io_detail::quote;
 using io_detail::Tokens;
 
 constexpr std::uint64_t kMaxDepthPixels = std::uint64_t{1} << 26;  // 64 Mpixel: no depth camera is larger
-constexpr std::uint64_t kImageBytesPerPixel = 2 + 3;                // the 16-bit depth and the RGB colour image
+// The decoded 16-bit depth and RGB colour images, their copy in the scan
+// (ScanImage) and each point's pixel index.
+constexpr std::uint64_t kImageBytesPerPixel = 2 + 3 + 2 + 3 + 4;
 
 // --- 16-bit greyscale PNG decoding --------------------------------------------
 
@@ -113,7 +115,7 @@ bool read_png_rows(png_structp png, png_infop info, png_bytepp rows) {
 }
 
 /// A 16-bit greyscale image as stored (2 bytes per pixel, big-endian).
-struct DepthImage {
+struct PngDepth {
   std::uint32_t width = 0;
   std::uint32_t height = 0;
   std::vector<unsigned char> samples;
@@ -124,7 +126,7 @@ struct DepthImage {
   }
 };
 
-void read_depth_png(const fs::path& path, DepthImage& image) {
+void read_depth_png(const fs::path& path, PngDepth& image) {
   std::FILE* file = std::fopen(path.c_str(), "rb");
   if (file == nullptr) throw std::runtime_error("cannot open " + path.string() + ": " + io_detail::errno_text(errno));
   PngErrorState state;
@@ -152,7 +154,8 @@ void read_depth_png(const fs::path& path, DepthImage& image) {
   }
   io_detail::require_point_memory(path.string(),
                                   "a frame of " + std::to_string(header.width) + " x " +
-                                      std::to_string(header.height) + " pixels (both images and its points)",
+                                      std::to_string(header.height) +
+                                      " pixels (both images, the scan's copy of them and its points)",
                                   pixels, true, pixels * kImageBytesPerPixel);
   image.width = header.width;
   image.height = header.height;
@@ -278,29 +281,28 @@ class TumReader final : public ScanSource {
                                                    frame.depth.string() + " is " + std::to_string(depth_.width) +
                                                    " x " + std::to_string(depth_.height));
     }
-    prepare_factors();
-
-    scan.points.clear();
-    scan.colors.clear();
     scan.origin = frame.pose.translation();
     scan.name = association_name_ + " frame " + std::to_string(next_frame_ + 1) + " of " +
                 std::to_string(frames_.size()) + " (line " + std::to_string(frame.line) + ", " + frame.depth_text + ")";
-    std::size_t valid = 0;
-    for (std::size_t i = 0, n = std::size_t{depth_.width} * depth_.height; i < n; ++i) valid += depth_.at(i) != 0;
-    scan.points.reserve(valid);
-    scan.colors.reserve(valid);
-    const double inverse_scale = 1.0 / camera_.depth_scale;
-    for (std::uint32_t v = 0; v < depth_.height; ++v) {
-      const std::size_t row_start = std::size_t{v} * depth_.width;
-      for (std::uint32_t u = 0; u < depth_.width; ++u) {
-        const std::uint32_t raw = depth_.at(row_start + u);
-        if (raw == 0) continue;
-        const double z = raw * inverse_scale;
-        scan.points.push_back(frame.pose.apply(column_factor_[u] * z, row_factor_[v] * z, z));
-        const std::size_t pixel = (row_start + u) * 3;
-        scan.colors.push_back({colour.rgb[pixel], colour.rgb[pixel + 1], colour.rgb[pixel + 2]});
-      }
+    // The image is kept with the scan (the projective integrator reads it),
+    // and the points are made from it by the library's back_project, so
+    // that inserting either gives the same points.
+    ScanImage& image = scan.image ? *scan.image : scan.image.emplace();
+    image.width = static_cast<int>(depth_.width);
+    image.height = static_cast<int>(depth_.height);
+    image.units_per_metre = camera_.depth_scale;
+    image.camera = PinholeCamera{camera_.fx, camera_.fy, camera_.cx, camera_.cy};
+    image.pose = frame.pose;
+    const std::size_t pixels = std::size_t{depth_.width} * depth_.height;
+    image.raw.resize(pixels);
+    image.colors.resize(pixels);
+    for (std::size_t i = 0; i < pixels; ++i) {
+      image.raw[i] = static_cast<std::uint16_t>(depth_.at(i));
+      image.colors[i] = {colour.rgb[3 * i], colour.rgb[3 * i + 1], colour.rgb[3 * i + 2]};
     }
+    back_project(image.view(), image.camera, image.pose, scan.points, &pixels_);
+    scan.colors.resize(pixels_.size());
+    for (std::size_t i = 0; i < pixels_.size(); ++i) scan.colors[i] = image.colors[pixels_[i]];
     ++next_frame_;
     done_.store(next_frame_, std::memory_order_relaxed);
     return true;
@@ -314,15 +316,6 @@ class TumReader final : public ScanSource {
   }
 
  private:
-  /// (u - cx) / fx per column and (v - cy) / fy per row, for the current image size.
-  void prepare_factors() {
-    if (column_factor_.size() == depth_.width && row_factor_.size() == depth_.height) return;
-    column_factor_.resize(depth_.width);
-    row_factor_.resize(depth_.height);
-    for (std::uint32_t u = 0; u < depth_.width; ++u) column_factor_[u] = (u - camera_.cx) / camera_.fx;
-    for (std::uint32_t v = 0; v < depth_.height; ++v) row_factor_[v] = (v - camera_.cy) / camera_.fy;
-  }
-
   /// Counts a row whose images are not both on disk; the first one is named in messages.
   void note_missing(const Frame& frame, const std::string& file) {
     if (missing_rows_++ > 0) return;
@@ -338,9 +331,8 @@ class TumReader final : public ScanSource {
   std::vector<Frame> frames_;
   std::size_t next_frame_ = 0;
   std::atomic<std::size_t> done_{0};
-  DepthImage depth_;
-  std::vector<double> column_factor_;
-  std::vector<double> row_factor_;
+  PngDepth depth_;
+  std::vector<std::uint32_t> pixels_;  // pixel of each point of the current scan
 };
 
 }  // namespace

@@ -189,6 +189,27 @@ InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f
   return insert_point_cloud(origin, points, {}, options);
 }
 
+namespace {
+
+/// One scan: `trace` (which only reads the tree: readers go on meanwhile),
+/// then the apply phase, the only one that keeps readers out.
+template <typename Trace>
+InsertStats insert_scan(detail::MapState& state, Trace&& trace) {
+  if (state.gate.held_by_this_thread()) state.gate.close();  // throws: this thread is reading the map
+  std::lock_guard writer(state.writer);
+  InsertStats stats = std::forward<Trace>(trace)();
+  {
+    const auto start = std::chrono::steady_clock::now();
+    detail::ClosedGate closed(state.gate);
+    state.integrator.apply(state.tree, state.sensor);
+    stats.exclusive_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  state.integrator_bytes.store(state.integrator.memory_bytes(), std::memory_order_relaxed);
+  return stats;
+}
+
+}  // namespace
+
 InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
                                              std::span<const Rgb> colors, const InsertOptions& options) {
   if (!colors.empty() && !color_) {
@@ -199,19 +220,20 @@ InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f
                                 std::to_string(points.size()));
   }
   detail::MapState& state = *state_;
-  if (state.gate.held_by_this_thread()) state.gate.close();  // throws: this thread is reading the map
-  std::lock_guard writer(state.writer);
-  // Tracing only reads the tree: readers go on meanwhile. Only the apply
-  // phase keeps them out.
-  InsertStats stats = state.integrator.trace(state.tree, grid_, origin, points, colors, options, state.bounding_box);
-  {
-    const auto start = std::chrono::steady_clock::now();
-    detail::ClosedGate closed(state.gate);
-    state.integrator.apply(state.tree, state.sensor);
-    stats.exclusive_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return insert_scan(state, [&] {
+    return state.integrator.trace(state.tree, grid_, origin, points, colors, options, state.bounding_box);
+  });
+}
+
+InsertStats OccupancyMap::insert_depth_image(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose,
+                                             std::span<const Rgb> colors, const InsertOptions& options) {
+  if (!colors.empty() && !color_) {
+    throw std::invalid_argument("colours given, but the map was made without colour (MapConfig::color)");
   }
-  state.integrator_bytes.store(state.integrator.memory_bytes(), std::memory_order_relaxed);
-  return stats;
+  detail::MapState& state = *state_;
+  return insert_scan(state, [&] {
+    return state.integrator.trace_image(state.tree, grid_, depth, camera, pose, colors, options, state.bounding_box);
+  });
 }
 
 // --- reading ------------------------------------------------------------------------

@@ -80,8 +80,12 @@ std::vector<Vec3f> simulate_depth_image(const Scene& scene, const CameraPose& po
   return points;
 }
 
-void simulate_depth_image(const Scene& scene, const CameraPose& pose, const DepthCameraModel& model,
-                          std::vector<Vec3f>& points) {
+namespace {
+
+/// Calls visit(u, v, direction, range) for every pixel that gives a point
+/// (see the header), row by row from the top.
+template <typename Visit>
+void for_each_reading(const Scene& scene, const CameraPose& pose, const DepthCameraModel& model, Visit&& visit) {
   model.validate();
   if (!pose.position.is_finite() || !std::isfinite(pose.yaw) || !std::isfinite(pose.pitch)) {
     std::ostringstream out;
@@ -89,8 +93,6 @@ void simulate_depth_image(const Scene& scene, const CameraPose& pose, const Dept
         << pose.position.y << ", " << pose.position.z << ") yaw " << pose.yaw << " pitch " << pose.pitch;
     throw std::invalid_argument(out.str());
   }
-  points.clear();
-  points.reserve(model.pixel_count());
   const CameraFrame frame(pose);
   const double fx = focal(model.width, model.hfov_deg);
   const double fy = focal(model.height, model.vfov_deg);
@@ -112,9 +114,57 @@ void simulate_depth_image(const Scene& scene, const CameraPose& pose, const Dept
       } else {
         continue;
       }
-      points.push_back(Vec3f(pose.position + d * range));
+      visit(u, v, d, range);
     }
   }
+}
+
+}  // namespace
+
+void simulate_depth_image(const Scene& scene, const CameraPose& pose, const DepthCameraModel& model,
+                          std::vector<Vec3f>& points) {
+  points.clear();
+  points.reserve(model.pixel_count());
+  for_each_reading(scene, pose, model,
+                   [&](int, int, Vec3d d, double range) { points.push_back(Vec3f(pose.position + d * range)); });
+}
+
+DepthImage SimulatedDepthImage::view() const { return DepthImage::metres(depth, width, height); }
+
+SimulatedDepthImage simulate_depth_frame(const Scene& scene, const CameraPose& pose, const DepthCameraModel& model) {
+  SimulatedDepthImage image;
+  image.width = model.width;
+  image.height = model.height;
+  image.depth.assign(model.pixel_count(), 0.0f);
+  const CameraFrame frame(pose);
+  const double fx = focal(model.width, model.hfov_deg);
+  const double fy = focal(model.height, model.vfov_deg);
+  // Pixel (u, v) looks along forward + right (u + 1/2 - width / 2) / fx + down
+  // (v + 1/2 - height / 2) / fy: a pinhole with its principal point there and
+  // the optical axes right = -left, down = -up, forward.
+  image.camera = PinholeCamera{fx, fy, 0.5 * model.width - 0.5, 0.5 * model.height - 0.5};
+  const Vec3d right = frame.left * -1.0;
+  const Vec3d down = frame.up * -1.0;
+  image.pose.m = {{{right.x, down.x, frame.forward.x, pose.position.x},
+                   {right.y, down.y, frame.forward.y, pose.position.y},
+                   {right.z, down.z, frame.forward.z, pose.position.z}}};
+  for_each_reading(scene, pose, model, [&](int u, int v, Vec3d d, double range) {
+    image.depth[static_cast<std::size_t>(v) * static_cast<std::size_t>(model.width) + static_cast<std::size_t>(u)] =
+        static_cast<float>(range * d.dot(frame.forward));
+  });
+  return image;
+}
+
+std::vector<SimulatedDepthImage> simulate_depth_frames(const Scene& scene, std::span<const CameraPose> poses,
+                                                       const DepthCameraModel& model) {
+  std::vector<SimulatedDepthImage> frames;
+  frames.reserve(poses.size());
+  DepthCameraModel per_frame = model;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    per_frame.seed = model.seed + static_cast<std::uint32_t>(i);
+    frames.push_back(simulate_depth_frame(scene, poses[i], per_frame));
+  }
+  return frames;
 }
 
 std::vector<DepthFrame> simulate_depth_sequence(const Scene& scene, std::span<const CameraPose> poses,
@@ -167,6 +217,11 @@ DepthCameraModel noisy_depth_camera(std::uint32_t seed) {
 
 std::vector<DepthFrame> demo_depth_sequence(std::uint32_t seed) {
   return simulate_depth_sequence(make_demo_scene(), demo_camera_path(), noisy_depth_camera(seed));
+}
+
+std::vector<SimulatedDepthImage> demo_depth_images(std::uint32_t seed) {
+  const std::vector<CameraPose> path = demo_camera_path();
+  return simulate_depth_frames(make_demo_scene(), path, noisy_depth_camera(seed));
 }
 
 }  // namespace umbra::sim

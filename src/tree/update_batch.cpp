@@ -102,13 +102,21 @@ std::uint32_t UpdateBatch::descend(std::uint64_t code, int depth, Mark mark) {
   return group;
 }
 
-void UpdateBatch::add_hit(std::uint64_t code) {
+bool UpdateBatch::add_hit(std::uint64_t code) {
   const std::uint32_t group = descend(code, 1, Mark::hit);
-  bricks_[group].hit[morton::slot(code, 1)] |= static_cast<std::uint8_t>(1u << morton::slot(code, 0));
-  // Every group on the path now holds a hit (path_ is valid from depth 1 up).
+  std::uint8_t& hits = bricks_[group].hit[morton::slot(code, 1)];
+  const auto bit = static_cast<std::uint8_t>(1u << morton::slot(code, 0));
+  if ((hits & bit) != 0) return false;  // its path already holds the marks below
+  hits |= bit;
+  // Every group on the path now holds a hit (path_ is valid from depth 1 up);
+  // above the first group that already said so, all do.
   for (int d = 2; d <= depth_levels_; ++d) {
-    inner_[d][path_[d]].hits |= static_cast<std::uint8_t>(1u << morton::slot(code, d));
+    std::uint8_t& marks = inner_[d][path_[d]].hits;
+    const auto slot_bit = static_cast<std::uint8_t>(1u << morton::slot(code, d));
+    if ((marks & slot_bit) != 0) break;
+    marks |= slot_bit;
   }
+  return true;
 }
 
 void UpdateBatch::add_misses_slow(std::uint64_t code, std::uint64_t voxels) {

@@ -67,8 +67,9 @@ class UpdateBatch {
   /// Empties the batch (and frees its memory) for a map of `depth_levels`.
   void reset(int depth_levels);
 
-  /// The finest voxel `code` gets a hit (wins over any miss).
-  void add_hit(std::uint64_t code);
+  /// The finest voxel `code` gets a hit (wins over any miss). True when it
+  /// had none before.
+  bool add_hit(std::uint64_t code);
 
   /// The finest voxel `code` gets a miss, unless it gets a hit.
   void add_miss(std::uint64_t code) { add_misses_in_brick(code, std::uint64_t{1} << (code & 63)); }

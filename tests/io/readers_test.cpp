@@ -1351,8 +1351,8 @@ TEST(TumReader, AFrameDeclaringHugeImagesIsRefusedBeforeDecoding) {
       message = error.what();
     }
   }
-  EXPECT_TRUE(contains(message, (dir / "depth" / "1.png").string() + ": a frame of 8192 x 8192 pixels (both images "
-                                "and its points) needs 1.2 GiB (1342177280 bytes), more than the memory limit of "
+  EXPECT_TRUE(contains(message, (dir / "depth" / "1.png").string() + ": a frame of 8192 x 8192 pixels (both images, "
+                                "the scan's copy of them and its points) needs 1.8 GiB (1946157056 bytes), more than the memory limit of "
                                 "256.0 MiB (268435456 bytes)"))
       << message;
   EXPECT_EQ(scan.points.capacity(), 0u);

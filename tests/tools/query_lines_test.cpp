@@ -3,9 +3,11 @@
 // (quoted as \xNN, long words cut in the message), a line of a million
 // numbers (only the kind's count kept, the count said), numbers beyond
 // double range, infinities and NaN in every spelling from_chars knows,
-// separators mixed; lines read in order with their numbers; a stream that
-// fails to read is an error, not an empty answer. Reference: the lines'
-// values written by the test.
+// separators mixed; lines read in order with their numbers, each before
+// the next is written; lines over kMaxQueryLineBytes refused with their
+// length (comments skipped) without ending the input; a stream that fails
+// to read is an error, not an empty answer. Reference: the lines' values
+// written by the test.
 #include <gtest/gtest.h>
 
 #include <limits>
@@ -83,25 +85,76 @@ TEST(QueryLines, AMillionNumbersAreCountedNotKept) {
   EXPECT_EQ(problem_of(line, LineQuery::raycast), "expected 7 numbers (x y z dx dy dz max_range), found 1000000");
 }
 
+/// Every line the reader gives: number, values, problem.
+std::vector<QueryLine> read_all(std::istream& in, LineQuery kind) {
+  QueryLineReader reader(in, kind);
+  std::vector<QueryLine> lines;
+  while (const QueryLine* line = reader.next()) lines.push_back(*line);
+  return lines;
+}
+
 TEST(QueryLines, LinesAreReadInOrderWithTheirNumbers) {
   std::istringstream in("# header\n1 2 3 4\n\n  \t\n1 2 3\n  # indented comment\n5 6 7 8\r\nx 1 2 3");
-  const QueryLines lines = read_query_lines(in, LineQuery::sphere);
-  ASSERT_EQ(lines.good.size(), 2u);
-  EXPECT_EQ(lines.good[0].number, 2u);
-  EXPECT_EQ(lines.good[0].values, (std::vector<double>{1, 2, 3, 4}));
-  EXPECT_EQ(lines.good[1].number, 7u);
-  EXPECT_EQ(lines.good[1].values, (std::vector<double>{5, 6, 7, 8}));
-  ASSERT_EQ(lines.bad.size(), 2u);
-  EXPECT_EQ(lines.bad[0].number, 5u);
-  EXPECT_EQ(lines.bad[0].problem, "expected 4 numbers (x y z r), found 3");
-  EXPECT_EQ(lines.bad[1].number, 8u);
-  EXPECT_EQ(lines.bad[1].problem, "'x' is not a finite number");
+  const std::vector<QueryLine> lines = read_all(in, LineQuery::sphere);
+  ASSERT_EQ(lines.size(), 4u);
+  EXPECT_EQ(lines[0].number, 2u);
+  EXPECT_TRUE(lines[0].good());
+  EXPECT_EQ(lines[0].values, (std::vector<double>{1, 2, 3, 4}));
+  EXPECT_EQ(lines[1].number, 5u);
+  EXPECT_EQ(lines[1].problem, "expected 4 numbers (x y z r), found 3");
+  EXPECT_TRUE(lines[1].values.empty());
+  EXPECT_EQ(lines[2].number, 7u);
+  EXPECT_EQ(lines[2].values, (std::vector<double>{5, 6, 7, 8}));
+  EXPECT_EQ(lines[3].number, 8u);
+  EXPECT_EQ(lines[3].problem, "'x' is not a finite number");
+}
+
+TEST(QueryLines, TheReaderGivesEachLineBeforeTheNextArrives) {
+  std::stringstream pipe;  // written and read in turns, as a pipe from a program that waits for answers
+  QueryLineReader reader(pipe, LineQuery::sphere);
+  pipe << "1 2 3 4\n";
+  ASSERT_TRUE(reader.input_ready());
+  const QueryLine* first = reader.next();
+  ASSERT_NE(first, nullptr);
+  EXPECT_EQ(first->values, (std::vector<double>{1, 2, 3, 4}));
+  EXPECT_FALSE(reader.input_ready());  // nothing more written yet: the command flushes its answers here
+  pipe << "5 6 7 8\n";
+  ASSERT_TRUE(reader.input_ready());
+  const QueryLine* second = reader.next();
+  ASSERT_NE(second, nullptr);
+  EXPECT_EQ(second->number, 2u);
+  EXPECT_EQ(second->values, (std::vector<double>{5, 6, 7, 8}));
+  EXPECT_EQ(reader.next(), nullptr);
+}
+
+TEST(QueryLines, LinesOverTheLimitAreRefusedWithTheirLengthAndSkipped) {
+  const std::string numbers = "1 2 3 4";
+  const std::string padded_to_limit = numbers + std::string(kMaxQueryLineBytes - numbers.size(), ' ');
+  const std::string long_line(3 * kMaxQueryLineBytes + 5, '7');
+  const std::string long_comment = "# " + std::string(2 * kMaxQueryLineBytes, 'c');
+  std::istringstream in(padded_to_limit + "\n" + padded_to_limit + " \n" + long_comment + "\n" + long_line + "\n" +
+                        numbers + "\n" + long_line);
+  const std::vector<QueryLine> lines = read_all(in, LineQuery::sphere);
+  ASSERT_EQ(lines.size(), 5u);
+  EXPECT_EQ(lines[0].number, 1u);  // exactly the limit: read whole
+  EXPECT_EQ(lines[0].values, (std::vector<double>{1, 2, 3, 4}));
+  EXPECT_EQ(lines[1].number, 2u);  // one byte more
+  EXPECT_EQ(lines[1].problem, "the line holds " + std::to_string(kMaxQueryLineBytes + 1) + " bytes, more than the " +
+                                  std::to_string(kMaxQueryLineBytes) + " a query line may hold");
+  EXPECT_EQ(lines[2].number, 4u);  // the long comment (line 3) skipped
+  EXPECT_EQ(lines[2].problem, "the line holds " + std::to_string(long_line.size()) + " bytes, more than the " +
+                                  std::to_string(kMaxQueryLineBytes) + " a query line may hold");
+  EXPECT_EQ(lines[3].number, 5u);
+  EXPECT_EQ(lines[3].values, (std::vector<double>{1, 2, 3, 4}));
+  EXPECT_EQ(lines[4].number, 6u);  // the last, with no newline
+  EXPECT_EQ(lines[4].problem, lines[2].problem);
 }
 
 TEST(QueryLines, AStreamThatFailsIsAnError) {
   std::istringstream in("1 2 3 4\n");
   in.setstate(std::ios::badbit);
-  EXPECT_THROW((void)read_query_lines(in, LineQuery::sphere), std::runtime_error);
+  QueryLineReader reader(in, LineQuery::sphere);
+  EXPECT_THROW((void)reader.next(), std::runtime_error);
 }
 
 TEST(QueryLines, AnswersRefuseBadShapesWithTheLibrarysMessage) {

@@ -48,20 +48,40 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "umbra/core/color.hpp"
+#include "umbra/core/pose.hpp"
 #include "umbra/core/vec3.hpp"
+#include "umbra/map/depth_image.hpp"
 #include "umbra/io/format_error.hpp"
 
 namespace umbra {
+
+/// The depth image a scan was made from (TUM RGB-D frames), for the
+/// projective integrator (OccupancyMap::insert_depth_image): the scan's
+/// points are back_project(view(), camera, pose), in that order.
+struct ScanImage {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint16_t> raw;  ///< raw depths, `units_per_metre` per metre; 0: no reading
+  double units_per_metre = 1000.0;
+  std::vector<Rgb> colors;  ///< empty, or one per pixel
+  PinholeCamera camera;
+  Pose pose;  ///< the camera's optical frame to the map
+
+  [[nodiscard]] DepthImage view() const { return DepthImage::raw(raw, width, height, units_per_metre); }
+};
 
 struct Scan {
   Vec3f origin;               ///< sensor origin, map frame
   std::vector<Vec3f> points;  ///< map frame
   std::vector<Rgb> colors;    ///< empty, or one per point
   std::string name;           ///< where it came from, e.g. "run.graph scan 3"
+  /// Set by readers of depth images: the image the points came from.
+  std::optional<ScanImage> image;
 };
 
 class ScanSource {

@@ -15,7 +15,9 @@
 // pose's translation, the colour the colour image's pixel (u, v). Opening
 // parses and checks the whole association file (a few hundred KB for a long
 // sequence) and looks up which files exist; next() decodes one frame's two
-// images (libpng) into reused buffers, so memory stays at one frame.
+// images (libpng) into reused buffers, so memory stays at one frame. The
+// scan keeps the depth image and the colour image (Scan::image) for the
+// projective integrator; its points are back_project() of that image.
 #pragma once
 
 #include <filesystem>
@@ -33,8 +35,8 @@ namespace umbra {
 /// (an empty association file, or none of its images on disk); undecodable
 /// images throw FormatError from next(). Rows whose images are missing are
 /// skipped and counted in warnings() (the first such row named). A depth
-/// image whose frame would need more than memory_limit() (20 bytes a pixel:
-/// both images and the points) throws MemoryLimitError from next() before it
+/// image whose frame would need more than memory_limit() (29 bytes a pixel:
+/// both images, the scan's copy of them and the points) throws MemoryLimitError from next() before it
 /// is decoded.
 std::unique_ptr<ScanSource> open_tum_sequence(const std::filesystem::path& association_file,
                                               const DepthCamera& camera = {});

@@ -12,14 +12,14 @@
 
 namespace umbra {
 
-enum class IntegratorKind { simple, discrete, fast };
+enum class IntegratorKind { simple, discrete, fast, projective };
 
 /// The threads InsertOptions::threads = 0 stands for: the hardware's (at least 1).
 unsigned hardware_threads();
 /// The most InsertOptions::threads may ask for: 4 per hardware thread, at least 16.
 unsigned max_threads();
 
-/// "simple" / "discrete" / "fast"; throws std::invalid_argument for anything else.
+/// "simple" / "discrete" / "fast" / "projective"; throws std::invalid_argument for anything else.
 IntegratorKind parse_integrator_kind(const std::string& name);
 const char* to_string(IntegratorKind kind);
 
@@ -33,14 +33,18 @@ struct InsertOptions {
   int clear_depth = -1;
   /// fast: coarse nodes before the end point traced voxel by voxel; 0: none.
   int fine_steps = 2;
+  /// projective: a voxel is cleared only when its centre lies at least this
+  /// many voxel edges in front of the reading its centre projects onto
+  /// (docs/design.md, "The projective integrator"). >= 0.
+  double surface_margin = 0.0;
   /// Threads tracing rays; 0: all cores; at most max_threads(). When the
   /// system refuses to start some of them (a process limit), the scan runs
   /// on those that did start: InsertStats::threads says how many.
   unsigned threads = 0;
 
   /// Throws std::invalid_argument naming the bad field (NaN max_range,
-  /// clear_depth above the map's depth levels, negative fine_steps, threads
-  /// above max_threads()).
+  /// clear_depth above the map's depth levels, negative fine_steps, a
+  /// negative or non-finite surface_margin, threads above max_threads()).
   void validate(int depth_levels) const;
   /// The clear depth used for a map with this grid.
   [[nodiscard]] int resolved_clear_depth(const Grid& grid) const;

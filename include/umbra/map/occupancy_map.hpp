@@ -48,6 +48,7 @@
 #include "umbra/core/grid.hpp"
 #include "umbra/core/log_odds.hpp"
 #include "umbra/core/vec3.hpp"
+#include "umbra/map/depth_image.hpp"
 #include "umbra/map/insert_options.hpp"
 #include "umbra/query/collision.hpp"
 #include "umbra/query/information_gain.hpp"
@@ -157,6 +158,22 @@ class OccupancyMap {
   /// no colour or the sizes differ.
   InsertStats insert_point_cloud(Vec3f origin, std::span<const Vec3f> points, std::span<const Rgb> colors,
                                  const InsertOptions& options = {});
+
+  /// Integrates one depth image taken from `pose` (the camera's optical frame
+  /// to the map) with intrinsics `camera` (depth_image.hpp). With
+  /// IntegratorKind::projective free space comes from the image itself: a
+  /// voxel is cleared when its centre projects onto a pixel with a reading
+  /// and lies in front of it (and the rest of its 4 x 4 x 4 brick is in view;
+  /// docs/design.md, "The projective integrator"); the hits are the discrete
+  /// integrator's on the image's points. Any other integrator inserts the
+  /// image's points (back_project) from the camera's position as a point
+  /// cloud. `colors`: empty, or one per pixel (the map must have colour).
+  /// Throws std::invalid_argument for bad intrinsics, a pose that is not a
+  /// rotation and translation, a colour count that is not the pixel count,
+  /// or bad options, and std::out_of_range for a camera outside the map; the
+  /// map is unchanged then.
+  InsertStats insert_depth_image(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose,
+                                 std::span<const Rgb> colors = {}, const InsertOptions& options = {});
 
   // --- reading single nodes -----------------------------------------------
   /// State of the depth-`depth` node containing the coordinate: occupied if

@@ -32,7 +32,9 @@
 #include <span>
 #include <vector>
 
+#include "umbra/core/pose.hpp"
 #include "umbra/core/vec3.hpp"
+#include "umbra/map/depth_image.hpp"
 #include "umbra/sim/scene.hpp"
 
 namespace umbra::sim {
@@ -81,6 +83,29 @@ std::vector<Vec3f> simulate_depth_image(const Scene& scene, const CameraPose& po
 void simulate_depth_image(const Scene& scene, const CameraPose& pose, const DepthCameraModel& model,
                           std::vector<Vec3f>& points);
 
+/// A depth image as a depth camera gives it: per pixel the depth along the
+/// optical axis (metres; 0: no reading), with the pinhole intrinsics and the
+/// pose (optical frame to map) that describe the model and pose exactly.
+/// back_project(view(), camera, pose) gives simulate_depth_image's points
+/// for the same arguments, up to float rounding (the image stores depths,
+/// the points are made from them).
+struct SimulatedDepthImage {
+  int width = 0;
+  int height = 0;
+  std::vector<float> depth;
+  PinholeCamera camera;
+  Pose pose;
+  [[nodiscard]] DepthImage view() const;
+};
+
+/// The image simulate_depth_image's points come from (same noise, same seed).
+/// Throws as simulate_depth_image.
+SimulatedDepthImage simulate_depth_frame(const Scene& scene, const CameraPose& pose, const DepthCameraModel& model);
+
+/// One image per pose, seeded as simulate_depth_sequence.
+std::vector<SimulatedDepthImage> simulate_depth_frames(const Scene& scene, std::span<const CameraPose> poses,
+                                                       const DepthCameraModel& model);
+
 /// One depth image of a sequence: the camera's position and the points.
 struct DepthFrame {
   Vec3f origin;
@@ -106,5 +131,7 @@ DepthCameraModel noisy_depth_camera(std::uint32_t seed = 1);
 
 /// noisy_depth_camera() along demo_camera_path() in make_demo_scene().
 std::vector<DepthFrame> demo_depth_sequence(std::uint32_t seed = 1);
+/// The same as depth images.
+std::vector<SimulatedDepthImage> demo_depth_images(std::uint32_t seed = 1);
 
 }  // namespace umbra::sim

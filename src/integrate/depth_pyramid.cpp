@@ -1,0 +1,87 @@
+#include "integrate/depth_pyramid.hpp"
+
+#include <algorithm>
+#include <bit>
+
+#include "core/assert.hpp"
+
+namespace umbra {
+
+void DepthPyramid::build(const float* depth, int width, int height) {
+  UMBRA_ASSERT(width >= 1 && height >= 1);
+  std::size_t count = 1;
+  for (int w = width, h = height; w > 1 || h > 1; w = (w + 1) / 2, h = (h + 1) / 2) ++count;
+  levels_.resize(count);
+  Level& base = levels_[0];
+  base.width = width;
+  base.height = height;
+  const std::size_t pixels = std::size_t(width) * std::size_t(height);
+  base.min.assign(depth, depth + pixels);
+  base.max.assign(depth, depth + pixels);
+  for (std::size_t l = 1; l < count; ++l) {
+    const Level& below = levels_[l - 1];
+    Level& level = levels_[l];
+    level.width = (below.width + 1) / 2;
+    level.height = (below.height + 1) / 2;
+    const std::size_t cells = std::size_t(level.width) * std::size_t(level.height);
+    level.min.resize(cells);
+    level.max.resize(cells);
+    for (int y = 0; y < level.height; ++y) {
+      const std::size_t row0 = std::size_t(2 * y) * below.width;
+      const std::size_t row1 = std::size_t(std::min(2 * y + 1, below.height - 1)) * below.width;
+      for (int x = 0; x < level.width; ++x) {
+        const std::size_t x0 = std::size_t(2 * x);
+        const std::size_t x1 = std::size_t(std::min(2 * x + 1, below.width - 1));
+        const std::size_t cell = std::size_t(y) * level.width + x;
+        level.min[cell] = std::min(std::min(below.min[row0 + x0], below.min[row0 + x1]),
+                                   std::min(below.min[row1 + x0], below.min[row1 + x1]));
+        level.max[cell] = std::max(std::max(below.max[row0 + x0], below.max[row0 + x1]),
+                                   std::max(below.max[row1 + x0], below.max[row1 + x1]));
+      }
+    }
+    // Its 2 x 2 windows, from a = -1 and b = -1 on.
+    const int wide = level.width + 1;
+    level.window.resize(std::size_t(wide) * std::size_t(level.height + 1));
+    auto cell_max = [&level](int x, int y) {
+      return x < 0 || y < 0 || x >= level.width || y >= level.height ? 0.0f
+                                                                     : level.max[std::size_t(y) * level.width + x];
+    };
+    for (int b = -1; b < level.height; ++b) {
+      for (int a = -1; a < level.width; ++a) {
+        level.window[std::size_t(b + 1) * wide + std::size_t(a + 1)] =
+            std::max(std::max(cell_max(a, b), cell_max(a + 1, b)), std::max(cell_max(a, b + 1), cell_max(a + 1, b + 1)));
+      }
+    }
+  }
+}
+
+DepthPyramid::Range DepthPyramid::range(int u0, int v0, int u1, int v1) const {
+  UMBRA_ASSERT(u0 >= 0 && v0 >= 0 && u0 <= u1 && v0 <= v1 && u1 < levels_[0].width && v1 < levels_[0].height);
+  const unsigned extent = static_cast<unsigned>(std::max(u1 - u0, v1 - v0) + 1);
+  // Cells of 2^l >= extent / 2 pixels: the rectangle meets at most 3 per axis.
+  const int l = std::min(static_cast<int>(std::bit_width(extent)) - 1, static_cast<int>(levels_.size()) - 1);
+  const Level& level = levels_[static_cast<std::size_t>(l)];
+  const int x0 = u0 >> l;
+  const int x1 = u1 >> l;
+  const int y0 = v0 >> l;
+  const int y1 = v1 >> l;
+  Range result{level.min[std::size_t(y0) * level.width + x0], 0.0f};
+  for (int y = y0; y <= y1; ++y) {
+    const std::size_t row = std::size_t(y) * level.width;
+    for (int x = x0; x <= x1; ++x) {
+      result.min = std::min(result.min, level.min[row + x]);
+      result.max = std::max(result.max, level.max[row + x]);
+    }
+  }
+  return result;
+}
+
+std::size_t DepthPyramid::memory_bytes() const {
+  std::size_t bytes = levels_.capacity() * sizeof(Level);
+  for (const Level& level : levels_) {
+    bytes += (level.min.capacity() + level.max.capacity() + level.window.capacity()) * sizeof(float);
+  }
+  return bytes;
+}
+
+}  // namespace umbra

@@ -1,0 +1,64 @@
+// DepthPyramid: the nearest and farthest reading over any rectangle of a
+// depth image, in a few reads.
+//
+// Level 0 is the image; every level above halves both sides (rounding up),
+// a cell holding the minimum and the maximum of the (up to) four cells below
+// it. A pixel without a reading counts as depth 0, so a rectangle's minimum
+// is 0 when any of its pixels has no reading and its maximum is 0 when none
+// has one. range() reads the cells of the level whose cells are at least
+// half the rectangle's longer side: at most 3 x 3 cells, which cover the
+// rectangle and a little more around it. The answer is therefore
+// conservative: the minimum it gives is at most the rectangle's, the
+// maximum at least, which is all the projective integrator needs to decide
+// a node whole (the price of the extra margin is only a node split more
+// often). The maxima of a level are also the projective rule's windows
+// (projective_frame.hpp), read directly with level_max().
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace umbra {
+
+class DepthPyramid {
+ public:
+  struct Range {
+    float min = 0.0f;  ///< 0 when some pixel has no reading
+    float max = 0.0f;  ///< 0 when no pixel has one
+  };
+
+  /// Builds the levels over `depth` (metres, 0: no reading), row by row.
+  void build(const float* depth, int width, int height);
+
+  /// The range over pixels [u0, u1] x [v0, v1] (inclusive; inside the image).
+  [[nodiscard]] Range range(int u0, int v0, int u1, int v1) const;
+
+  [[nodiscard]] int levels() const { return static_cast<int>(levels_.size()); }
+  [[nodiscard]] int width(int level) const { return levels_[static_cast<std::size_t>(level)].width; }
+  [[nodiscard]] int height(int level) const { return levels_[static_cast<std::size_t>(level)].height; }
+  /// The maxima of a level, row by row (level 0: the image itself).
+  [[nodiscard]] const float* level_max(int level) const { return levels_[static_cast<std::size_t>(level)].max.data(); }
+  /// The 2 x 2 windows of level `level` >= 1, (width + 1) x (height + 1)
+  /// of them: entry (b + 1) (width + 1) + (a + 1) is the maximum of the
+  /// cells (a, a + 1) x (b, b + 1) that lie in the level, for a in [-1,
+  /// width - 1] and b in [-1, height - 1]. One read instead of four for
+  /// the projective rule's windows.
+  [[nodiscard]] const float* window_max(int level) const {
+    return levels_[static_cast<std::size_t>(level)].window.data();
+  }
+
+  [[nodiscard]] std::size_t memory_bytes() const;
+
+ private:
+  struct Level {
+    int width = 0;
+    int height = 0;
+    std::vector<float> min;
+    std::vector<float> max;
+    std::vector<float> window;  // level >= 1: see window_max()
+  };
+  std::vector<Level> levels_;
+};
+
+}  // namespace umbra

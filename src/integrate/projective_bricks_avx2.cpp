@@ -1,0 +1,116 @@
+// The projective rule for one brick with AVX2, eight voxels per step (see
+// projective_frame.hpp for the rule and its float arithmetic).
+//
+// Only the functions below are compiled for AVX2 (a target attribute, not a
+// flag for the whole file or library), and ProjectiveRule::cleared calls
+// them only when the CPU reports AVX2. Every step is the plain code's
+// arithmetic on eight lanes (IEEE division and rounding are the same per
+// lane, and the build forbids contraction into FMA), and the window's
+// readings are gathered with the lanes outside the level masked to 0, so
+// the result is the same bit for bit (ProjectiveIntegrator.AvxEqualsPlain).
+#include "integrate/projective_frame.hpp"
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define UMBRA_PROJECTIVE_AVX2 1
+#include <immintrin.h>
+#endif
+
+namespace umbra::detail {
+
+#if UMBRA_PROJECTIVE_AVX2
+
+bool projective_avx2_available() {
+  __builtin_cpu_init();  // may run before the constructors that set up __builtin_cpu_supports
+  return __builtin_cpu_supports("avx2") != 0;
+}
+
+namespace {
+
+/// cells[y * stride + x] where `use` is set and first <= x < first + count
+/// (likewise y, with `rows`), 0 elsewhere.
+__attribute__((target("avx2"))) __m256 gather_cells(const float* cells, __m256i x, __m256i y, int first, int columns,
+                                                    int rows, int stride, __m256i use) {
+  const __m256i before = _mm256_set1_epi32(first - 1);
+  const __m256i inside = _mm256_and_si256(
+      _mm256_and_si256(_mm256_cmpgt_epi32(x, before), _mm256_cmpgt_epi32(_mm256_set1_epi32(first + columns), x)),
+      _mm256_and_si256(_mm256_cmpgt_epi32(y, before), _mm256_cmpgt_epi32(_mm256_set1_epi32(first + rows), y)));
+  const __m256i mask = _mm256_and_si256(inside, use);
+  const __m256i index = _mm256_and_si256(
+      _mm256_add_epi32(_mm256_mullo_epi32(_mm256_sub_epi32(y, _mm256_set1_epi32(first)), _mm256_set1_epi32(stride)),
+                       _mm256_sub_epi32(x, _mm256_set1_epi32(first))),
+      mask);
+  return _mm256_mask_i32gather_ps(_mm256_setzero_ps(), cells, index, _mm256_castsi256_ps(mask), 4);
+}
+
+}  // namespace
+
+__attribute__((target("avx2"))) std::uint64_t projective_cleared_avx2(const ProjectiveRule& rule, Vec3f origin,
+                                                                     int level) {
+  const float* cells = level == 0 ? rule.frame->pyramid.level_max(0) : rule.frame->pyramid.window_max(level);
+  const int cells_wide = rule.frame->pyramid.width(level);
+  const int cells_high = rule.frame->pyramid.height(level);
+  const __m256 zero = _mm256_setzero_ps();
+  const __m256 limit = _mm256_set1_ps(16777216.0f);
+  const __m256 minus_limit = _mm256_set1_ps(-16777216.0f);
+  const __m256 base_x = _mm256_set1_ps(origin.x);
+  const __m256 base_y = _mm256_set1_ps(origin.y);
+  const __m256 base_z = _mm256_set1_ps(origin.z);
+  const __m256 fx = _mm256_set1_ps(rule.fx);
+  const __m256 fy = _mm256_set1_ps(rule.fy);
+  const __m256 cx = _mm256_set1_ps(rule.cx_half);
+  const __m256 cy = _mm256_set1_ps(rule.cy_half);
+  const __m256 margin = _mm256_set1_ps(rule.margin);
+  const __m256 range_squared = _mm256_set1_ps(rule.max_range_squared);
+  const bool limited = rule.max_range_squared > 0.0f;
+  const __m256 scale = _mm256_set1_ps(1.0f / static_cast<float>(1u << level));  // exact: a power of two
+  const __m256 half = _mm256_set1_ps(0.5f);
+  std::uint64_t result = 0;
+  for (unsigned group = 0; group < 8; ++group) {
+    const __m256 x = _mm256_add_ps(base_x, _mm256_loadu_ps(&rule.offset_table[0][8 * group]));
+    const __m256 y = _mm256_add_ps(base_y, _mm256_loadu_ps(&rule.offset_table[1][8 * group]));
+    const __m256 z = _mm256_add_ps(base_z, _mm256_loadu_ps(&rule.offset_table[2][8 * group]));
+    __m256 ok = _mm256_cmp_ps(z, zero, _CMP_GT_OQ);
+    if (limited) {
+      const __m256 squared = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, x), _mm256_mul_ps(y, y)), _mm256_mul_ps(z, z));
+      ok = _mm256_and_ps(ok, _mm256_cmp_ps(squared, range_squared, _CMP_LE_OQ));
+    }
+    const __m256 inverse = _mm256_div_ps(_mm256_set1_ps(1.0f), z);
+    const __m256 u = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(x, inverse), fx), cx);
+    const __m256 v = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(y, inverse), fy), cy);
+    ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(u, minus_limit, _CMP_GE_OQ),
+                                                       _mm256_cmp_ps(u, limit, _CMP_LE_OQ)),
+                                         _mm256_and_ps(_mm256_cmp_ps(v, minus_limit, _CMP_GE_OQ),
+                                                       _mm256_cmp_ps(v, limit, _CMP_LE_OQ))));
+    if (_mm256_movemask_ps(ok) == 0) continue;
+    __m256 d;
+    if (level == 0) {
+      ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(u, zero, _CMP_GE_OQ),
+                                                         _mm256_cmp_ps(u, _mm256_set1_ps(rule.width), _CMP_LT_OQ)),
+                                           _mm256_and_ps(_mm256_cmp_ps(v, zero, _CMP_GE_OQ),
+                                                         _mm256_cmp_ps(v, _mm256_set1_ps(rule.height), _CMP_LT_OQ))));
+      // Lanes not ok may hold anything: clear them before converting.
+      const __m256i column = _mm256_cvttps_epi32(_mm256_and_ps(u, ok));
+      const __m256i row = _mm256_cvttps_epi32(_mm256_and_ps(v, ok));
+      d = gather_cells(cells, column, row, 0, cells_wide, cells_high, cells_wide, _mm256_castps_si256(ok));
+    } else {
+      const __m256 safe_u = _mm256_and_ps(u, ok);
+      const __m256 safe_v = _mm256_and_ps(v, ok);
+      const __m256i a = _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(safe_u, scale), half)));
+      const __m256i b = _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(safe_v, scale), half)));
+      // The window's first cell (a, b) in [-1, cells) on each axis: one read of window_max.
+      d = gather_cells(cells, a, b, -1, cells_wide + 1, cells_high + 1, cells_wide + 1, _mm256_castps_si256(ok));
+    }
+    const __m256 cleared = _mm256_and_ps(ok, _mm256_cmp_ps(z, _mm256_sub_ps(d, margin), _CMP_LT_OQ));
+    result |= static_cast<std::uint64_t>(static_cast<unsigned>(_mm256_movemask_ps(cleared))) << (8 * group);
+  }
+  return result;
+}
+
+#else
+
+bool projective_avx2_available() { return false; }
+std::uint64_t projective_cleared_avx2(const ProjectiveRule&, Vec3f, int) { return 0; }
+
+#endif
+
+}  // namespace umbra::detail

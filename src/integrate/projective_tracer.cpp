@@ -1,0 +1,218 @@
+#include "integrate/projective_tracer.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+
+#include "core/assert.hpp"
+#include "umbra/core/morton.hpp"
+
+namespace umbra {
+
+namespace {
+
+/// The brick mask of the voxels of brick `brick` inside the box.
+std::uint64_t brick_voxels_in_box(const KeyBox& box, std::uint64_t brick) {
+  const Key low = morton::decode(brick);
+  const Key high{low.x + 3, low.y + 3, low.z + 3};
+  if (box.contains(low) && box.contains(high)) return ~std::uint64_t{0};
+  std::uint64_t mask = 0;
+  for (unsigned i = 0; i < 64; ++i) mask |= std::uint64_t{box.contains(morton::decode(brick + i))} << i;
+  return mask;
+}
+
+// How far the rule's float camera-frame coordinates may stray from the exact
+// ones, relative to their size: the brick origin is rounded once (2^-24),
+// the offset once, their sum once; 2e-6 is several times that.
+constexpr double kRelativeError = 2e-6;
+
+}  // namespace
+
+ProjectiveTracer::Decision ProjectiveTracer::classify(std::uint64_t code, int depth) const {
+  UMBRA_ASSERT(depth >= 2);
+  const Grid& grid = *rule_.grid;
+  const ProjectiveFrame& frame = *rule_.frame;
+  const std::uint32_t n = std::uint32_t{1} << depth;  // voxels per edge
+  const Key first = morton::decode(code);
+  bool contained = true;  // in the box
+  if (rule_.box_keys) {
+    const KeyBox& box = *rule_.box_keys;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const std::uint32_t lo = first[a];
+      const std::uint32_t hi = lo + (n - 1);
+      if (hi < box.min[a] || lo > box.max[a]) return Decision::none;
+      if (lo < box.min[a] || hi > box.max[a]) contained = false;
+    }
+  }
+  // The box of the node's voxel centres, in the map frame.
+  const double res = grid.resolution();
+  const double span = (n - 1) * res;
+  const Vec3d lo{grid.axis_center(first.x), grid.axis_center(first.y), grid.axis_center(first.z)};
+  // Distances from the camera to that box: nearest and farthest point.
+  double near_squared = 0.0;
+  double far_squared = 0.0;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const double below = lo[a] - frame.origin[a];
+    const double above = below + span;
+    const double nearest = below > 0.0 ? below : (above < 0.0 ? -above : 0.0);
+    const double farthest = std::max(std::abs(below), std::abs(above));
+    near_squared += nearest * nearest;
+    far_squared += farthest * farthest;
+  }
+  const double far = std::sqrt(far_squared);
+  const double pad = kRelativeError * (1.0 + far);  // metres the float rule may differ by
+  bool within_range = true;
+  if (rule_.max_range > 0.0) {
+    if (std::sqrt(near_squared) - pad > rule_.max_range) return Decision::none;
+    within_range = far + pad <= rule_.max_range;
+  }
+
+  // The eight corners of that box in the camera frame.
+  const Vec3d c0 = frame.to_camera(lo);
+  const Vec3d ex = frame.rotate(Vec3d{span, 0.0, 0.0});
+  const Vec3d ey = frame.rotate(Vec3d{0.0, span, 0.0});
+  const Vec3d ez = frame.rotate(Vec3d{0.0, 0.0, span});
+  std::array<Vec3d, 8> corners;
+  for (unsigned i = 0; i < 8; ++i) {
+    corners[i] = c0;
+    if (i & 1u) corners[i] = corners[i] + ex;
+    if (i & 2u) corners[i] = corners[i] + ey;
+    if (i & 4u) corners[i] = corners[i] + ez;
+  }
+  double z_min = corners[0].z;
+  double z_max = corners[0].z;
+  for (const Vec3d& c : corners) {
+    z_min = std::min(z_min, c.z);
+    z_max = std::max(z_max, c.z);
+  }
+  if (z_max + pad <= 0.0) return Decision::none;  // behind the camera: not seen
+  const double fx = frame.fx;
+  const double fy = frame.fy;
+  const double u_offset = frame.cx + 0.5;
+  const double v_offset = frame.cy + 0.5;
+  const double width = frame.width;
+  const double height = frame.height;
+  if (z_min - pad <= 0.0) {
+    // Across the camera plane: no projection, but the four planes through the
+    // camera and the image's edges, moved out by the farthest a window
+    // reaches (the top level's: the bricks nearest the camera have it), can
+    // still show the node outside the view (a point with z <= 0 is not
+    // cleared anyway).
+    const double reach = 1.5 * std::ldexp(1.0, rule_.top_level) + 1.0;
+    const double left_offset = u_offset + reach;
+    const double right_offset = u_offset - width - reach;
+    const double top_offset = v_offset + reach;
+    const double bottom_offset = v_offset - height - reach;
+    double left = -1e300;    // max of fx x + (cx + 1/2 + reach) z: >= 0 inside
+    double right = -1e300;   // max of -(fx x + (cx + 1/2 - width - reach) z): > 0 inside
+    double top = -1e300;
+    double bottom = -1e300;
+    double scale = 0.0;
+    for (const Vec3d& c : corners) {
+      left = std::max(left, fx * c.x + left_offset * c.z);
+      right = std::max(right, -(fx * c.x + right_offset * c.z));
+      top = std::max(top, fy * c.y + top_offset * c.z);
+      bottom = std::max(bottom, -(fy * c.y + bottom_offset * c.z));
+      scale = std::max(scale, std::abs(fx * c.x) + std::abs(fy * c.y) +
+                                  (std::abs(left_offset) + std::abs(right_offset) + std::abs(top_offset) +
+                                   std::abs(bottom_offset)) * std::abs(c.z));
+    }
+    const double plane_pad = 1e-5 * scale + 1e-9;
+    if (left < -plane_pad || right < -plane_pad || top < -plane_pad || bottom < -plane_pad) return Decision::none;
+    return Decision::split;
+  }
+
+  // In front of the camera: the pixels the voxel centres can project onto.
+  double u_min = 1e300;
+  double u_max = -1e300;
+  double v_min = 1e300;
+  double v_max = -1e300;
+  double lateral = 0.0;  // largest |x| or |y|
+  for (const Vec3d& c : corners) {
+    const double u = fx * (c.x / c.z) + u_offset;
+    const double v = fy * (c.y / c.z) + v_offset;
+    u_min = std::min(u_min, u);
+    u_max = std::max(u_max, u);
+    v_min = std::min(v_min, v);
+    v_max = std::max(v_max, v);
+    lateral = std::max({lateral, std::abs(c.x), std::abs(c.y)});
+  }
+  const double near = z_min - pad;
+  // A coordinate off by `pad` moves the projection by about f pad (1 + lateral / z) / z pixels.
+  const double spread = pad * (1.0 + lateral / near) / near;
+  const double u_pad = 1e-3 + fx * spread + 1e-6 * std::max(std::abs(u_min), std::abs(u_max));
+  const double v_pad = 1e-3 + fy * spread + 1e-6 * std::max(std::abs(v_min), std::abs(v_max));
+  const double u0 = std::floor(u_min - u_pad);
+  const double u1 = std::floor(u_max + u_pad);
+  const double v0 = std::floor(v_min - v_pad);
+  const double v1 = std::floor(v_max + v_pad);
+  // The voxels' windows (projective_frame.hpp) reach beyond their own
+  // pixels by at most 1.5 cells of their level plus a pixel; the nearest
+  // bricks have the largest level.
+  const double w = rule_.half_voxel_pixels * (1.0 + kRelativeError) / near;
+  const int level = w < 1.0 ? 0
+                            : std::min(static_cast<int>(std::bit_width(static_cast<unsigned>(std::min(w, 1048576.0)))),
+                                       rule_.top_level);
+  const double reach = level == 0 ? 0.0 : 1.5 * std::ldexp(1.0, level) + 1.0;
+  if (u1 + reach < 0.0 || v1 + reach < 0.0 || u0 - reach >= width || v0 - reach >= height) return Decision::none;
+  const DepthPyramid::Range wide = frame.pyramid.range(
+      static_cast<int>(std::max(u0 - reach, 0.0)), static_cast<int>(std::max(v0 - reach, 0.0)),
+      static_cast<int>(std::min(u1 + reach, width - 1.0)), static_cast<int>(std::min(v1 + reach, height - 1.0)));
+  if (wide.max == 0.0f) return Decision::none;  // no reading any voxel's window can hold
+  const double margin = rule_.margin;
+  // d - margin is rounded to float in the rule: allow for it.
+  if (near >= wide.max * (1.0 + kRelativeError) - margin) return Decision::none;  // behind every reading
+  const bool in_image = u0 >= 0.0 && v0 >= 0.0 && u1 < width && v1 < height;
+  if (in_image && within_range && contained) {
+    // Every voxel's window holds its own pixel: a reading beyond the node
+    // on each of the node's pixels clears every voxel.
+    const DepthPyramid::Range own = frame.pyramid.range(static_cast<int>(u0), static_cast<int>(v0),
+                                                        static_cast<int>(u1), static_cast<int>(v1));
+    if (own.min > 0.0f && z_max + pad < own.min * (1.0 - kRelativeError) - margin) return Decision::all;
+  }
+  return Decision::split;
+}
+
+void ProjectiveTracer::trace_brick(std::uint64_t brick, UpdateBatch& batch) const {
+  std::uint64_t voxels = rule_.cleared(brick);
+  if (voxels != 0 && rule_.box_keys) voxels &= brick_voxels_in_box(*rule_.box_keys, brick);
+  if (voxels != 0) batch.add_misses_in_brick(brick, voxels);
+}
+
+void ProjectiveTracer::trace(std::uint64_t code, int depth, UpdateBatch& batch) const {
+  switch (classify(code, depth)) {
+    case Decision::none:
+      return;
+    case Decision::all:
+      batch.add_miss_node(code, depth);
+      return;
+    case Decision::split:
+      break;
+  }
+  if (depth == 2) {
+    trace_brick(code, batch);
+    return;
+  }
+  const int child_depth = depth - 1;
+  if (child_depth == 2) {
+    // Evaluating a brick voxel by voxel (eight at a time) costs less than
+    // asking the pyramid about it first: the children of a split node are
+    // evaluated directly.
+    for (std::uint64_t slot = 0; slot < 8; ++slot) trace_brick(code | slot << 6, batch);
+    return;
+  }
+  for (std::uint64_t slot = 0; slot < 8; ++slot) trace(code | slot << (3 * child_depth), child_depth, batch);
+}
+
+void ProjectiveTracer::collect(std::uint64_t code, int depth, int task_depth, std::vector<Task>& tasks) const {
+  const Decision decision = classify(code, depth);
+  if (decision == Decision::none) return;
+  if (decision == Decision::all || depth <= task_depth || depth == 2) {
+    tasks.push_back({code, depth, decision});
+    return;
+  }
+  const int child_depth = depth - 1;
+  for (std::uint64_t slot = 0; slot < 8; ++slot) collect(code | slot << (3 * child_depth), child_depth, task_depth, tasks);
+}
+
+}  // namespace umbra

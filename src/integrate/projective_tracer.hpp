@@ -1,0 +1,65 @@
+// ProjectiveTracer: the misses of one depth image, found from the tree down.
+//
+// Instead of walking a ray per pixel, the projective integrator walks the
+// octree's nodes from the top and asks the image about each node at once
+// (ProjectiveFrame's pyramid of the nearest and farthest readings over the
+// pixels the node projects onto):
+//  - a node that lies wholly in front of the nearest reading under it, with
+//    a reading on every pixel it covers, inside the image, the range and the
+//    box, is cleared whole (one mark in the batch, however many voxels);
+//  - a node behind the farthest reading under it, outside the image, the
+//    range or the box, or over pixels without readings, is skipped;
+//  - any other node is split into its children; at depth 2 (a brick of 4 x 4
+//    x 4 voxels, the batch's unit) the rule is evaluated voxel by voxel.
+// The whole-node decisions are sufficient conditions of the voxel rule
+// (projective_frame.hpp), computed in double with margins larger than the
+// rule's float rounding, so the misses are exactly the rule's, whatever
+// nodes the walk happens to decide whole; work grows with the area of the
+// borders of free space (the surface, the image's edges, holes), not with
+// the number of pixels or the volume.
+//
+// Any node can be traced on its own into any batch, so the tracing splits
+// into independent subtrees for threads (Integrator::trace_image).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "integrate/projective_frame.hpp"
+#include "tree/update_batch.hpp"
+
+namespace umbra {
+
+class ProjectiveTracer {
+ public:
+  enum class Decision : std::uint8_t { none, all, split };
+
+  explicit ProjectiveTracer(const ProjectiveRule& rule) : rule_(rule) {}
+
+  /// What the rule does to the voxels of the depth-`depth` node (depth >= 2)
+  /// whose first voxel is `code`: clears none, clears all, or only some (or
+  /// it cannot tell from the node as a whole).
+  [[nodiscard]] Decision classify(std::uint64_t code, int depth) const;
+
+  /// Adds the misses of the depth-`depth` node `code` (depth >= 2) to `batch`.
+  void trace(std::uint64_t code, int depth, UpdateBatch& batch) const;
+
+  /// The depth-`depth` nodes (in Morton order) below the node `code` whose
+  /// subtrees hold all the rule's work: split nodes are opened down to
+  /// `depth`, nodes cleared whole are returned as they are (with their own
+  /// depth). Used to hand subtrees to threads.
+  struct Task {
+    std::uint64_t code;
+    int depth;
+    Decision decision;  ///< all or split
+  };
+  void collect(std::uint64_t code, int depth, int task_depth, std::vector<Task>& tasks) const;
+
+ private:
+  /// A split brick: the voxels it clears, in the box.
+  void trace_brick(std::uint64_t brick, UpdateBatch& batch) const;
+
+  const ProjectiveRule& rule_;
+};
+
+}  // namespace umbra
