@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "cloud_message.hpp"
+#include "umbra/core/memory_limit.hpp"
 #include "io/reader_support.hpp"
 #include "umbra_ros/bag_file.hpp"
 #include "umbra_ros/serialized_messages.hpp"
@@ -100,6 +101,8 @@ class RosbagSource final : public RosbagScanSource {
         cloud_to_scan(cloud.cloud, to_map, colors_, decoded_, scan, label);
       } catch (const FormatError& e) {
         throw bag_->error(message, e.what());
+      } catch (const MemoryLimitError& e) {  // the decoded points: named like the other errors
+        throw MemoryLimitError(bag_->error(message, e.what()).what());
       }
       scan.name = path_ + " " + label;
       ++scans_;
