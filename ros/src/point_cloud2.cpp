@@ -199,6 +199,7 @@ void decode_point_cloud2(const PointCloud2View& cloud, const RigidTransform& to_
   out.points.clear();
   out.colors.clear();
   out.non_finite = 0;
+  if (total == 0) return;  // width 0 with any height: no row to walk (up to 2^32 - 1 of them)
   out.points.reserve(total);
   if (layout.rgb_offset) out.colors.reserve(total);
   for (std::uint32_t row = 0; row < cloud.height; ++row) {
