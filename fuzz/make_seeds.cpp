@@ -1,7 +1,7 @@
 // umbra_fuzz_seeds OUTDIR: writes the seed corpora of the fuzz targets.
 //
 // One folder per target (OUTDIR/octomap_bt, octomap_ot, umb, umb_body,
-// graph, xyz, xyz_bz2, ply, pcd, kitti, query_lines) with a handful of small, valid files made by
+// graph, xyz, xyz_bz2, ply, pcd, kitti, query_lines, insert) with a handful of small, valid files made by
 // umbra's own writers or spelled out here: empty maps, single voxels, a few
 // random voxels, colour, an unpruned tree, a coarse map of the simulated
 // office; point clouds in every encoding each reader supports; `umbra query`
@@ -248,6 +248,35 @@ void query_line_seeds(const fs::path& out) {
   }
 }
 
+/// Point insertion (fuzz_insert.cpp): the inputs of issue 21 for every
+/// integrator. A coordinate is a kind byte and a payload byte (kind 0: 0,
+/// payload bit 7 the sign; 1: a tiny value; 2: a whole number of voxels,
+/// payload & 63 minus 32; 8: the sensor's coordinate).
+void insert_seeds(const fs::path& out) {
+  const Bytes sensor_at_zero = {0, 0, 0, 0, 0, 0};
+  const Bytes hair_point = {1, 0x80, 1, 0x00, 0, 0};     // (-1e-23, 1e-23, 0)
+  const Bytes hair_point_29 = {1, 0x81, 1, 0x01, 0, 0};  // (-1e-29, 1e-29, 0)
+  const Bytes axis_point = {8, 0, 8, 0, 2, 2};           // (0, 0, -30 voxels)
+  const Bytes axis_points = {2, 62, 8, 0, 8, 0, 8, 0, 2, 2, 8, 0, 2, 7, 8, 0, 8, 0};  // +-x, -y: along edges
+  fs::create_directories(out / "insert");
+  for (const std::uint8_t integrator : {0, 1, 2}) {
+    for (const std::uint8_t more : {0, 1 << 2 | 2, 5 << 2 | 1 << 5}) {  // fine steps / max range / resolution
+      const std::string name = std::to_string(integrator) + "-" + std::to_string(more);
+      const auto seed = [&](const char* what, std::uint8_t count, std::initializer_list<Bytes> points) {
+        Bytes bytes = {integrator, more, 0};
+        bytes.insert(bytes.end(), sensor_at_zero.begin(), sensor_at_zero.end());
+        bytes.push_back(count);
+        for (const Bytes& p : points) bytes.insert(bytes.end(), p.begin(), p.end());
+        write(out / "insert" / (std::string(what) + "-" + name), bytes);
+      };
+      seed("hair", 0, {hair_point});
+      seed("hair29", 1, {hair_point_29, axis_point});
+      seed("axis", 0, {axis_point});
+      seed("edges", 2, {Bytes(axis_points.begin(), axis_points.end())});
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -266,6 +295,7 @@ int main(int argc, char** argv) {
     kitti_seeds(out);
     rosbag_seeds(out);
     query_line_seeds(out);
+    insert_seeds(out);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "umbra_fuzz_seeds: %s\n", e.what());
     return 1;

@@ -4,7 +4,7 @@
 #
 #   fuzz/run_fuzzers.sh [--build DIR] [--seconds N | --runs N] [--jobs J] [TARGET...]
 #
-# TARGET: octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines (default:
+# TARGET: octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines insert (default:
 # all). Defaults: --build build-fuzz (under the source folder), --seconds 10;
 # --runs N stops each target after N inputs instead. Each target starts from
 # the generated seeds and the corpus kept in the repository (fuzz/corpus/TARGET);
@@ -34,7 +34,7 @@ while [[ $# -gt 0 ]]; do
     *) targets+=("$1"); named=1; shift ;;
   esac
 done
-[[ ${#targets[@]} -gt 0 ]] || targets=(octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines)
+[[ ${#targets[@]} -gt 0 ]] || targets=(octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines insert)
 
 cxx="${UMBRA_FUZZ_CXX:-clang++}"
 if ! command -v "$cxx" > /dev/null 2>&1 || ! "$cxx" --version 2>/dev/null | grep -qi clang; then

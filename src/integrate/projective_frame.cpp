@@ -50,7 +50,6 @@ ProjectiveRule::ProjectiveRule(const Grid& grid_in, const ProjectiveFrame& frame
       width(static_cast<float>(frame_in.width)),
       height(static_cast<float>(frame_in.height)),
       margin(static_cast<float>(margin_in)),
-      max_range_squared(max_range_in > 0.0 ? static_cast<float>(max_range_in * max_range_in) : 0.0f),
       max_range(max_range_in),
       half_voxel_pixels(static_cast<float>(frame_in.fx * grid_in.resolution() / 2.0)),
       top_level(frame_in.pyramid.levels() - 1),
@@ -62,6 +61,32 @@ ProjectiveRule::ProjectiveRule(const Grid& grid_in, const ProjectiveFrame& frame
     for (std::size_t axis = 0; axis < 3; ++axis) offset_table[axis][i] = static_cast<float>(offset[axis]);
   }
   centre_dz = static_cast<float>(frame_in.rotate(Vec3d{1.5 * res, 1.5 * res, 1.5 * res}).z);
+  if (max_range > 0.0) {
+    const int ideal = static_cast<int>(std::lround(std::log2(max_range / 64.0 / res)));
+    range_depth = ideal < 2 ? 0 : std::min(ideal, grid_in.depth_levels());
+    if (range_depth == 0) max_range_squared = static_cast<float>(max_range * max_range);
+  }
+}
+
+ProjectiveRule::CentreDistances ProjectiveRule::centre_distances(std::uint64_t code, int depth) const {
+  const Key first = morton::decode(code);
+  const double span = ((1u << depth) - 1) * grid->resolution();
+  CentreDistances result{0.0, 0.0};
+  for (std::size_t a = 0; a < 3; ++a) {
+    const double below = grid->axis_center(first[a]) - frame->origin[a];
+    const double above = below + span;
+    const double nearest = below > 0.0 ? below : (above < 0.0 ? -above : 0.0);
+    const double farthest = std::max(std::abs(below), std::abs(above));
+    result.nearest_squared += nearest * nearest;
+    result.farthest_squared += farthest * farthest;
+  }
+  return result;
+}
+
+bool ProjectiveRule::within_range(std::uint64_t code) const {
+  if (max_range <= 0.0 || range_depth == 0) return true;
+  const std::uint64_t node = code & ~((std::uint64_t{1} << (3 * range_depth)) - 1);
+  return centre_distances(node, range_depth).farthest_squared <= max_range * max_range;
 }
 
 Vec3f ProjectiveRule::brick_origin(std::uint64_t brick) const {
@@ -80,6 +105,7 @@ int ProjectiveRule::window_level(Vec3f origin) const {
 }
 
 std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
+  if (!within_range(brick)) return 0;
   const Vec3f base = brick_origin(brick);
   const int level = window_level(base);
   const float* cells = level == 0 ? frame->pyramid.level_max(0) : frame->pyramid.window_max(level);
@@ -118,6 +144,7 @@ std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
 std::uint64_t ProjectiveRule::cleared(std::uint64_t brick) const {
   static const bool avx2 = detail::projective_avx2_available();  // the CPU does not change
   if (!avx2) return cleared_plain(brick);
+  if (!within_range(brick)) return 0;
   const Vec3f base = brick_origin(brick);
   return detail::projective_cleared_avx2(*this, base, window_level(base));
 }

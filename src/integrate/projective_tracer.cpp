@@ -48,23 +48,26 @@ ProjectiveTracer::Decision ProjectiveTracer::classify(std::uint64_t code, int de
   const double res = grid.resolution();
   const double span = (n - 1) * res;
   const Vec3d lo{grid.axis_center(first.x), grid.axis_center(first.y), grid.axis_center(first.z)};
-  // Distances from the camera to that box: nearest and farthest point.
-  double near_squared = 0.0;
-  double far_squared = 0.0;
-  for (std::size_t a = 0; a < 3; ++a) {
-    const double below = lo[a] - frame.origin[a];
-    const double above = below + span;
-    const double nearest = below > 0.0 ? below : (above < 0.0 ? -above : 0.0);
-    const double farthest = std::max(std::abs(below), std::abs(above));
-    near_squared += nearest * nearest;
-    far_squared += farthest * farthest;
-  }
-  const double far = std::sqrt(far_squared);
+  const ProjectiveRule::CentreDistances distances = rule_.centre_distances(code, depth);
+  const double far = std::sqrt(distances.farthest_squared);
   const double pad = kRelativeError * (1.0 + far);  // metres the float rule may differ by
   bool within_range = true;
   if (rule_.max_range > 0.0) {
-    if (std::sqrt(near_squared) - pad > rule_.max_range) return Decision::none;
-    within_range = far + pad <= rule_.max_range;
+    if (rule_.range_depth == 0) {
+      // Voxel by voxel, in float.
+      if (std::sqrt(distances.nearest_squared) - pad > rule_.max_range) return Decision::none;
+      within_range = far + pad <= rule_.max_range;
+    } else if (depth <= rule_.range_depth) {
+      // Per depth-range_depth node (projective_frame.hpp): exactly at that
+      // depth and below.
+      if (!rule_.within_range(code)) return Decision::none;
+    } else {
+      // Above it, with a little slack: the nodes it holds are no farther
+      // and no nearer.
+      const double limit = rule_.max_range * rule_.max_range;
+      if (distances.nearest_squared > limit * (1.0 + 1e-9)) return Decision::none;
+      within_range = distances.farthest_squared * (1.0 + 1e-9) <= limit;
+    }
   }
 
   // The eight corners of that box in the camera frame.
