@@ -8,6 +8,7 @@
 // input lines of every kind, good and bad. Nothing comes
 // from ../shared/data. Every file is a few bytes to ~10 KB so that the
 // fuzzers mutate quickly. Cost: well under a second.
+// In builds with ROS also OUTDIR/rosbag: the tests' small bag in each compression.
 #include <bzlib.h>
 
 #include <bit>
@@ -25,6 +26,9 @@
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/sim/lidar.hpp"
 #include "umbra/sim/scene.hpp"
+#ifdef UMBRA_FUZZ_ROSBAG_SEEDS
+#include "bag_writer.hpp"
+#endif
 
 namespace {
 
@@ -216,6 +220,17 @@ void kitti_seeds(const fs::path& out) {
 /// `umbra query` input lines: byte 0 holds the settings (fuzz_query_lines.cpp:
 /// kind in bits 0-1, unknown-is-free bit 2, depth bits 3-4, radius bits 5-7),
 /// then good lines of the kind, a comment, a blank line and a few bad ones.
+/// rosbag: the tests' small bag (clouds, /tf, /tf_static, another type) in each compression the reader knows.
+void rosbag_seeds(const fs::path& out) {
+#ifdef UMBRA_FUZZ_ROSBAG_SEEDS
+  for (const char* compression : {"none", "bz2", "lz4"}) {
+    write(out / "rosbag" / (std::string("small-") + compression + ".bag"), umbra::test::small_bag(compression).bytes);
+  }
+#else
+  (void)out;
+#endif
+}
+
 void query_line_seeds(const fs::path& out) {
   const char* const lines[] = {
       "0.5 0.2 0.1 0.3\n1 1 1 0.05\n# comment\n\n-2,0,0.5,1\n0.1 0.2 nan 1\n500 0 0 0.1\n",       // sphere
@@ -278,6 +293,7 @@ int main(int argc, char** argv) {
     ply_seeds(out);
     pcd_seeds(out);
     kitti_seeds(out);
+    rosbag_seeds(out);
     query_line_seeds(out);
     insert_seeds(out);
   } catch (const std::exception& e) {
