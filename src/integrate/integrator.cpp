@@ -197,13 +197,15 @@ void add_image_hits(const Grid& grid, Vec3f origin, std::span<const Vec3f> point
   row.assign(static_cast<std::size_t>(width), kNonFiniteCode);  // the code last seen in each column
   std::uint64_t left = kNonFiniteCode;
   std::uint32_t left_pixel = ~std::uint32_t{0};
+  std::uint32_t row_start = 0;  // first pixel of the current point's row (the pixels rise)
   for (std::size_t block = 0; block < points.size(); block += kBlock) {
     const std::size_t size = std::min(kBlock, points.size() - block);
     voxel_codes(grid, points.subspan(block, size), codes.data());
     for (std::size_t j = 0; j < size; ++j) {
       const std::uint64_t code = codes[j];
       const std::uint32_t pixel = pixels[block + j];
-      const std::size_t column = pixel % static_cast<std::uint32_t>(width);
+      while (pixel - row_start >= static_cast<std::uint32_t>(width)) row_start += static_cast<std::uint32_t>(width);
+      const std::size_t column = pixel - row_start;
       const bool beside = pixel == left_pixel + 1 && column != 0;
       left_pixel = pixel;
       if (code >= kOutsideCode) {
@@ -480,8 +482,9 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   add_image_hits(grid, origin, points, pixels, image.width(), options.max_range, box, box_keys, tracers_[0]->batch(),
                  stats, hit_candidates_, hit_row_);
   frame_.set(image, camera, pose);
-  frame_.set_rays(points, pixels);
-  trace_projective_misses(tree, grid, options, box_keys, std::span<const ProjectiveFrame>(&frame_, 1), threads);
+  // A depth image's rays are as dense as its pixels: the rule alone decides
+  // its misses, known obstacles included (projective_frame.hpp).
+  trace_projective_misses(nullptr, grid, options, box_keys, std::span<const ProjectiveFrame>(&frame_, 1), threads);
   if (!point_colors.empty()) {
     InsertOptions discrete = options;
     discrete.integrator = IntegratorKind::discrete;
@@ -507,7 +510,7 @@ InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const G
   if (resolution.horizontal > 0.0 && resolution.vertical > 0.0) {
     stats.scan_resolution = resolution;
     scan_images_.build(origin, points, resolution);
-    trace_projective_misses(tree, grid, options, box_keys, scan_images_.faces(), threads);
+    trace_projective_misses(&tree, grid, options, box_keys, scan_images_.faces(), threads);
   }
   if (!colors.empty()) {
     InsertOptions discrete = options;
@@ -518,7 +521,7 @@ InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const G
   return stats;
 }
 
-void Integrator::trace_projective_misses(const OccupancyTree& tree, const Grid& grid, const InsertOptions& options,
+void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& grid, const InsertOptions& options,
                                          const std::optional<KeyBox>& box_keys,
                                          std::span<const ProjectiveFrame> frames, unsigned threads) {
   // One rule and tracer per image (the six faces of a scan, or one depth
@@ -528,8 +531,10 @@ void Integrator::trace_projective_misses(const OccupancyTree& tree, const Grid& 
   for (const ProjectiveFrame& frame : frames) {
     ProjectiveRule& rule =
         rules.emplace_back(grid, frame, options.max_range, options.surface_margin * grid.resolution(), box_keys);
-    rule.tree = &tree;
-    rule.occupied_log_odds = tree.thresholds().occupied;
+    if (tree != nullptr) {
+      rule.tree = tree;
+      rule.occupied_log_odds = tree->thresholds().occupied;
+    }
   }
   const int root_depth = grid.depth_levels();
   if (threads == 1) {

@@ -106,8 +106,9 @@ class Integrator {
                                     std::span<const Rgb> colors, const InsertOptions& options,
                                     const std::optional<Aabb>& box);
   /// The projective integrator's misses for `frames`, into the tracers'
-  /// batches (merged into tracers_[0]'s).
-  void trace_projective_misses(const OccupancyTree& tree, const Grid& grid, const InsertOptions& options,
+  /// batches (merged into tracers_[0]'s); with `tree`, its obstacles are
+  /// cleared only where the frames' rays cross them.
+  void trace_projective_misses(const OccupancyTree* tree, const Grid& grid, const InsertOptions& options,
                                const std::optional<KeyBox>& box_keys, std::span<const ProjectiveFrame> frames,
                                unsigned threads);
 

@@ -27,16 +27,20 @@
 // those from floor(u / 2^l - 1/2) and floor(v / 2^l - 1/2); cells outside the
 // level hold no reading. At level 0 the pixel must lie in the image.
 //
-// Known obstacles. A voxel the map holds as occupied (before this scan) is
-// cleared only when one of the image's rays really passes through it and
-// ends beyond it (a segment-cube test in double against the rays of the
-// pixels its cube projects onto), as OctoMap's ray would clear it: the
+// Known obstacles (images of scans: scan_images.hpp). A voxel the map holds
+// as occupied (before this scan) is cleared only when one of the image's
+// rays really passes through it and ends beyond it (a segment-cube test in double against the rays of the
+// 3 x 3 pixels in the middle of those its cube projects onto), as OctoMap's
+// ray would clear it: the
 // rule's view of free space is the whole cone of a pixel in front of its
 // reading, and a surface seen at a grazing angle from elsewhere can lie in
 // that cone while no ray of this scan crosses it. (The fast integrator
 // never clears known obstacles wholesale either.) Without this, a LiDAR
 // scan binned at its ring spacing cleared 3% of the floor the simple
-// integrator keeps.
+// integrator keeps. Depth images need no such test: their rays are as dense
+// as their pixels, so the cone of a pixel is its ray's neighbourhood (on the
+// TUM frames the test changed recall and precision by 0.1% to 0.3% either
+// way and cost half the misses' time).
 //
 // Several readings a pixel. The images of a LiDAR scan (scan_images.hpp)
 // can hold several points in a pixel, and keep the nearest of each half
