@@ -43,6 +43,9 @@ enum class GainMethod : unsigned char {
   fast,   ///< an approximation: small undecided nodes decided by their corner voxels
 };
 
+/// GainOptions::max_steps's default: a few seconds to a minute of one core.
+inline constexpr std::uint64_t kDefaultMaxGainSteps = std::uint64_t{1} << 28;
+
 struct GainOptions {
   GainMethod method = GainMethod::exact;
   /// fast only: nodes of up to 2^fast_depth voxels per edge are decided by
@@ -51,6 +54,12 @@ struct GainOptions {
   /// Batch form only: poses answered in parallel by this many threads,
   /// including the caller; 0 means all hardware threads.
   unsigned threads = 1;
+  /// The most work one pose may take, in steps (a node or a voxel decided,
+  /// a block of up to 64 centres counted, a ray walked plus one per 8 of
+  /// its voxels; about 10 to 20 million a second). A pose that needs more
+  /// throws std::invalid_argument naming its max_range (see the file
+  /// comment, "Long ranges"). 0: no limit.
+  std::uint64_t max_steps = kDefaultMaxGainSteps;
 };
 
 struct GainResult {
