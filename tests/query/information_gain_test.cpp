@@ -376,6 +376,10 @@ std::uint64_t brute_force_gain_in_box(const OccupancyMap& map, const std::vector
       for (std::uint32_t x = low.x; x <= high.x; ++x) {
         const Vec3d c{rays.centre(x), rays.centre(y), rays.centre(z)};
         if (!frustum.contains(c) || occupied({x, y, z})) continue;
+        if (obstacles.empty()) {
+          ++count;
+          continue;
+        }
         EXPECT_TRUE(rays.ray_keys(origin, Vec3f(c), keys));
         if (std::none_of(keys.begin(), keys.end(), occupied)) ++count;
       }
@@ -417,7 +421,7 @@ TEST(InformationGain, LongRangesBeyondTheObstaclesEqualBruteForce) {
   // Ranges of over 8,490 voxels used to walk every voxel (the margin of the
   // whole range was too wide for the image); near obstacles only the
   // margin of their own distance counts. The rays to a thin far shell
-  // (8,760 to 8,800 voxels away, a few voxels across) start on or next to
+  // (8,775 to 8,800 voxels away, a few voxels across) start on or next to
   // a corner of four rows of voxels and run along them, so that obstacles
   // in those rows within 200 voxels block some rays, graze others and miss
   // the rest, by amounts far below a voxel. (In old builds this test passed
@@ -437,14 +441,14 @@ TEST(InformationGain, LongRangesBeyondTheObstaclesEqualBruteForce) {
   int mixed = 0;  // poses that see some of the shell and not all
   for (const Vec3d& origin : origins) {
     for (const auto& [yaw, pitch] : directions) {
-      const Frustum f = Frustum::from_degrees(origin, yaw, pitch, 0.03, 0.03, 175.2, 176.0);
+      const Frustum f = Frustum::from_degrees(origin, yaw, pitch, 0.03, 0.03, 175.5, 176.0);
       Key low;
       Key high;
       shell_box(map, f, low, high);
       const std::uint64_t expected = brute_force_gain_in_box(map, obstacles, f, low, high);
       const OccupancyMap empty(0.02, 15);
       const std::uint64_t all = brute_force_gain_in_box(empty, {}, f, low, high);
-      EXPECT_GT(all, 500u) << describe(f);
+      EXPECT_GT(all, 300u) << describe(f);
       mixed += expected > 0 && expected < all ? 1 : 0;
       ASSERT_EQ(map.information_gain(f).unknown_voxels, expected) << describe(f) << " (of " << all << ")";
       EXPECT_EQ(map.information_gain(f, {.method = GainMethod::fast, .fast_depth = 0}).unknown_voxels, expected);
