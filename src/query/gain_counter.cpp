@@ -561,6 +561,7 @@ GainCounter::Visibility GainCounter::node_visibility(Key key, int depth, bool sw
   }
   const double obstacle_free = double(image_.nearest(rect));  // no obstacle nearer in the cone
   if (obstacle_free > std::sqrt(farthest_distance_squared(s.apex, targets))) return Visibility::visible;
+  if (hidden_by_one_candidate(targets, rect)) return Visibility::blocked;
   // For eight voxels or fewer a sweep costs more than the rays it saves.
   if (!sweep || depth < 2) return Visibility::undecided;
   // Some rays reach the node's near side without passing an obstacle: a
@@ -571,6 +572,47 @@ GainCounter::Visibility GainCounter::node_visibility(Key key, int depth, bool sw
   const double across = double(std::max(rect.x1 - rect.x0, rect.y1 - rect.y0) + 1) * s.pixel * obstacles_before;
   if (across > kMaxSweepWidth * grid_.resolution()) return Visibility::undecided;
   return sweep_.hidden(sweep_pose_, targets, obstacle_free) ? Visibility::blocked : Visibility::undecided;
+}
+
+bool GainCounter::hidden_by_one_candidate(const Aabb& targets, const PixelRect& rect) const {
+  // An obstacle that hides every point of the targets hides all their
+  // directions, so it is drawn into every pixel of their footprint: the
+  // candidates of its middle pixel are enough to look at.
+  int count = 0;
+  bool overflow = false;
+  const ViewImage::Candidate* candidates = image_.candidates((rect.x0 + rect.x1) / 2, (rect.y0 + rect.y1) / 2, count, overflow);
+  const Vec3d o = image_.setup().apex;
+  const double nearest = std::sqrt(distance_squared(o, targets));
+  for (int i = 0; i < count && double(candidates[i].near) < nearest; ++i) {
+    const Aabb inside = grown(obstacles_[candidates[i].index], -margin_);
+    for (int a = 0; a < 3; ++a) {
+      // The obstacle's slab along a lies between the apex and the targets:
+      // every segment from the apex to a target crosses its middle plane,
+      // at a point in the convex hull of where the targets' corners' segments
+      // cross it. If those lie inside the obstacle (shrunk by the margin),
+      // every walk to the targets visits it, as in ray_visibility_from_image.
+      double side = 0.0;
+      if (o[a] < inside.min[a] && inside.max[a] < targets.min[a]) side = 1.0;
+      if (o[a] > inside.max[a] && inside.min[a] > targets.max[a]) side = -1.0;
+      if (side == 0.0) continue;
+      const double plane = 0.5 * (inside.min[a] + inside.max[a]);
+      const int b = (a + 1) % 3;
+      const int c = (a + 2) % 3;
+      // (A relative hair for the rounding of the crossings.)
+      const double hair = 1e-12 * (std::fabs(o[b]) + std::fabs(o[c]) + nearest + 1.0);
+      bool all = true;
+      for (unsigned corner = 0; corner < 8 && all; ++corner) {
+        const Vec3d p{(corner & 1u) ? targets.max.x : targets.min.x, (corner & 2u) ? targets.max.y : targets.min.y,
+                      (corner & 4u) ? targets.max.z : targets.min.z};
+        const double along = (plane - o[a]) / (p[a] - o[a]);
+        const double qb = o[b] + along * (p[b] - o[b]);
+        const double qc = o[c] + along * (p[c] - o[c]);
+        all = qb > inside.min[b] + hair && qb < inside.max[b] - hair && qc > inside.min[c] + hair && qc < inside.max[c] - hair;
+      }
+      if (all) return true;
+    }
+  }
+  return false;
 }
 
 bool GainCounter::voxel_visible(Key key) {

@@ -97,6 +97,9 @@ class GainCounter {
   /// What the image (and, if `sweep`, an OcclusionSweep) proves of a node.
   [[nodiscard]] Visibility node_visibility(Key key, int depth, bool sweep);
   bool voxel_visible(Key key);
+  /// Whether one obstacle drawn into the middle pixel of `rect` (the
+  /// footprint of `targets`) surely hides every target.
+  [[nodiscard]] bool hidden_by_one_candidate(const Aabb& targets, const PixelRect& rect) const;
   /// What the image and the sweep prove of a node (whose value, the maximum
   /// of its voxels, is `value`); for the fast method also what its corner
   /// voxels suggest.
