@@ -561,7 +561,8 @@ GainCounter::Visibility GainCounter::node_visibility(Key key, int depth, bool sw
   }
   const double obstacle_free = double(image_.nearest(rect));  // no obstacle nearer in the cone
   if (obstacle_free > std::sqrt(farthest_distance_squared(s.apex, targets))) return Visibility::visible;
-  if (hidden_by_one_candidate(targets, rect)) return Visibility::blocked;
+  // (Fast decides the small nodes this mostly proves by their corners.)
+  if (sweeps_ && hidden_by_one_candidate(targets, rect)) return Visibility::blocked;
   // For eight voxels or fewer a sweep costs more than the rays it saves.
   if (!sweep || depth < 2) return Visibility::undecided;
   // Some rays reach the node's near side without passing an obstacle: a
