@@ -528,9 +528,9 @@ void GainCounter::refuse() const {
   char text[700];
   std::snprintf(text, sizeof text,
                 "information gain: max_range %g m at resolution %g m needs more than %llu steps "
-                "(GainOptions::max_steps) for an exact count: the voxels along the edges of the frustum and of the "
-                "shadows in it are decided one by one, more of them the longer the range (%s). Use a shorter "
-                "max_range or a coarser map, or raise max_steps",
+                "(GainOptions::max_steps): the voxels along the edges of the frustum and of the shadows in it "
+                "are decided one by one, more of them the longer the range (%s). Use a shorter max_range or a "
+                "coarser map, or raise max_steps",
                 f.max_range, res, static_cast<unsigned long long>(max_steps_), hint);
   throw std::invalid_argument(text);
 }
