@@ -1,13 +1,14 @@
 // umbra_fuzz_seeds OUTDIR: writes the seed corpora of the fuzz targets.
 //
 // One folder per target (OUTDIR/octomap_bt, octomap_ot, umb, umb_body,
-// graph, xyz, xyz_bz2, ply, pcd, kitti, query_lines) with a handful of small, valid files made by
+// graph, xyz, xyz_bz2, ply, pcd, kitti, query_lines, insert) with a handful of small, valid files made by
 // umbra's own writers or spelled out here: empty maps, single voxels, a few
 // random voxels, colour, an unpruned tree, a coarse map of the simulated
 // office; point clouds in every encoding each reader supports; `umbra query`
 // input lines of every kind, good and bad. Nothing comes
 // from ../shared/data. Every file is a few bytes to ~10 KB so that the
 // fuzzers mutate quickly. Cost: well under a second.
+// In builds with ROS also OUTDIR/rosbag: the tests' small bag in each compression.
 #include <bzlib.h>
 
 #include <bit>
@@ -25,6 +26,9 @@
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/sim/lidar.hpp"
 #include "umbra/sim/scene.hpp"
+#ifdef UMBRA_FUZZ_ROSBAG_SEEDS
+#include "bag_writer.hpp"
+#endif
 
 namespace {
 
@@ -216,6 +220,17 @@ void kitti_seeds(const fs::path& out) {
 /// `umbra query` input lines: byte 0 holds the settings (fuzz_query_lines.cpp:
 /// kind in bits 0-1, unknown-is-free bit 2, depth bits 3-4, radius bits 5-7),
 /// then good lines of the kind, a comment, a blank line and a few bad ones.
+/// rosbag: the tests' small bag (clouds, /tf, /tf_static, another type) in each compression the reader knows.
+void rosbag_seeds(const fs::path& out) {
+#ifdef UMBRA_FUZZ_ROSBAG_SEEDS
+  for (const char* compression : {"none", "bz2", "lz4"}) {
+    write(out / "rosbag" / (std::string("small-") + compression + ".bag"), umbra::test::small_bag(compression).bytes);
+  }
+#else
+  (void)out;
+#endif
+}
+
 void query_line_seeds(const fs::path& out) {
   const char* const lines[] = {
       "0.5 0.2 0.1 0.3\n1 1 1 0.05\n# comment\n\n-2,0,0.5,1\n0.1 0.2 nan 1\n500 0 0 0.1\n",       // sphere
@@ -229,6 +244,35 @@ void query_line_seeds(const fs::path& out) {
       std::string seed(1, static_cast<char>(kind | settings));
       seed += lines[kind];
       write(out / "query_lines" / ("q" + std::to_string(kind) + "-" + std::to_string(settings)), seed);
+    }
+  }
+}
+
+/// Point insertion (fuzz_insert.cpp): the inputs of issue 21 for every
+/// integrator. A coordinate is a kind byte and a payload byte (kind 0: 0,
+/// payload bit 7 the sign; 1: a tiny value; 2: a whole number of voxels,
+/// payload & 63 minus 32; 8: the sensor's coordinate).
+void insert_seeds(const fs::path& out) {
+  const Bytes sensor_at_zero = {0, 0, 0, 0, 0, 0};
+  const Bytes hair_point = {1, 0x80, 1, 0x00, 0, 0};     // (-1e-23, 1e-23, 0)
+  const Bytes hair_point_29 = {1, 0x81, 1, 0x01, 0, 0};  // (-1e-29, 1e-29, 0)
+  const Bytes axis_point = {8, 0, 8, 0, 2, 2};           // (0, 0, -30 voxels)
+  const Bytes axis_points = {2, 62, 8, 0, 8, 0, 8, 0, 2, 2, 8, 0, 2, 7, 8, 0, 8, 0};  // +-x, -y: along edges
+  fs::create_directories(out / "insert");
+  for (const std::uint8_t integrator : {0, 1, 2}) {
+    for (const std::uint8_t more : {0, 1 << 2 | 2, 5 << 2 | 1 << 5}) {  // fine steps / max range / resolution
+      const std::string name = std::to_string(integrator) + "-" + std::to_string(more);
+      const auto seed = [&](const char* what, std::uint8_t count, std::initializer_list<Bytes> points) {
+        Bytes bytes = {integrator, more, 0};
+        bytes.insert(bytes.end(), sensor_at_zero.begin(), sensor_at_zero.end());
+        bytes.push_back(count);
+        for (const Bytes& p : points) bytes.insert(bytes.end(), p.begin(), p.end());
+        write(out / "insert" / (std::string(what) + "-" + name), bytes);
+      };
+      seed("hair", 0, {hair_point});
+      seed("hair29", 1, {hair_point_29, axis_point});
+      seed("axis", 0, {axis_point});
+      seed("edges", 2, {Bytes(axis_points.begin(), axis_points.end())});
     }
   }
 }
@@ -249,7 +293,9 @@ int main(int argc, char** argv) {
     ply_seeds(out);
     pcd_seeds(out);
     kitti_seeds(out);
+    rosbag_seeds(out);
     query_line_seeds(out);
+    insert_seeds(out);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "umbra_fuzz_seeds: %s\n", e.what());
     return 1;

@@ -4,7 +4,7 @@
 #
 #   fuzz/run_fuzzers.sh [--build DIR] [--seconds N | --runs N] [--jobs J] [TARGET...]
 #
-# TARGET: octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines (default:
+# TARGET: octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines insert (default:
 # all). Defaults: --build build-fuzz (under the source folder), --seconds 10;
 # --runs N stops each target after N inputs instead. Each target starts from
 # the generated seeds and the corpus kept in the repository (fuzz/corpus/TARGET);
@@ -14,6 +14,8 @@
 # missing (CTest counts that as skipped). Environment: UMBRA_FUZZ_CXX (the
 # compiler, default clang++; CXX is not used since it usually names the main
 # build's GCC), UMBRA_FUZZ_FLAGS (extra libFuzzer flags).
+# Also the target rosbag (the .bag scan source), named or by default, where
+# the fuzz build found ROS 1; elsewhere it is skipped with a message.
 set -euo pipefail
 
 source_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -29,10 +31,10 @@ while [[ $# -gt 0 ]]; do
     --runs) runs="$2"; shift 2 ;;
     --jobs) jobs="$2"; shift 2 ;;
     -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
-    *) targets+=("$1"); shift ;;
+    *) targets+=("$1"); named=1; shift ;;
   esac
 done
-[[ ${#targets[@]} -gt 0 ]] || targets=(octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines)
+[[ ${#targets[@]} -gt 0 ]] || targets=(octomap_bt octomap_ot umb umb_body graph xyz xyz_bz2 ply pcd kitti query_lines insert)
 
 cxx="${UMBRA_FUZZ_CXX:-clang++}"
 if ! command -v "$cxx" > /dev/null 2>&1 || ! "$cxx" --version 2>/dev/null | grep -qi clang; then
@@ -60,9 +62,14 @@ seeds="$build_dir/seeds"
 rm -rf "$seeds"
 "$build_dir/fuzz/umbra_fuzz_seeds" "$seeds" || { echo "!! writing the seed corpora failed"; exit 1; }
 
+[[ -n "${named:-}" ]] || targets+=(rosbag)  # by default too
 status=0
 for target in "${targets[@]}"; do
   binary="$build_dir/fuzz/umbra_fuzz_$target"
+  if [[ "$target" == rosbag && ! -x "$binary" ]]; then
+    echo "== rosbag: skipped (the fuzz build found no ROS 1; scripts/common.sh lists the Debian packages)"
+    continue
+  fi
   [[ -x "$binary" ]] || { echo "unknown target '$target'"; exit 2; }
   corpus="$build_dir/corpus/$target"
   mkdir -p "$corpus" "$build_dir/crashes"
@@ -71,6 +78,7 @@ for target in "${targets[@]}"; do
     octomap_*) dict=(-dict="$source_dir/fuzz/octomap.dict") ;;
     ply) dict=(-dict="$source_dir/fuzz/ply.dict") ;;
     pcd) dict=(-dict="$source_dir/fuzz/pcd.dict") ;;
+    rosbag) dict=(-dict="$source_dir/fuzz/rosbag.dict") ;;
   esac
   kept=()
   [[ -d "$source_dir/fuzz/corpus/$target" ]] && kept=("$source_dir/fuzz/corpus/$target")

@@ -6,6 +6,7 @@
 UMBRA_APT_PACKAGES=(
   build-essential cmake pkg-config git
   libzstd-dev libbz2-dev libpng-dev zlib1g-dev  # umbra_io
+  liblz4-dev                                    # lz4 chunks of .bag files (ros/src/bag_chunk.cpp)
   libcli11-dev                                  # the umbra program
   libgtest-dev libgmock-dev                     # tests
   liboctomap-dev                                # differential tests and benchmarks only

@@ -33,15 +33,20 @@ std::string tf2_frame(const std::string& frame) {
   return start == std::string::npos ? std::string() : frame.substr(start);
 }
 
-std::size_t cloud_to_scan(const sensor_msgs::PointCloud2& cloud, const RigidTransform& sensor_to_map,
+std::size_t cloud_to_scan(const PointCloud2View& cloud, const RigidTransform& sensor_to_map, bool want_colors,
                           DecodedCloud& decoded, Scan& scan, const std::string& name) {
-  decode_point_cloud2(view_of(cloud), sensor_to_map, true, decoded, name);
+  decode_point_cloud2(cloud, sensor_to_map, want_colors, decoded, name);
   std::swap(scan.points, decoded.points);
   std::swap(scan.colors, decoded.colors);
   const Vec3d origin = sensor_to_map.translation;
   scan.origin = Vec3f(origin);
   scan.name = name;
   return decoded.non_finite;
+}
+
+std::size_t cloud_to_scan(const sensor_msgs::PointCloud2& cloud, const RigidTransform& sensor_to_map,
+                          bool want_colors, DecodedCloud& decoded, Scan& scan, const std::string& name) {
+  return cloud_to_scan(view_of(cloud), sensor_to_map, want_colors, decoded, scan, name);
 }
 
 }  // namespace umbra::ros_io

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cloud_message.hpp"
+#include "crash_log.hpp"
 #include "map_messages.hpp"
 
 namespace umbra::ros_io {
@@ -75,13 +76,18 @@ bool MapServer::wanted(const ros::Publisher& publisher) const {
 
 void MapServer::insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
   const std::string name = "cloud in frame '" + cloud->header.frame_id + "' at " + std::to_string(cloud->header.stamp.toSec());
+  // Whatever goes wrong with one cloud (a malformed message, a transform tf2 cannot give, an error inside the
+  // integrator) is logged and the cloud dropped: the node keeps its map and goes on with the next one.
+  set_crash_context("inserting the " + name);
   try {
     const std::string cloud_frame = tf2_frame(cloud->header.frame_id);
     RigidTransform to_map;
     if (cloud_frame != settings_.frame) {
       to_map = to_rigid_transform(tf_buffer_.lookupTransform(settings_.frame, cloud_frame, cloud->header.stamp).transform);
     }
-    cloud_to_scan(*cloud, to_map, decoded_, scan_, name);
+    // Colours only when the map keeps them: otherwise the rgb field is not even looked at.
+    const std::size_t non_finite = cloud_to_scan(*cloud, to_map, settings_.color, decoded_, scan_, name);
+    const std::size_t total = scan_.points.size();
     if (std::isfinite(settings_.pointcloud_min_z) || std::isfinite(settings_.pointcloud_max_z)) {
       // Keep points strictly inside (min_z, max_z) in the map frame; NaN points go too.
       std::size_t kept = 0;
@@ -98,14 +104,33 @@ void MapServer::insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
     const InsertStats stats = settings_.color && !scan_.colors.empty()
                                   ? map_.insert_point_cloud(scan_.origin, scan_.points, scan_.colors, settings_.insert)
                                   : map_.insert_point_cloud(scan_.origin, scan_.points, settings_.insert);
+    if (non_finite > 0) {
+      ROS_INFO_THROTTLE(5.0, "umbra_server: %zu of the %zu points of the %s are NaN or infinite and were skipped",
+                        non_finite, total, name.c_str());
+    }
     if (stats.out_of_bounds > 0) {
       ROS_WARN_THROTTLE(5.0, "umbra_server: %zu points of a cloud lie outside the map and were skipped", stats.out_of_bounds);
     }
+  } catch (const FormatError& e) {  // its message starts with the cloud's name
+    ROS_ERROR("umbra_server: cannot insert the %s", e.what());
+    set_crash_context("");
+    return;
   } catch (const std::exception& e) {
     ROS_ERROR("umbra_server: cannot insert the %s: %s", name.c_str(), e.what());
+    set_crash_context("");
+    return;
+  } catch (...) {
+    ROS_ERROR("umbra_server: cannot insert the %s: an exception of unknown type", name.c_str());
+    set_crash_context("");
     return;
   }
-  publish_all(cloud->header.stamp);
+  set_crash_context("publishing the map after the " + name);
+  try {
+    publish_all(cloud->header.stamp);
+  } catch (const std::exception& e) {
+    ROS_ERROR("umbra_server: cannot publish the map after the %s: %s", name.c_str(), e.what());
+  }
+  set_crash_context("");
 }
 
 void MapServer::publish_all(const ros::Time& stamp) {

@@ -9,6 +9,8 @@
 #include <optional>
 #include <stdexcept>
 
+#include "core/memory_budget.hpp"
+
 namespace umbra::ros_io {
 namespace {
 
@@ -190,10 +192,14 @@ RigidTransform RigidTransform::from_quaternion(Vec3d translation, double qx, dou
 void decode_point_cloud2(const PointCloud2View& cloud, const RigidTransform& to_map, bool want_colors,
                          DecodedCloud& out, const std::string& name) {
   const Layout layout = check_layout(cloud, want_colors, name);
+  const std::size_t total = std::size_t{cloud.width} * cloud.height;
+  // The points take up to three times the data (12 bytes a point against a point_step of 4 or more).
+  detail::require_memory(name, "decoding " + std::to_string(total) + " points",
+                         std::uint64_t{total} * (sizeof(Vec3f) + (layout.rgb_offset ? sizeof(Rgb) : 0)));
   out.points.clear();
   out.colors.clear();
   out.non_finite = 0;
-  const std::size_t total = std::size_t{cloud.width} * cloud.height;
+  if (total == 0) return;  // width 0 with any height: no row to walk (up to 2^32 - 1 of them)
   out.points.reserve(total);
   if (layout.rgb_offset) out.colors.reserve(total);
   for (std::uint32_t row = 0; row < cloud.height; ++row) {

@@ -9,11 +9,13 @@
 
 #include <exception>
 
+#include "crash_log.hpp"
 #include "map_server.hpp"
 #include "umbra/io/map_formats.hpp"
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "umbra_server");  // removes the remappings and _param:=value arguments
+  umbra::ros_io::install_crash_log();     // a crash inside a library still leaves a line naming the cloud
   ros::NodeHandle node;
   ros::NodeHandle private_node("~");
   try {

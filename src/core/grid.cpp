@@ -1,7 +1,8 @@
 #include "umbra/core/grid.hpp"
 
 #include <charconv>
-#include <sstream>
+#include <cmath>
+#include <string>
 #include <stdexcept>
 
 namespace umbra {
@@ -27,15 +28,36 @@ Grid::Grid(double resolution, int depth_levels)
   key_offset_ = 1u << (depth_levels - 1);
 }
 
+namespace {
+
+/// The shortest text that reads back as exactly `value` (-3276.800048828125
+/// for the float nearest -3276.8): an error about a value at the map's edge
+/// must show the value that was tested, not one rounded back inside.
+std::string exact_text(double value) {
+  char text[32];
+  const auto written = std::to_chars(text, text + sizeof text, value);
+  return std::string(text, written.ptr);
+}
+
+}  // namespace
+
 Key Grid::key(Vec3d c) const {
   if (auto k = key_checked(c)) return *k;
-  std::ostringstream message;
-  message.precision(9);
-  message << "coordinate (" << c.x << ", " << c.y << ", " << c.z
-          << ") is outside the map, which spans [" << -half_extent() << ", " << half_extent()
-          << ") on every axis (resolution " << resolution_ << ", depth levels " << depth_levels_
-          << ")";
-  throw std::out_of_range(message.str());
+  std::string message = "coordinate (" + exact_text(c.x) + ", " + exact_text(c.y) + ", " + exact_text(c.z) +
+                        ") is outside the map, which spans [" + exact_text(-half_extent()) + ", " +
+                        exact_text(half_extent()) + ") on every axis (resolution " + exact_text(resolution_) +
+                        ", depth levels " + std::to_string(depth_levels_) + ")";
+  // The key is floor(c * (1 / resolution)), as OctoMap computes it: a
+  // coordinate a rounding step inside the span can still land outside.
+  for (int axis = 0; axis < 3; ++axis) {
+    const double v = c[axis];
+    if (axis_key(v) || !(v >= -half_extent() && v < half_extent())) continue;
+    message += "; " + std::string(1, "xyz"[axis]) + " = " + exact_text(v) +
+               " rounds outside: its key, floor(x * (1 / resolution)) as OctoMap computes it, is " +
+               exact_text(std::floor(v * inverse_resolution_)) + ", outside [-" + std::to_string(key_offset_) +
+               ", " + std::to_string(key_offset_) + ")";
+  }
+  throw std::out_of_range(message);
 }
 
 Vec3d Grid::min_corner(Key key, int depth) const {

@@ -5,7 +5,9 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/radix_sort.hpp"
 #include "core/voxel_codes.hpp"
+#include "integrate/scan_images.hpp"
 #include "integrate/color_samples.hpp"
 #include "integrate/end_voxels.hpp"
 #include "integrate/projective_tracer.hpp"
@@ -42,6 +44,12 @@ void InsertOptions::validate(int depth_levels) const {
                                 "], got " + std::to_string(clear_depth));
   }
   if (fine_steps < 0) throw std::invalid_argument("fine_steps must be >= 0, got " + std::to_string(fine_steps));
+  for (const double resolution : {scan_resolution.horizontal, scan_resolution.vertical}) {
+    if (!(resolution >= 0.0 && resolution < 0.5)) {
+      throw std::invalid_argument("scan_resolution must be 0 (estimated) or a positive number of radians below 0.5 on "
+                                  "each axis, got " + std::to_string(resolution));
+    }
+  }
   if (!(surface_margin >= 0.0 && std::isfinite(surface_margin))) {
     throw std::invalid_argument("surface_margin must be finite and >= 0, got " + std::to_string(surface_margin));
   }
@@ -70,6 +78,7 @@ InsertStats& InsertStats::operator+=(const InsertStats& other) {
   outside_box += other.outside_box;
   threads = std::max(threads, other.threads);
   exclusive_seconds += other.exclusive_seconds;
+  if (other.scan_resolution.horizontal > 0.0) scan_resolution = other.scan_resolution;
   return *this;
 }
 
@@ -84,6 +93,29 @@ KeyBox key_box(const Grid& grid, const Aabb& box) {
   return {grid.key(clamp(box.min)), grid.key(clamp(box.max))};
 }
 
+
+/// A hit for the end voxel `code` of the discrete integrator's ray from
+/// `origin`: unless its centre lies beyond max_range, or (with a box) the
+/// ray to it is clipped by the box or the voxel lies outside the box's keys
+/// (counted in `stats`). False when it had one already.
+bool add_end_voxel_hit(const Grid& grid, Vec3f origin, std::uint64_t code, double max_range,
+                       const std::optional<Aabb>& box, const std::optional<KeyBox>& box_keys, UpdateBatch& batch,
+                       InsertStats& stats) {
+  const Key key = morton::decode(code);
+  const Vec3f centre = grid.center_f(key);
+  if (max_range > 0.0 && octomap_norm(centre - origin) > max_range) {
+    ++stats.truncated;
+    return false;
+  }
+  if (box) {
+    const auto part = box->clip(Vec3d(origin), Vec3d(centre));
+    if (!part || part->second < 1.0 || !box_keys->contains(key)) {
+      ++stats.outside_box;
+      return false;
+    }
+  }
+  return batch.add_hit(code);
+}
 
 /// The discrete integrator's hits for a scan's points: the voxel of every
 /// point in the map whose centre lies within max_range of the origin (and,
@@ -104,23 +136,58 @@ void add_end_voxel_hits(const Grid& grid, Vec3f origin, std::span<const Vec3f> p
         ++(code == kNonFiniteCode ? stats.non_finite : stats.out_of_bounds);
         continue;
       }
-      if (code == last) continue;  // neighbouring pixels share voxels: most repeats come in a row
+      if (code == last) continue;  // neighbouring points share voxels: most repeats come in a row
       last = code;
-      const Key key = morton::decode(code);
-      const Vec3f centre = grid.center_f(key);
-      if (max_range > 0.0 && octomap_norm(centre - origin) > max_range) {
-        ++stats.truncated;
+      if (add_end_voxel_hit(grid, origin, code, max_range, box, box_keys, batch, stats)) ++stats.hits;
+    }
+  }
+  stats.rays = stats.hits;
+}
+
+/// The same for the points of a depth image (`pixels`: each point's pixel,
+/// rising, in an image `width` pixels wide), each voxel decided once: a
+/// point whose voxel is its left or upper neighbour's is dropped (at 2 cm
+/// a Kinect pixel shares its voxel with both in most of the image), the
+/// rest sorted and made unique, then added in Morton order (the batch's
+/// cached path then serves most of them).
+void add_image_hits(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
+                    std::span<const std::uint32_t> pixels, int width, double max_range, const std::optional<Aabb>& box,
+                    const std::optional<KeyBox>& box_keys, UpdateBatch& batch, InsertStats& stats,
+                    std::vector<std::uint64_t>& candidates, std::vector<std::uint64_t>& row) {
+  constexpr std::size_t kBlock = 1024;
+  std::array<std::uint64_t, kBlock> codes;
+  candidates.clear();
+  row.assign(static_cast<std::size_t>(width), kNonFiniteCode);  // the code last seen in each column
+  std::uint64_t left = kNonFiniteCode;
+  std::uint32_t left_pixel = ~std::uint32_t{0};
+  std::uint32_t row_start = 0;  // first pixel of the current point's row (the pixels rise)
+  for (std::size_t block = 0; block < points.size(); block += kBlock) {
+    const std::size_t size = std::min(kBlock, points.size() - block);
+    voxel_codes(grid, points.subspan(block, size), codes.data());
+    for (std::size_t j = 0; j < size; ++j) {
+      const std::uint64_t code = codes[j];
+      const std::uint32_t pixel = pixels[block + j];
+      while (pixel - row_start >= static_cast<std::uint32_t>(width)) row_start += static_cast<std::uint32_t>(width);
+      const std::size_t column = pixel - row_start;
+      const bool beside = pixel == left_pixel + 1 && column != 0;
+      left_pixel = pixel;
+      if (code >= kOutsideCode) {
+        ++(code == kNonFiniteCode ? stats.non_finite : stats.out_of_bounds);
+        left = code;
+        row[column] = code;
         continue;
       }
-      if (box) {
-        const auto part = box->clip(Vec3d(origin), Vec3d(centre));
-        if (!part || part->second < 1.0 || !box_keys->contains(key)) {
-          ++stats.outside_box;
-          continue;
-        }
-      }
-      if (batch.add_hit(code)) ++stats.hits;
+      // Any repeat dropped here is one already kept: only the first
+      // occurrence of a code reaches the candidates without a twin before it.
+      if (!(beside && code == left) && code != row[column]) candidates.push_back(code);
+      left = code;
+      row[column] = code;
     }
+  }
+  radix_sort(candidates, 3 * grid.depth_levels(), [](std::uint64_t code) { return code; });
+  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  for (const std::uint64_t code : candidates) {
+    if (add_end_voxel_hit(grid, origin, code, max_range, box, box_keys, batch, stats)) ++stats.hits;
   }
   stats.rays = stats.hits;
 }
@@ -141,8 +208,9 @@ std::size_t Integrator::memory_bytes() const {
   std::size_t bytes = tracers_.capacity() * sizeof(tracers_[0]);
   if (pool_) bytes += sizeof(ThreadPool) + pool_->size() * sizeof(std::thread);
   for (const auto& tracer : tracers_) bytes += sizeof(RayTracer) + tracer->memory_bytes();
-  return bytes + frame_.memory_bytes() + image_points_.capacity() * sizeof(Vec3f) +
-         image_pixels_.capacity() * sizeof(std::uint32_t);
+  return bytes + frame_.memory_bytes() + scan_images_.memory_bytes() + image_points_.capacity() * sizeof(Vec3f) +
+         image_pixels_.capacity() * sizeof(std::uint32_t) +
+         (hit_candidates_.capacity() + hit_row_.capacity()) * sizeof(std::uint64_t);
 }
 
 InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f origin,
@@ -161,10 +229,15 @@ InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f
   }
   if (box) box->validate();
 
+  const Key origin_key = grid.key(Vec3d(origin));  // throws std::out_of_range with the coordinate and the extent
+  if (options.integrator == IntegratorKind::projective && grid.depth_levels() >= 2) {
+    return trace_scan_projective(tree, grid, origin, points, colors, options, box);
+  }
+
   ScanContext scan;
   scan.grid = &grid;
   scan.origin = origin;
-  scan.origin_key = grid.key(Vec3d(origin));  // throws std::out_of_range with the coordinate and the extent
+  scan.origin_key = origin_key;
   scan.max_range = options.max_range;
   scan.clear_depth = options.resolved_clear_depth(grid);
   // Clearing depth-0 "nodes" is clearing voxels: tracing every ray voxel by
@@ -370,9 +443,12 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   ensure_workers(threads);
   stats.threads = threads > 1 ? pool_->size() : 1;
   for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
-  add_end_voxel_hits(grid, origin, points, options.max_range, box, box_keys, tracers_[0]->batch(), stats);
+  add_image_hits(grid, origin, points, pixels, image.width(), options.max_range, box, box_keys, tracers_[0]->batch(),
+                 stats, hit_candidates_, hit_row_);
   frame_.set(image, camera, pose);
-  trace_projective_misses(grid, options, box_keys, threads);
+  // A depth image's rays are as dense as its pixels: the rule alone decides
+  // its misses, known obstacles included (projective_frame.hpp).
+  trace_projective_misses(nullptr, grid, options, box_keys, std::span<const ProjectiveFrame>(&frame_, 1), threads);
   if (!point_colors.empty()) {
     InsertOptions discrete = options;
     discrete.integrator = IntegratorKind::discrete;
@@ -383,31 +459,74 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   return stats;
 }
 
-void Integrator::trace_projective_misses(const Grid& grid, const InsertOptions& options,
-                                         const std::optional<KeyBox>& box_keys, unsigned threads) {
-  const ProjectiveRule rule(grid, frame_, options.max_range, options.surface_margin * grid.resolution(), box_keys);
-  const ProjectiveTracer tracer(rule);
+InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
+                                              std::span<const Rgb> colors, const InsertOptions& options,
+                                              const std::optional<Aabb>& box) {
+  std::optional<KeyBox> box_keys;
+  if (box) box_keys = key_box(grid, *box);
+  InsertStats stats;
+  stats.points = points.size();
+  const unsigned threads = options.threads == 0 ? ThreadPool::hardware_threads() : options.threads;
+  ensure_workers(threads);
+  stats.threads = threads > 1 ? pool_->size() : 1;
+  for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
+  add_end_voxel_hits(grid, origin, points, options.max_range, box, box_keys, tracers_[0]->batch(), stats);
+  const ScanResolution resolution = estimate_scan_resolution(origin, points, options.scan_resolution);
+  if (resolution.horizontal > 0.0 && resolution.vertical > 0.0) {
+    stats.scan_resolution = resolution;
+    scan_images_.build(origin, points, resolution);
+    trace_projective_misses(&tree, grid, options, box_keys, scan_images_.faces(), threads);
+  }
+  if (!colors.empty()) {
+    InsertOptions discrete = options;
+    discrete.integrator = IntegratorKind::discrete;
+    ThreadPool* const pool = threads > 1 ? pool_.get() : nullptr;
+    pending_colors_ = color_samples(grid, origin, points, colors, discrete, box_keys, pool);
+  }
+  pending_threads_ = threads;
+  return stats;
+}
+
+void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& grid, const InsertOptions& options,
+                                         const std::optional<KeyBox>& box_keys,
+                                         std::span<const ProjectiveFrame> frames, unsigned threads) {
+  // One rule and tracer per image (the six faces of a scan, or one depth
+  // image); a voxel gets a miss when any of them clears it.
+  std::vector<ProjectiveRule> rules;
+  rules.reserve(frames.size());
+  for (const ProjectiveFrame& frame : frames) {
+    ProjectiveRule& rule =
+        rules.emplace_back(grid, frame, options.max_range, options.surface_margin * grid.resolution(), box_keys);
+    if (tree != nullptr) {
+      rule.tree = tree;
+      rule.occupied_log_odds = tree->thresholds().occupied;
+    }
+  }
   const int root_depth = grid.depth_levels();
   if (threads == 1) {
-    tracer.trace(0, root_depth, tracers_[0]->batch());
+    for (const ProjectiveRule& rule : rules) ProjectiveTracer(rule).trace(0, root_depth, tracers_[0]->batch());
     return;
   }
-  // Subtrees for the threads: the nodes the walk opens, down to the first
+  // Subtrees for the threads: the nodes the walks open, down to the first
   // depth that yields 16 per thread (several per thread balance uneven ones).
-  std::vector<ProjectiveTracer::Task> tasks;
+  struct Task {
+    std::size_t image;
+    ProjectiveTracer::Task node;
+  };
+  std::vector<Task> tasks;
+  std::vector<ProjectiveTracer::Task> nodes;
   for (int depth = root_depth - 1; depth >= 2; --depth) {
     tasks.clear();
-    tracer.collect(0, root_depth, depth, tasks);
+    for (std::size_t i = 0; i < rules.size(); ++i) {
+      nodes.clear();
+      ProjectiveTracer(rules[i]).collect(0, root_depth, depth, nodes);
+      for (const ProjectiveTracer::Task& node : nodes) tasks.push_back({i, node});
+    }
     if (tasks.size() >= std::size_t{threads} * 16) break;
   }
   pool_->run(tasks.size(), [&](std::size_t i, unsigned worker) {
-    const ProjectiveTracer::Task& task = tasks[i];
-    UpdateBatch& batch = tracers_[worker]->batch();
-    if (task.decision == ProjectiveTracer::Decision::all) {
-      batch.add_miss_node(task.code, task.depth);
-    } else {
-      tracer.trace(task.code, task.depth, batch);
-    }
+    const Task& task = tasks[i];
+    ProjectiveTracer(rules[task.image]).trace(task.node.code, task.node.depth, tracers_[worker]->batch());
   });
   UpdateBatch& merged = tracers_[0]->batch();
   for (unsigned w = 1; w < threads; ++w) {

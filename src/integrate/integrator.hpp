@@ -53,6 +53,7 @@
 #include "umbra/core/log_odds.hpp"
 #include "core/thread_pool.hpp"
 #include "umbra/core/vec3.hpp"
+#include "integrate/scan_images.hpp"
 #include "integrate/projective_frame.hpp"
 #include "integrate/ray_tracer.hpp"
 #include "tree/occupancy_tree.hpp"
@@ -99,9 +100,16 @@ class Integrator {
 
  private:
   void ensure_workers(unsigned threads);
-  /// The projective integrator's misses for the frame in frame_, into the
-  /// tracers' batches (merged into tracers_[0]'s).
-  void trace_projective_misses(const Grid& grid, const InsertOptions& options, const std::optional<KeyBox>& box_keys,
+  /// trace() with the projective integrator: the scan as the six faces of
+  /// images around its origin (scan_images.hpp).
+  InsertStats trace_scan_projective(const OccupancyTree& tree, const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
+                                    std::span<const Rgb> colors, const InsertOptions& options,
+                                    const std::optional<Aabb>& box);
+  /// The projective integrator's misses for `frames`, into the tracers'
+  /// batches (merged into tracers_[0]'s); with `tree`, its obstacles are
+  /// cleared only where the frames' rays cross them.
+  void trace_projective_misses(const OccupancyTree* tree, const Grid& grid, const InsertOptions& options,
+                               const std::optional<KeyBox>& box_keys, std::span<const ProjectiveFrame> frames,
                                unsigned threads);
 
   std::unique_ptr<ThreadPool> pool_;
@@ -112,8 +120,11 @@ class Integrator {
   // The projective integrator's image and the points of the last depth
   // image, kept between scans (their buffers are reused).
   ProjectiveFrame frame_;
+  ScanImages scan_images_;
   std::vector<Vec3f> image_points_;
   std::vector<std::uint32_t> image_pixels_;
+  std::vector<std::uint64_t> hit_candidates_;  // add_image_hits' scratch
+  std::vector<std::uint64_t> hit_row_;
 };
 
 }  // namespace umbra

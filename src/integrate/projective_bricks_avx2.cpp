@@ -46,7 +46,8 @@ __attribute__((target("avx2"))) __m256 gather_cells(const float* cells, __m256i 
 
 __attribute__((target("avx2"))) std::uint64_t projective_cleared_avx2(const ProjectiveRule& rule, Vec3f origin,
                                                                      int level) {
-  const float* cells = level == 0 ? rule.frame->pyramid.level_max(0) : rule.frame->pyramid.window_max(level);
+  const float* cells = level == 0 ? rule.frame->depth.data() : rule.frame->pyramid.window_max(level);
+  const float* halves = rule.frame->depth_halves.empty() ? nullptr : rule.frame->depth_halves.data();
   const int cells_wide = rule.frame->pyramid.width(level);
   const int cells_high = rule.frame->pyramid.height(level);
   const __m256 zero = _mm256_setzero_ps();
@@ -92,6 +93,14 @@ __attribute__((target("avx2"))) std::uint64_t projective_cleared_avx2(const Proj
       const __m256i column = _mm256_cvttps_epi32(_mm256_and_ps(u, ok));
       const __m256i row = _mm256_cvttps_epi32(_mm256_and_ps(v, ok));
       d = gather_cells(cells, column, row, 0, cells_wide, cells_high, cells_wide, _mm256_castps_si256(ok));
+      if (halves != nullptr) {
+        // Its half pixel's nearest reading, where it has one.
+        const __m256i half_column = _mm256_cvttps_epi32(_mm256_and_ps(_mm256_add_ps(u, u), ok));
+        const __m256i half_row = _mm256_cvttps_epi32(_mm256_and_ps(_mm256_add_ps(v, v), ok));
+        const __m256 nearest_in_half = gather_cells(halves, half_column, half_row, 0, 2 * cells_wide,
+                                                    2 * cells_high, 2 * cells_wide, _mm256_castps_si256(ok));
+        d = _mm256_blendv_ps(d, nearest_in_half, _mm256_cmp_ps(nearest_in_half, zero, _CMP_GT_OQ));
+      }
     } else {
       const __m256 safe_u = _mm256_and_ps(u, ok);
       const __m256 safe_v = _mm256_and_ps(v, ok);

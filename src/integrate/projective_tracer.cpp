@@ -29,11 +29,14 @@ constexpr double kRelativeError = 2e-6;
 }  // namespace
 
 ProjectiveTracer::Decision ProjectiveTracer::classify(std::uint64_t code, int depth) const {
+  return classify_node(morton::decode(code), depth);
+}
+
+ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth) const {
   UMBRA_ASSERT(depth >= 2);
   const Grid& grid = *rule_.grid;
   const ProjectiveFrame& frame = *rule_.frame;
   const std::uint32_t n = std::uint32_t{1} << depth;  // voxels per edge
-  const Key first = morton::decode(code);
   bool contained = true;  // in the box
   if (rule_.box_keys) {
     const KeyBox& box = *rule_.box_keys;
@@ -48,23 +51,26 @@ ProjectiveTracer::Decision ProjectiveTracer::classify(std::uint64_t code, int de
   const double res = grid.resolution();
   const double span = (n - 1) * res;
   const Vec3d lo{grid.axis_center(first.x), grid.axis_center(first.y), grid.axis_center(first.z)};
-  // Distances from the camera to that box: nearest and farthest point.
-  double near_squared = 0.0;
-  double far_squared = 0.0;
-  for (std::size_t a = 0; a < 3; ++a) {
-    const double below = lo[a] - frame.origin[a];
-    const double above = below + span;
-    const double nearest = below > 0.0 ? below : (above < 0.0 ? -above : 0.0);
-    const double farthest = std::max(std::abs(below), std::abs(above));
-    near_squared += nearest * nearest;
-    far_squared += farthest * farthest;
-  }
-  const double far = std::sqrt(far_squared);
+  const ProjectiveRule::CentreDistances distances = rule_.centre_distances(first, depth);
+  const double far = std::sqrt(distances.farthest_squared);
   const double pad = kRelativeError * (1.0 + far);  // metres the float rule may differ by
   bool within_range = true;
   if (rule_.max_range > 0.0) {
-    if (std::sqrt(near_squared) - pad > rule_.max_range) return Decision::none;
-    within_range = far + pad <= rule_.max_range;
+    if (rule_.range_depth == 0) {
+      // Voxel by voxel, in float.
+      if (std::sqrt(distances.nearest_squared) - pad > rule_.max_range) return Decision::none;
+      within_range = far + pad <= rule_.max_range;
+    } else if (depth <= rule_.range_depth) {
+      // Per depth-range_depth node (projective_frame.hpp): exactly at that
+      // depth and below.
+      if (!rule_.within_range(first)) return Decision::none;
+    } else {
+      // Above it, with a little slack: the nodes it holds are no farther
+      // and no nearer.
+      const double limit = rule_.max_range * rule_.max_range;
+      if (distances.nearest_squared > limit * (1.0 + 1e-9)) return Decision::none;
+      within_range = distances.farthest_squared * (1.0 + 1e-9) <= limit;
+    }
   }
 
   // The eight corners of that box in the camera frame.
@@ -173,35 +179,54 @@ ProjectiveTracer::Decision ProjectiveTracer::classify(std::uint64_t code, int de
   return Decision::split;
 }
 
-void ProjectiveTracer::trace_brick(std::uint64_t brick, UpdateBatch& batch) const {
-  std::uint64_t voxels = rule_.cleared(brick);
+bool ProjectiveTracer::holds_obstacle(std::uint64_t code, int depth) const {
+  return cursor_ && cursor_->max_log_odds(code, depth) > rule_.occupied_log_odds;
+}
+
+void ProjectiveTracer::trace_brick(std::uint64_t brick, Key first, UpdateBatch& batch) const {
+  // Its range node was classified on the way down unless it is the brick itself.
+  if (rule_.range_depth == 2 && !rule_.within_range(first)) return;
+  std::uint64_t voxels = rule_.cleared_in_range(brick, first);
   if (voxels != 0 && rule_.box_keys) voxels &= brick_voxels_in_box(*rule_.box_keys, brick);
+  if (voxels != 0 && holds_obstacle(brick, 2)) {
+    for (std::uint64_t rest = voxels; rest != 0; rest &= rest - 1) {
+      const unsigned i = static_cast<unsigned>(std::countr_zero(rest));
+      if (holds_obstacle(brick + i, 0) && !rule_.ray_crosses(brick + i)) voxels &= ~(std::uint64_t{1} << i);
+    }
+  }
   if (voxels != 0) batch.add_misses_in_brick(brick, voxels);
 }
 
-void ProjectiveTracer::trace(std::uint64_t code, int depth, UpdateBatch& batch) const {
-  switch (classify(code, depth)) {
+void ProjectiveTracer::trace_node(std::uint64_t code, Key first, int depth, UpdateBatch& batch) const {
+  switch (classify_node(first, depth)) {
     case Decision::none:
       return;
     case Decision::all:
+      if (holds_obstacle(code, depth)) break;  // split: its obstacles are cleared only where rays cross them
       batch.add_miss_node(code, depth);
       return;
     case Decision::split:
       break;
   }
   if (depth == 2) {
-    trace_brick(code, batch);
+    trace_brick(code, first, batch);
     return;
   }
   const int child_depth = depth - 1;
-  if (child_depth == 2) {
+  const std::uint32_t half = std::uint32_t{1} << child_depth;
+  for (std::uint32_t slot = 0; slot < 8; ++slot) {
+    const std::uint64_t child = code | std::uint64_t{slot} << (3 * child_depth);
+    const Key child_first{first.x + (slot & 1u ? half : 0u), first.y + (slot & 2u ? half : 0u),
+                          first.z + (slot & 4u ? half : 0u)};
     // Evaluating a brick voxel by voxel (eight at a time) costs less than
     // asking the pyramid about it first: the children of a split node are
     // evaluated directly.
-    for (std::uint64_t slot = 0; slot < 8; ++slot) trace_brick(code | slot << 6, batch);
-    return;
+    if (child_depth == 2) {
+      trace_brick(child, child_first, batch);
+    } else {
+      trace_node(child, child_first, child_depth, batch);
+    }
   }
-  for (std::uint64_t slot = 0; slot < 8; ++slot) trace(code | slot << (3 * child_depth), child_depth, batch);
 }
 
 void ProjectiveTracer::collect(std::uint64_t code, int depth, int task_depth, std::vector<Task>& tasks) const {

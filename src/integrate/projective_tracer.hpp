@@ -18,14 +18,21 @@
 // borders of free space (the surface, the image's edges, holes), not with
 // the number of pixels or the volume.
 //
+// Known obstacles (the map's occupied voxels) inside a node to be cleared
+// whole make it split instead, down to the bricks, where each obstacle the
+// rule would clear is cleared only if a ray crosses it
+// (ProjectiveRule::ray_crosses).
+//
 // Any node can be traced on its own into any batch, so the tracing splits
 // into independent subtrees for threads (Integrator::trace_image).
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "integrate/projective_frame.hpp"
+#include "tree/occupancy_tree.hpp"
 #include "tree/update_batch.hpp"
 
 namespace umbra {
@@ -34,7 +41,9 @@ class ProjectiveTracer {
  public:
   enum class Decision : std::uint8_t { none, all, split };
 
-  explicit ProjectiveTracer(const ProjectiveRule& rule) : rule_(rule) {}
+  explicit ProjectiveTracer(const ProjectiveRule& rule) : rule_(rule) {
+    if (rule.tree != nullptr) cursor_.emplace(*rule.tree);
+  }
 
   /// What the rule does to the voxels of the depth-`depth` node (depth >= 2)
   /// whose first voxel is `code`: clears none, clears all, or only some (or
@@ -42,7 +51,9 @@ class ProjectiveTracer {
   [[nodiscard]] Decision classify(std::uint64_t code, int depth) const;
 
   /// Adds the misses of the depth-`depth` node `code` (depth >= 2) to `batch`.
-  void trace(std::uint64_t code, int depth, UpdateBatch& batch) const;
+  void trace(std::uint64_t code, int depth, UpdateBatch& batch) const {
+    trace_node(code, morton::decode(code), depth, batch);
+  }
 
   /// The depth-`depth` nodes (in Morton order) below the node `code` whose
   /// subtrees hold all the rule's work: split nodes are opened down to
@@ -56,10 +67,20 @@ class ProjectiveTracer {
   void collect(std::uint64_t code, int depth, int task_depth, std::vector<Task>& tasks) const;
 
  private:
+  /// classify() and trace() of a node whose first voxel's key is `first`
+  /// (the walk keeps keys, so that nodes are not decoded).
+  [[nodiscard]] Decision classify_node(Key first, int depth) const;
+  void trace_node(std::uint64_t code, Key first, int depth, UpdateBatch& batch) const;
   /// A split brick: the voxels it clears, in the box.
-  void trace_brick(std::uint64_t brick, UpdateBatch& batch) const;
+  void trace_brick(std::uint64_t brick, Key first, UpdateBatch& batch) const;
+  /// Whether the map holds an obstacle in the depth-`depth` node `code`.
+  [[nodiscard]] bool holds_obstacle(std::uint64_t code, int depth) const;
 
   const ProjectiveRule& rule_;
+  // Looks up known obstacles along the walk (a walk is in Morton order, so
+  // consecutive lookups share most of their path). One per tracer: a
+  // tracer belongs to one thread.
+  mutable std::optional<OccupancyTree::Cursor> cursor_;
 };
 
 }  // namespace umbra

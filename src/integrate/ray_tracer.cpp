@@ -42,9 +42,18 @@ bool prepare_ray(const ScanContext& scan, Vec3f point, InsertStats* stats, Prepa
   const Vec3f offset = point - scan.origin;
   const double range = octomap_norm(offset);
   if (scan.max_range > 0.0 && range > scan.max_range) {
-    // OctoMap: origin + normalized(direction) * (float)max_range, no hit.
+    // OctoMap: origin + normalized(direction) * (float)max_range, no hit
+    // (range > max_range > 0 here: the division is by a positive length).
+    // Except for a point so far away (beyond about 1.8e19 m) that the float
+    // squared length overflows: OctoMap's normalized() divides by infinity,
+    // gets a zero direction and updates nothing; here the direction comes
+    // from double, and the ray is cut at max_range like any other.
     const auto length = static_cast<float>(range);
-    const Vec3f direction = range > 0.0 ? Vec3f{offset.x / length, offset.y / length, offset.z / length} : offset;
+    Vec3f direction{offset.x / length, offset.y / length, offset.z / length};
+    if (!std::isfinite(range)) {
+      const Vec3d exact = Vec3d(point) - Vec3d(scan.origin);
+      direction = Vec3f(exact / exact.norm());
+    }
     ray.end = scan.origin + direction * static_cast<float>(scan.max_range);
     ray.hit = false;
     count(&InsertStats::truncated);
@@ -248,6 +257,17 @@ void RayTracer::trace_group(const ScanContext& scan, std::span<const PreparedRay
     for (int axis = 0; axis < 3; ++axis) {
       low[axis] = node_index(grid, std::min(a[axis], b[axis]) - spread, depth);
       high[axis] = node_index(grid, std::max(a[axis], b[axis]) + spread, depth);
+      // A group of rays that runs along a node border (one ray along a face,
+      // such as x = 0 from a sensor at x = 0): the shrinking put low above
+      // high, and the empty box counted as cleared, so that nothing was
+      // cleared along the whole ray. Such rays lie in the node their
+      // coordinate rounds into, as in the voxel walk. (A crossing shorter
+      // than the shrinking, where the guide only grazes a node's edge or
+      // corner, still clears nothing: which side the voxel walk takes
+      // there is rounding.)
+      if (low[axis] > high[axis] && s_out - s_in > 2e-6 * grid.resolution() / guide_length) {
+        low[axis] = high[axis] = node_index(grid, 0.5 * (a[axis] + b[axis]), depth);
+      }
     }
     bool all_cleared = true;
     for (std::uint32_t z = low[2]; z <= high[2] && all_cleared; ++z) {

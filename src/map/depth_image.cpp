@@ -60,17 +60,32 @@ void back_project(const DepthImage& depth, const PinholeCamera& camera, const Po
   points.clear();
   if (pixels != nullptr) pixels->clear();
   const int width = depth.width();
+  const std::size_t count = depth.pixel_count();
+  // Room for every pixel first (the buffers are the caller's, kept from
+  // frame to frame): no growth inside the loop.
+  points.reserve(count);
+  if (pixels != nullptr) pixels->reserve(count);
   std::vector<double> column_factor(static_cast<std::size_t>(width));
   for (int u = 0; u < width; ++u) column_factor[static_cast<std::size_t>(u)] = (u - camera.cx) / camera.fx;
-  std::size_t index = 0;
-  for (int v = 0; v < depth.height(); ++v) {
-    const double row_factor = (v - camera.cy) / camera.fy;
-    for (int u = 0; u < width; ++u, ++index) {
-      const double z = depth.depth(index);
-      if (z == 0.0) continue;
-      points.push_back(pose.apply(column_factor[static_cast<std::size_t>(u)] * z, row_factor * z, z));
-      if (pixels != nullptr) pixels->push_back(static_cast<std::uint32_t>(index));
+  // One loop per kind of image, so that the pixel loop does not ask which.
+  auto project = [&](auto&& depth_of) {
+    std::size_t index = 0;
+    for (int v = 0; v < depth.height(); ++v) {
+      const double row_factor = (v - camera.cy) / camera.fy;
+      for (int u = 0; u < width; ++u, ++index) {
+        const double z = depth_of(index);
+        if (z == 0.0) continue;
+        points.push_back(pose.apply(column_factor[static_cast<std::size_t>(u)] * z, row_factor * z, z));
+        if (pixels != nullptr) pixels->push_back(static_cast<std::uint32_t>(index));
+      }
     }
+  };
+  if (depth.is_raw()) {
+    const std::span<const std::uint16_t> raw = depth.raw_depths();
+    const double scale = depth.metres_per_unit();
+    project([&](std::size_t i) { return raw[i] * scale; });
+  } else {
+    project([&](std::size_t i) { return depth.depth(i); });
   }
 }
 

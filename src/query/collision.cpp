@@ -192,10 +192,9 @@ SegmentWalk segment_walk(const Grid& grid, const Segment& segment) {
   // The walk works on float points, as OctoMap's computeRayKeys.
   const Vec3f from(segment.from);
   const Vec3f to(segment.to);
-  const std::optional<Key> from_key = grid.key_checked(from);
-  const std::optional<Key> to_key = grid.key_checked(to);
-  if (!from_key || !to_key) (void)grid.key(Vec3d(!from_key ? from : to));  // throws std::out_of_range naming it
-  return {grid, from, *from_key, to, *to_key};
+  const Key from_key = key_of_rounded(grid, from, "segment: its start");  // throw std::out_of_range naming it
+  const Key to_key = key_of_rounded(grid, to, "segment: its end");
+  return {grid, from, from_key, to, to_key};
 }
 
 CollisionResult check_segment(const OccupancyMap& map, const Segment& segment, const CollisionOptions& options) {

@@ -17,8 +17,8 @@ std::vector<std::uint64_t> segment_voxel_codes(const Grid& grid, const Segment& 
   // OctoMap's computeRayKeys works on float points: so does the walk.
   const Vec3f from(segment.from);
   const Vec3f to(segment.to);
-  const Key from_key = grid.key(Vec3d(from));  // throws std::out_of_range naming the coordinate
-  const Key to_key = grid.key(Vec3d(to));
+  const Key from_key = key_of_rounded(grid, from, "segment: its start");  // throw std::out_of_range naming it
+  const Key to_key = key_of_rounded(grid, to, "segment: its end");
   std::vector<std::uint64_t> codes;
   walk_ray(grid, from, from_key, to, to_key, [&](std::uint64_t code) { codes.push_back(code); });
   codes.push_back(morton::encode(to_key));

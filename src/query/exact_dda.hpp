@@ -29,7 +29,7 @@
 #include <limits>
 
 #include "core/assert.hpp"
-#include "integrate/ray_walker.hpp"  // octomap_norm
+#include "integrate/ray_walker.hpp"  // ray_direction
 #include "umbra/core/grid.hpp"
 #include "umbra/core/morton.hpp"
 #include "umbra/core/vec3.hpp"
@@ -210,12 +210,11 @@ class SegmentWalk {
   SegmentWalk(const Grid& grid, Vec3f from, Key from_key, Vec3f to, Key to_key)
       : end_code_(morton::encode(to_key)), code_(end_code_), at_end_(from_key == to_key) {
     if (at_end_) return;
-    // Direction and length rounded as computeRayKeys rounds them.
-    Vec3f direction = to - from;
-    const auto length = static_cast<float>(octomap_norm(direction));
-    direction = {direction.x / length, direction.y / length, direction.z / length};  // float division, as OctoMap
-    length_ = length;
-    dda_ = ExactDda(grid, from, from_key, direction, ExactDda::HalfVoxel::kFloat);
+    // Direction and length rounded as computeRayKeys rounds them (a hair-thin
+    // segment whose float length underflows normalised in double: ray_direction).
+    const RayDirection direction = ray_direction(from, to);
+    length_ = direction.length;
+    dda_ = ExactDda(grid, from, from_key, direction.unit, ExactDda::HalfVoxel::kFloat);
     code_ = dda_.code();
   }
 

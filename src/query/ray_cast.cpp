@@ -43,7 +43,7 @@ CastStart prepare(const Grid& grid, Vec3d origin, Vec3d direction) {
   if (!direction.is_finite()) throw std::invalid_argument("ray cast: the direction is not finite");
   CastStart start;
   start.origin = Vec3f(origin);
-  start.origin_key = grid.key(Vec3d(start.origin));  // throws std::out_of_range naming the coordinate
+  start.origin_key = key_of_rounded(grid, start.origin, "ray cast: the origin");  // throws std::out_of_range
   // A direction whose float squares overflow or vanish (1e20, 1e-25, or a
   // double beyond float range, which became inf) is first scaled by a power
   // of two, which changes no bit of the normalised direction otherwise; its

@@ -1,5 +1,6 @@
 // Grid: the key rule of DESIGN.md §1, the map's extent, centres.
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <string>
@@ -57,6 +58,67 @@ TEST(Grid, KeyThrowsWithTheCoordinateAndTheExtent) {
     EXPECT_NE(message.find("17.25"), std::string::npos) << message;
     EXPECT_NE(message.find("[-4, 4)"), std::string::npos) << message;
   }
+}
+
+// A coordinate refused at the map's edge is printed as the exact value
+// tested, and the span exactly too, so that the message never shows a value
+// inside the span it says the value is outside of; where the key
+// computation (c * (1 / resolution), floored, as OctoMap's) rounds a value
+// inside the span to a key outside, the message says so. Issue 21: a ray
+// from x = -3276.8 was refused as "(-3276.80005, ...) is outside [-3276.8, 3276.8)".
+TEST(Grid, AnEdgeCoordinateIsRefusedWithTheExactValueTestedAndNoContradiction) {
+  std::size_t refused = 0;
+  std::size_t rounded_outside = 0;
+  for (const int depth_levels : {4, 16, 21}) {
+    // The last two: found by search, each has a coordinate just below the span's top whose key rounds to 2^15.
+    for (const double resolution : {0.1, 0.05, 0.37, 0.3, 0.7, 0.013, 1e-4, 999.9, 0.20996970583824853, 0.89519100837016574}) {
+      const Grid grid(resolution, depth_levels);
+      const double h = grid.half_extent();
+      for (const double edge : {-h, h}) {
+        std::vector<double> values;
+        double up = edge;
+        double down = edge;
+        for (int i = 0; i < 40; ++i) {
+          values.push_back(up);
+          values.push_back(down);
+          values.push_back(static_cast<float>(up));  // as the ray walks round them
+          up = std::nextafter(up, 1e300);
+          down = std::nextafter(down, -1e300);
+        }
+        for (const double c : values) {
+          if (grid.axis_key(c)) continue;
+          ++refused;
+          std::string message;
+          try {
+            (void)grid.key(Vec3d{0.0, c, 0.0});
+          } catch (const std::out_of_range& e) {
+            message = e.what();
+          }
+          ASSERT_FALSE(message.empty()) << c;
+          // "coordinate (X, Y, Z) is outside the map, which spans [LO, HI)"
+          double x = 0;
+          double y = 0;
+          double z = 0;
+          double lo = 0;
+          double hi = 0;
+          ASSERT_EQ(std::sscanf(message.c_str(), "coordinate (%lf, %lf, %lf) is outside the map, which spans [%lf, %lf)",
+                                &x, &y, &z, &lo, &hi),
+                    5)
+              << message;
+          EXPECT_EQ(y, c) << "the value tested, to the last bit: " << message;
+          EXPECT_EQ(lo, -h) << message;
+          EXPECT_EQ(hi, h) << message;
+          const bool inside_span = y >= lo && y < hi;
+          const bool says_rounded = message.find("y = ") != std::string::npos &&
+                                    message.find("rounds outside") != std::string::npos;
+          EXPECT_EQ(inside_span, says_rounded) << message;
+          rounded_outside += says_rounded;
+        }
+      }
+    }
+  }
+  EXPECT_GT(refused, 1000u);
+  EXPECT_GT(rounded_outside, 0u) << "some resolution should round a value inside the span outside";
 }
 
 TEST(Grid, RejectsBadParameters) {

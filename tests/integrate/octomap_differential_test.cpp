@@ -7,6 +7,7 @@
 // properties.
 #include <cstdio>
 #include <cstring>
+#include <random>
 
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
@@ -134,6 +135,61 @@ TEST(OctomapDifferential, RealRegisteredScansAt10cm) {
   while (source->next(scan)) data.scans.push_back(scan);
   ASSERT_EQ(data.scans.size(), 3u);
   run_comparison(data, 0.1, 30.0);
+}
+
+TEST(OctomapDifferential, RaysAlongFacesAndEdgesIntoTheNeighbourVoxelAndHairThin) {
+  // Scans whose rays run exactly on voxel faces and edges, end in the voxel
+  // beside the origin's, or are a hair thin (offsets down to 3e-23 m, whose
+  // float squared length is denormal): every voxel with bit-identical
+  // log-odds, and no voxel known to umbra that OctoMap does not know.
+  // Rays whose squared length underflows to 0 are left out: liboctomap
+  // 1.9.7 crashes on them (it walks until its key buffer overflows; umbra
+  // stops at once, tests/integrate/ray_walker_test.cpp and hostile_rays_test.cpp).
+  for (const double resolution : {0.1, 0.5}) {
+    const auto r = static_cast<float>(resolution);
+    const std::vector<float> values = {0.0f,     -0.0f,   r,       -r,      2 * r,   -3 * r,  0.5f * r,
+                                       -0.5f * r, 3e-23f, -3e-23f, 1e-22f,  -1e-20f, 1e-16f,  -1e-16f};
+    std::mt19937 rng(static_cast<std::uint32_t>(resolution * 10));
+    std::uniform_int_distribution<std::size_t> pick(0, values.size() - 1);
+    std::uniform_int_distribution<int> steps(-6, 6);
+    for (const bool discrete : {false, true}) {
+      for (const double max_range : {-1.0, 3.5 * resolution}) {
+        octomap::OcTree octree(resolution);
+        OccupancyMap map(resolution);
+        InsertOptions options;
+        options.integrator = discrete ? IntegratorKind::discrete : IntegratorKind::simple;
+        options.max_range = max_range;
+        std::size_t rays = 0;
+        for (int scan = 0; scan < 40; ++scan) {
+          const Vec3f origin{values[pick(rng)], values[pick(rng)], values[pick(rng)]};
+          std::vector<Vec3f> points;
+          for (int i = 0; i < 50; ++i) {
+            Vec3f p;
+            for (std::size_t axis = 0; axis < 3; ++axis) {
+              // A border value, or the origin's coordinate moved by whole voxels (faces and edges).
+              p[axis] = i % 2 == 0 ? values[pick(rng)] : origin[axis] + float(steps(rng)) * r * float(i % 3 != 0);
+            }
+            const Vec3f d = p - origin;
+            if (d.x * d.x + d.y * d.y + d.z * d.z == 0.0f) continue;  // underflows (or zero): see above
+            points.push_back(p);
+          }
+          rays += points.size();
+          octomap::Pointcloud cloud;
+          for (const Vec3f& p : points) cloud.push_back(p.x, p.y, p.z);
+          octree.insertPointCloud(cloud, octomap::point3d(origin.x, origin.y, origin.z), max_range, false, discrete);
+          map.insert_point_cloud(origin, points, options);
+        }
+        const Agreement a = compare(octree, map);
+        EXPECT_GT(rays, 1000u);
+        EXPECT_GT(a.octomap_known, 50u);
+        EXPECT_EQ(a.same_log_odds, a.octomap_known) << "resolution " << resolution << " discrete " << discrete
+                                                    << " max range " << max_range;
+        EXPECT_EQ(a.umbra_known, a.octomap_known) << "resolution " << resolution << " discrete " << discrete
+                                                  << " max range " << max_range;
+        ASSERT_EQ(test::check_invariants(map), "");
+      }
+    }
+  }
 }
 
 }  // namespace

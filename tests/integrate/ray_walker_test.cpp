@@ -6,6 +6,7 @@
 #include <bit>
 #include <cstdlib>
 #include <functional>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -117,6 +118,98 @@ std::vector<std::uint64_t> codes_of(const Runs& runs) {
     for (std::uint64_t v = voxels; v != 0; v &= v - 1) codes.push_back(brick + static_cast<std::uint64_t>(std::countr_zero(v)));
   }
   return codes;
+}
+
+/// Coordinates a hair's breadth from the voxel border at 0: tiny, denormal,
+/// exactly zero, of both signs. A ray between two of them has a float
+/// squared length that underflows (below about 2.6e-23 per component),
+/// is denormal, or is barely normal.
+std::vector<float> hair_coordinates() {
+  std::vector<float> values = {0.0f, -0.0f};
+  for (const float v : {1e-23f, 1e-29f, 2.5e-23f, 3e-23f, 1e-22f, 1e-20f, 1e-16f, 1e-40f,
+                        std::numeric_limits<float>::denorm_min(), std::numeric_limits<float>::min()}) {
+    values.push_back(v);
+    values.push_back(-v);
+  }
+  return values;
+}
+
+TEST(RayWalker, HairThinRaysAcrossTheBorderAtZeroStopAtOnceAndMatchTheReference) {
+  // The ray from the origin to (-1e-23, 1e-23, 0) ends in the voxel beside
+  // the origin's, but its float squared length underflows to 0: OctoMap's
+  // normalisation gives an infinite / NaN direction, and its walk ran on
+  // along y without end (here: a crash, or a column of voxels to the
+  // map's edge). The walk visits the origin's voxel and stops.
+  const std::vector<float> values = hair_coordinates();
+  for (const double resolution : {0.1, 0.5, 0.05}) {  // 0.5: the border at 0 is exact in float
+    const Grid grid(resolution, 6);
+    const test::DenseGrid reference(resolution, 6, -2.0f, 3.5f);
+    std::mt19937 rng(static_cast<std::uint32_t>(resolution * 1000));
+    std::uniform_int_distribution<std::size_t> pick(0, values.size() - 1);
+    for (int i = 0; i < 20000; ++i) {
+      const Vec3f from = i == 0 ? Vec3f{0, 0, 0} : Vec3f{values[pick(rng)], values[pick(rng)], values[pick(rng)]};
+      const Vec3f to =
+          i == 0 ? Vec3f{-1e-23f, 1e-23f, 0} : Vec3f{values[pick(rng)], values[pick(rng)], values[pick(rng)]};
+      bool inside = false;
+      const std::vector<Key> keys = walk(grid, from, to, inside);
+      ASSERT_TRUE(inside);
+      const Key a = grid.key(Vec3d(from));
+      const Key b = grid.key(Vec3d(to));
+      // Every coordinate is within 1e-16 of the border at 0, so the walk can
+      // cross no other border: at most the three at 0, all its voxels in
+      // the eight around the origin (rounding as OctoMap's may carry it over
+      // the border at 0 beside the end voxel, but never further).
+      ASSERT_LE(keys.size(), 4u) << "ray " << i;
+      for (const Key& k : keys) {
+        for (int axis = 0; axis < 3; ++axis) {
+          ASSERT_TRUE(k[axis] + 1 == grid.key_offset() || k[axis] == grid.key_offset())
+              << "ray " << i << " (" << from.x << "," << from.y << "," << from.z << ") -> (" << to.x << ","
+              << to.y << "," << to.z << ") visits key " << k[axis] << " on axis " << axis;
+        }
+      }
+      if (a != b) {
+        ASSERT_FALSE(keys.empty());
+        ASSERT_EQ(keys.front(), a);
+      }
+      expect_same_walk(grid, reference, from, to);
+      // The fast integrator's walk: skipping nothing it is the same walk;
+      // skipping every node it visits no more.
+      Runs expected;
+      walk_ray_runs(grid, from, a, to, b, [&](std::uint64_t brick, std::uint64_t v) { expected.emplace_back(brick, v); });
+      ASSERT_EQ(walk_skipping(grid, 1, from, to, [](std::uint64_t) { return false; }), expected) << "ray " << i;
+      ASSERT_LE(codes_of(walk_skipping(grid, 1, from, to, [](std::uint64_t) { return true; })).size(), keys.size());
+    }
+  }
+}
+
+TEST(RayWalker, RaysAlongVoxelFacesAndEdgesAndIntoTheNeighbourMatchTheReference) {
+  // Rays that run exactly on voxel borders (a face: one coordinate constant
+  // on a border; an edge: two), axis-aligned and diagonal in a plane, and
+  // rays ending in the voxel beside the origin's, from origins on borders,
+  // edges and corners.
+  for (const double resolution : {0.1, 0.5, 0.05}) {
+    const Grid grid(resolution, 6);
+    const test::DenseGrid reference(resolution, 6, -2.0f, 3.5f);
+    const auto r = static_cast<float>(resolution);
+    const std::vector<float> borders = {0.0f, r, -r, 3 * r, -2 * r, 0.5f * r, 1e-23f, -1e-23f};
+    std::mt19937 rng(static_cast<std::uint32_t>(resolution * 100 + 1));
+    std::uniform_int_distribution<std::size_t> pick(0, borders.size() - 1);
+    std::uniform_int_distribution<int> steps(-8, 8);
+    std::uniform_real_distribution<float> fraction(-1.0f, 1.0f);
+    for (int i = 0; i < 20000; ++i) {
+      const Vec3f from{borders[pick(rng)], borders[pick(rng)], borders[pick(rng)]};
+      Vec3f to = from;
+      const int kind = i % 4;
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        if (kind == 0 && axis != std::size_t(i % 3)) continue;  // axis-aligned
+        if (kind == 1 && axis == std::size_t(i % 3)) continue;  // diagonal in a plane
+        const float move = kind == 3 ? fraction(rng) * r        // into a neighbour (or its own voxel)
+                                     : float(steps(rng)) * r * (kind == 2 ? fraction(rng) : 1.0f);
+        to[axis] = from[axis] + move;
+      }
+      expect_same_walk(grid, reference, from, to);
+    }
+  }
 }
 
 TEST(RayWalker, RunsAreTheWalksVoxelsBrickByBrick) {

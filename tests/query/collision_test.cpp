@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "support/dense_grid.hpp"
+#include "support/map_internals.hpp"
 #include "support/query_oracle.hpp"
 #include "support/shape_oracle.hpp"
 #include "umbra/map/occupancy_map.hpp"
@@ -316,6 +317,62 @@ TEST(Collision, HugeAndTinyRayDirectionsCastLikeOrdinaryOnes) {
   EXPECT_EQ(along_x.node.center, map.cast_ray(origin, {1, 0, 0}).node.center);
   EXPECT_FALSE(map.cast_ray(origin, {1, 0, 5.5e57}).hit);  // straight up: nothing there, and it returns
   EXPECT_EQ(map.cast_ray(origin, {1e-320, 0, 0}).node.center, along_x.node.center);  // subnormal: still a ray
+}
+
+TEST(Collision, HairThinSegmentsAndSegmentsAlongFacesStopAtTheFirstBlockingVoxelOfTheReferenceWalk) {
+  // Segments between points a hair's breadth from the border at 0 (tiny,
+  // denormal, zero, both signs: the float squared length of many
+  // underflows, and the walk's direction was infinite / NaN, so the check
+  // never ended), segments along voxel faces and edges, and segments into
+  // the voxel beside their start, in a map whose voxels around the origin
+  // are occupied, free or unknown: the answer is the first blocking voxel
+  // of the reference walk (the test DenseGrid's computeRayKeys, with its end voxel).
+  const double resolution = 0.1;
+  OccupancyMap map(resolution, 6);
+  std::mt19937 rng(21);
+  const std::uint32_t o = map.grid().key_offset();
+  for (std::uint32_t z = o - 3; z <= o + 2; ++z) {
+    for (std::uint32_t y = o - 3; y <= o + 2; ++y) {
+      for (std::uint32_t x = o - 3; x <= o + 2; ++x) {
+        const unsigned kind = rng() % 3;  // unknown, free, occupied
+        if (kind != 0) map.set_log_odds(Key{x, y, z}, kind == 1 ? -2.0f : 2.0f);
+      }
+    }
+  }
+  std::vector<float> values = {0.0f, -0.0f, 0.1f, -0.1f, 0.2f, -0.05f};
+  for (const float v : {1e-23f, 1e-29f, 3e-23f, 1e-20f, 1e-40f, std::numeric_limits<float>::denorm_min()}) {
+    values.push_back(v);
+    values.push_back(-v);
+  }
+  std::uniform_int_distribution<std::size_t> pick(0, values.size() - 1);
+  const test::DenseGrid walker(resolution, 6, -2.0f, 3.5f);
+  const test::DenseValues dense(map);
+  const LogOddsThresholds& t = test::log_odds_thresholds(map);
+  std::size_t blocked = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const Vec3f from{values[pick(rng)], values[pick(rng)], values[pick(rng)]};
+    const Vec3f to = i == 0 ? Vec3f{-1e-23f, 1e-23f, 0.0f} : Vec3f{values[pick(rng)], values[pick(rng)], values[pick(rng)]};
+    for (const bool unknown_is_free : {false, true}) {
+      std::vector<Key> keys;
+      ASSERT_TRUE(walker.ray_keys(from, to, keys));
+      keys.push_back(map.grid().key(Vec3d(to)));
+      std::optional<Key> first;
+      for (const Key& k : keys) {
+        const float v = dense.at(k);
+        if (t.is_occupied(v) || (!unknown_is_free && t.is_unknown(v))) {
+          first = k;
+          break;
+        }
+      }
+      const CollisionResult got = map.is_free(Segment{Vec3d(from), Vec3d(to)}, {unknown_is_free, 0});
+      ASSERT_EQ(got.free, !first) << "segment " << i;
+      if (first) {
+        ASSERT_TRUE(contains(*got.blocking, *first)) << "segment " << i;
+        ++blocked;
+      }
+    }
+  }
+  EXPECT_GT(blocked, 1000u);
 }
 
 TEST(Collision, BatchAnswersEqualSingleAnswers) {

@@ -8,6 +8,7 @@
 // and the problem.
 #include "umbra_ros/point_cloud2.hpp"
 
+#include "umbra/core/memory_limit.hpp"
 #include "umbra/io/scan_source.hpp"
 
 #include <bit>
@@ -299,6 +300,31 @@ TEST(PointCloud2, BadCloudsAreClearErrors) {
 
 // The library (umbra_io) knows .bag files but reads them only through the ROS build (ros/src/rosbag_source.cpp,
 // used by the umbra program); asked directly it says so.
+// The points take 12 bytes each, a point_step can be 4 (x, y and z at one offset): the memory limit is checked
+// before the points are allocated.
+TEST(PointCloud2, PointsBeyondTheMemoryLimitAreRefused) {
+  PointCloud2View cloud;
+  const auto f32 = static_cast<std::uint8_t>(PointFieldType::float32);
+  cloud.fields = {{"x", 0, f32, 1}, {"y", 0, f32, 1}, {"z", 0, f32, 1}};
+  cloud.point_step = 4;
+  cloud.width = 1000;
+  cloud.row_step = 4000;
+  const std::vector<std::uint8_t> data(4000, 0);
+  cloud.data = data;
+  DecodedCloud out;
+  set_memory_limit(8000);
+  try {
+    decode_point_cloud2(cloud, {}, false, out, "thin cloud");
+    ADD_FAILURE() << "decoded";
+  } catch (const MemoryLimitError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("thin cloud: decoding 1000 points needs 11.7 KiB (12000 bytes)", 0), 0u)
+        << e.what();
+  }
+  set_memory_limit(0);
+  decode_point_cloud2(cloud, {}, false, out, "thin cloud");
+  EXPECT_EQ(out.points.size(), 1000u);
+}
+
 TEST(RosbagWithoutRos, OpenScanSourceSaysItNeedsTheRosBuild) {
   EXPECT_EQ(scan_format_for("run.bag"), "rosbag");
   EXPECT_EQ(scan_format_for("x.txt", "rosbag"), "rosbag");

@@ -95,10 +95,25 @@ bool OctoMapRays::ray_keys(Vec3f origin, Vec3f end, std::vector<Key>& keys) cons
   float dy = end.y - origin.y;
   float dz = end.z - origin.z;
   const float squared = dx * dx + dy * dy + dz * dz;
-  const auto length = static_cast<float>(std::sqrt(static_cast<double>(squared)));
-  dx /= length;
-  dy /= length;
-  dz /= length;
+  auto length = static_cast<float>(std::sqrt(static_cast<double>(squared)));
+  if (length == 0.0f) {
+    // The squared length underflowed float (every component below about
+    // 2.6e-23): OctoMap divides by zero here and walks on until its key
+    // buffer overflows. umbra's rule instead (docs/octomap-agreement.md):
+    // the same walk with the direction and length computed in double.
+    const double ex = static_cast<double>(end.x) - static_cast<double>(origin.x);
+    const double ey = static_cast<double>(end.y) - static_cast<double>(origin.y);
+    const double ez = static_cast<double>(end.z) - static_cast<double>(origin.z);
+    const double norm = std::sqrt(ex * ex + ey * ey + ez * ez);
+    dx = static_cast<float>(ex / norm);
+    dy = static_cast<float>(ey / norm);
+    dz = static_cast<float>(ez / norm);
+    length = static_cast<float>(norm);
+  } else {
+    dx /= length;
+    dy /= length;
+    dz /= length;
+  }
   const float direction[3] = {dx, dy, dz};
   int step[3];
   double t_max[3];
@@ -176,7 +191,18 @@ void DenseGrid::insert_scan(Vec3f origin, std::span<const Vec3f> points, const D
     } else {
       const auto length = static_cast<float>(range);
       const float m = static_cast<float>(options.max_range);
-      const Vec3f end{origin.x + ox / length * m, origin.y + oy / length * m, origin.z + oz / length * m};
+      Vec3f direction{ox / length, oy / length, oz / length};
+      if (std::isinf(range)) {
+        // A point beyond about 1.8e19 m: OctoMap's direction is zero (it
+        // divides by an infinite length) and its ray updates nothing; umbra
+        // cuts the ray along the double direction (docs/octomap-agreement.md).
+        const double ex = static_cast<double>(p.x) - static_cast<double>(origin.x);
+        const double ey = static_cast<double>(p.y) - static_cast<double>(origin.y);
+        const double ez = static_cast<double>(p.z) - static_cast<double>(origin.z);
+        const double norm = std::sqrt(ex * ex + ey * ey + ez * ez);
+        direction = {static_cast<float>(ex / norm), static_cast<float>(ey / norm), static_cast<float>(ez / norm)};
+      }
+      const Vec3f end{origin.x + direction.x * m, origin.y + direction.y * m, origin.z + direction.z * m};
       if (ray_keys(origin, end, keys)) {
         for (const Key& k : keys) free_cells.insert(triple(k));
       }

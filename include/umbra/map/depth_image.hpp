@@ -48,6 +48,12 @@ class DepthImage {
   [[nodiscard]] int width() const { return width_; }
   [[nodiscard]] int height() const { return height_; }
   [[nodiscard]] std::size_t pixel_count() const { return std::size_t(width_) * std::size_t(height_); }
+  /// Whether the image holds raw 16-bit depths (else float metres).
+  [[nodiscard]] bool is_raw() const { return !raw_.empty(); }
+  [[nodiscard]] std::span<const std::uint16_t> raw_depths() const { return raw_; }
+  [[nodiscard]] std::span<const float> metre_depths() const { return metres_; }
+  /// Metres per raw unit (raw images).
+  [[nodiscard]] double metres_per_unit() const { return inverse_scale_; }
   /// Depth in metres of pixel `index` (v * width + u); 0 when it has no reading.
   [[nodiscard]] double depth(std::size_t index) const {
     if (!raw_.empty()) return raw_[index] * inverse_scale_;

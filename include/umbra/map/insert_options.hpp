@@ -14,6 +14,12 @@ namespace umbra {
 
 enum class IntegratorKind { simple, discrete, fast, projective };
 
+/// Angular sizes of a range image's pixels, in radians.
+struct ScanResolution {
+  double horizontal = 0.0;
+  double vertical = 0.0;
+};
+
 /// The threads InsertOptions::threads = 0 stands for: the hardware's (at least 1).
 unsigned hardware_threads();
 /// The most InsertOptions::threads may ask for: 4 per hardware thread, at least 16.
@@ -37,6 +43,12 @@ struct InsertOptions {
   /// many voxel edges in front of the reading its centre projects onto
   /// (docs/design.md, "The projective integrator"). >= 0.
   double surface_margin = 0.0;
+  /// projective, on a scan that is not a depth image: the angular size of
+  /// the pixels of the images the scan is binned into (radians; about the
+  /// scan's own spacing between neighbouring beams, horizontally and
+  /// vertically); 0 on an axis: estimated per scan
+  /// (InsertStats::scan_resolution says the values used).
+  ScanResolution scan_resolution;
   /// Threads tracing rays; 0: all cores; at most max_threads(). When the
   /// system refuses to start some of them (a process limit), the scan runs
   /// on those that did start: InsertStats::threads says how many.
@@ -44,7 +56,8 @@ struct InsertOptions {
 
   /// Throws std::invalid_argument naming the bad field (NaN max_range,
   /// clear_depth above the map's depth levels, negative fine_steps, a
-  /// negative or non-finite surface_margin, threads above max_threads()).
+  /// negative or non-finite surface_margin, a scan_resolution outside [0,
+  /// 0.5), threads above max_threads()).
   void validate(int depth_levels) const;
   /// The clear depth used for a map with this grid.
   [[nodiscard]] int resolved_clear_depth(const Grid& grid) const;
@@ -63,6 +76,9 @@ struct InsertStats {
   /// Seconds the scan kept queries out: its apply phase (tracing, most of
   /// the insertion, lets them run). A query waits at most this long.
   double exclusive_seconds = 0.0;
+  /// projective on a scan: the angular resolution of its images (radians;
+  /// 0: none, e.g. a depth image, or too few points to bin).
+  ScanResolution scan_resolution;
 
   InsertStats& operator+=(const InsertStats& other);
 };

@@ -22,7 +22,8 @@
 // message 12 on /points") and what is wrong: no x/y/z field, x/y/z of
 // another datatype, a field that runs past point_step, point_step 0,
 // row_step shorter than a row, data shorter than the rows need. Nothing is
-// written to the output before the layout is checked.
+// written to the output before the layout is checked. Points that would
+// take more than umbra::memory_limit() throw MemoryLimitError "NAME: ...".
 //
 // Cost: one pass over the points, no allocation beyond growing the output
 // vectors (whose capacity is reused from call to call).

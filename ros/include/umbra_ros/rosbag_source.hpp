@@ -1,24 +1,31 @@
 // open_rosbag: a ScanSource over a ROS 1 bag file (.bag), in ROS builds only.
 //
-// Every sensor_msgs/PointCloud2 message on the chosen topics (all
-// PointCloud2 topics when none is named), in the bag's time order, is one
-// scan: decoded by decode_point_cloud2 and moved into the map frame with the
-// transform tf2 gives from the cloud's frame to `frame` at the cloud's
-// stamp, from every transform on /tf and /tf_static in the bag (tf2
+// The bag is read by umbra's own reader (bag_file.hpp: format 2.0, chunks
+// uncompressed, bz2 or lz4), not librosbag, which trusts the file's lengths
+// and offsets. Every sensor_msgs/PointCloud2 message on the chosen topics
+// (all PointCloud2 topics when none is named), in the bag's time order, is
+// one scan: parsed (serialized_messages.hpp), decoded by decode_point_cloud2
+// (its layout checked before any point is read) and moved into the map frame
+// with the transform tf2 gives from the cloud's frame to `frame` at the
+// cloud's stamp, from every transform on /tf and /tf_static in the bag (tf2
 // interpolates between them); the sensor origin is the cloud frame's origin.
 // A cloud already in `frame` needs no transform. A cloud for which tf2 has
 // no transform (before the first or after the last one on its chain) is
 // skipped and counted; if every cloud is skipped, next() throws with tf2's
-// reason.
+// reason. Connections on /tf or /tf_static of another message type are
+// ignored (warnings() names them).
 //
-// Cost: opening reads every /tf and /tf_static message of the bag into a
-// tf2 buffer (memory: all transforms; small beside the clouds); then one
-// cloud at a time is read and decoded.
+// Cost: opening reads the bag's index and every /tf and /tf_static message
+// into a tf2 buffer (memory: all transforms; small beside the clouds); then
+// one cloud at a time is read and decoded (its chunk decompressed once).
 //
-// Errors: a file that is not a bag, or a bag without the named topics or
-// without any PointCloud2 topic, throws umbra::FormatError naming the file
-// (and the topics it has); a malformed cloud throws FormatError naming the
-// message index, topic and what is wrong.
+// Errors (umbra::FormatError, each naming the file): a file that is not a
+// bag of format 2.0, a corrupt record, chunk or index ("FILE: byte N: what is
+// wrong"); a bag without the named topics or without any PointCloud2 topic
+// (naming the topics it has); a chosen topic whose PointCloud2 connection
+// has another md5sum (another version of the message); a malformed cloud or
+// transform message ("FILE: byte N: message K on TOPIC: what is wrong").
+// MemoryLimitError when a chunk needs more than umbra::memory_limit().
 #pragma once
 
 #include <cstddef>
@@ -34,6 +41,7 @@ namespace umbra::ros_io {
 struct RosbagOptions {
   std::vector<std::string> topics;  ///< PointCloud2 topics; empty: every PointCloud2 topic in the bag
   std::string frame = "map";        ///< the map frame (a leading '/' is ignored)
+  bool colors = true;               ///< decode rgb/rgba (a bad rgb field is then an error); false: ignore it
 };
 
 class RosbagScanSource : public ScanSource {

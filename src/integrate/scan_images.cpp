@@ -1,0 +1,235 @@
+#include "integrate/scan_images.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <utility>
+#include <vector>
+
+namespace umbra {
+
+namespace {
+
+/// An image's axes in the map frame: it looks along `normal`; its x runs
+/// along `right` and its y along `down` = normal x right (right-handed).
+struct FaceAxes {
+  Vec3d right;
+  Vec3d down;
+  Vec3d normal;
+  bool cap;
+};
+
+/// Side face k looks at azimuth k * 45 degrees, its y along the map's z;
+/// faces 8 and 9 look up and down.
+FaceAxes face_axes(int face) {
+  if (face == ScanImages::kSideFaces) return {{1, 0, 0}, {0, -1, 0}, {0, 0, 1}, true};
+  if (face == ScanImages::kSideFaces + 1) return {{1, 0, 0}, {0, 1, 0}, {0, 0, -1}, true};
+  const double azimuth = face * (2.0 * std::numbers::pi / ScanImages::kSideFaces);
+  const double c = std::cos(azimuth);
+  const double s = std::sin(azimuth);
+  return {{-s, c, 0}, {0, 0, 1}, {c, s, 0}, false};
+}
+
+// Half-extents of the images in units of their focal length (tangents):
+// a side face spans 22.5 degrees of azimuth either side of its axis and,
+// at its edges, 45 degrees of elevation (tan 45 / cos 22.5); a cap 45
+// degrees either side, where it meets the side faces.
+const double kSideHalfWidth = std::tan(std::numbers::pi / ScanImages::kSideFaces);
+const double kSideHalfHeight = 1.0 / std::cos(std::numbers::pi / ScanImages::kSideFaces);
+constexpr double kCapHalfWidth = 1.0;
+
+}  // namespace
+
+void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResolution resolution) {
+  const Vec3d o(origin);
+  for (int k = 0; k < kFaces; ++k) {
+    ProjectiveFrame& face = faces_[static_cast<std::size_t>(k)];
+    const FaceAxes axes = face_axes(k);
+    // The caps take the coarser resolution on both axes (a LiDAR's rings cross them as circles).
+    const double cap_focal = 1.0 / std::max(resolution.horizontal, resolution.vertical);
+    face.fx = axes.cap ? cap_focal : 1.0 / resolution.horizontal;
+    face.fy = axes.cap ? cap_focal : 1.0 / resolution.vertical;
+    const double half_width = axes.cap ? kCapHalfWidth : kSideHalfWidth;
+    const double half_height = axes.cap ? kCapHalfWidth : kSideHalfHeight;
+    face.width = 2 * static_cast<int>(std::ceil(face.fx * half_width)) + 2 * kOverlap;
+    face.height = 2 * static_cast<int>(std::ceil(face.fy * half_height)) + 2 * kOverlap;
+    face.depth.assign(std::size_t(face.width) * std::size_t(face.height), 0.0f);
+    face.depth_halves.assign(4 * face.depth.size(), 0.0f);
+    face.cx = 0.5 * face.width - 0.5;
+    face.cy = 0.5 * face.height - 0.5;
+    face.origin = o;
+    face.rotation = {{{axes.right.x, axes.right.y, axes.right.z},
+                      {axes.down.x, axes.down.y, axes.down.z},
+                      {axes.normal.x, axes.normal.y, axes.normal.z}}};
+  }
+  // Every point into every image that holds it; each pixel keeps the
+  // nearest depth; every image knows its points' rays.
+  std::array<std::vector<std::uint32_t>, kFaces> ray_pixels;
+  std::array<std::vector<std::uint32_t>, kFaces> ray_points;
+  for (std::size_t index = 0; index < points.size(); ++index) {
+    const Vec3f& p = points[index];
+    if (!p.is_finite()) continue;
+    const Vec3d d = Vec3d(p) - o;
+    for (std::size_t k = 0; k < faces_.size(); ++k) {
+      ProjectiveFrame& face = faces_[k];
+      const Vec3d c = face.rotate(d);
+      if (!(c.z > 0.0)) continue;
+      const double u = face.fx * (c.x / c.z) + face.cx + 0.5;
+      const double v = face.fy * (c.y / c.z) + face.cy + 0.5;
+      if (!(u >= 0.0 && u < face.width && v >= 0.0 && v < face.height)) continue;
+      const std::size_t at =
+          std::size_t(static_cast<int>(v)) * std::size_t(face.width) + std::size_t(static_cast<int>(u));
+      float& pixel = face.depth[at];
+      const auto depth = static_cast<float>(c.z);
+      if (pixel == 0.0f || depth < pixel) pixel = depth;
+      // Its half pixel: the rule computes it as (int)(u + u) from float u,
+      // which may differ from the double here only on a half-pixel border
+      // (then the point counts in the neighbouring half: harmless).
+      float& half = face.depth_halves[std::size_t(static_cast<int>(2.0 * v)) * std::size_t(2 * face.width) +
+                                      std::size_t(static_cast<int>(2.0 * u))];
+      if (half == 0.0f || depth < half) half = depth;
+      ray_pixels[k].push_back(static_cast<std::uint32_t>(at));
+      ray_points[k].push_back(static_cast<std::uint32_t>(index));
+    }
+  }
+  for (std::size_t k = 0; k < faces_.size(); ++k) {
+    ProjectiveFrame& face = faces_[k];
+    // The pyramid's maxima: each pixel's farthest half (by its nearest reading).
+    std::vector<float>& farthest = face.farthest_half;
+    farthest.assign(face.depth.size(), 0.0f);
+    const std::size_t wide = 2 * std::size_t(face.width);
+    for (std::size_t y = 0; y < std::size_t(face.height); ++y) {
+      for (std::size_t x = 0; x < std::size_t(face.width); ++x) {
+        const float* top = &face.depth_halves[2 * y * wide + 2 * x];
+        const float* bottom = top + wide;
+        farthest[y * std::size_t(face.width) + x] = std::max(std::max(top[0], top[1]), std::max(bottom[0], bottom[1]));
+      }
+    }
+    face.pyramid.build(face.depth.data(), farthest.data(), face.width, face.height);
+    // The image's rays, by pixel (set_rays numbers them in the order given).
+    face.set_rays(points, ray_pixels[k]);
+    if (face.ray_order.empty()) {
+      face.ray_order.assign(ray_points[k].begin(), ray_points[k].end());
+    } else {
+      for (std::uint32_t& ray : face.ray_order) ray = ray_points[k][ray];
+    }
+  }
+}
+
+std::size_t ScanImages::memory_bytes() const {
+  std::size_t bytes = 0;
+  for (const ProjectiveFrame& face : faces_) bytes += face.memory_bytes();
+  return bytes;
+}
+
+ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> points, ScanResolution given) {
+  const Vec3d o(origin);
+  // The solid angle the points cover, from cells of about 2 degrees of a
+  // cube's faces at unit focal length; and every point in the middle of a
+  // side face, as (face, u, v) at unit focal length.
+  constexpr double kCoarse = 28.0;  // cells per unit: 1/28 rad = 2 degrees at a face's centre
+  constexpr int kCoarseSide = 56;
+  std::vector<std::uint8_t> coarse(std::size_t(6) * kCoarseSide * kCoarseSide, 0);
+  struct OnFace {
+    int face;
+    float u;
+    float v;
+  };
+  std::vector<OnFace> middle;
+  middle.reserve(points.size());
+  std::size_t count = 0;
+  constexpr double kMiddle = 0.5;  // |v| below this: where pixels keep about their nominal height
+  for (const Vec3f& p : points) {
+    if (!p.is_finite()) continue;
+    const Vec3d d = Vec3d(p) - o;
+    const double ax = std::abs(d.x);
+    const double ay = std::abs(d.y);
+    const double az = std::abs(d.z);
+    const double largest = std::max({ax, ay, az});
+    if (largest == 0.0) continue;
+    ++count;
+    // The cube face and cell for the covered solid angle.
+    const int axis = largest == ax ? 0 : (largest == ay ? 1 : 2);
+    const int cube_face = 2 * axis + (d[static_cast<std::size_t>(axis)] < 0.0 ? 1 : 0);
+    const double a = d[static_cast<std::size_t>((axis + 1) % 3)] / largest;
+    const double b = d[static_cast<std::size_t>((axis + 2) % 3)] / largest;
+    const int i = std::clamp(static_cast<int>((a + 1.0) * kCoarse), 0, kCoarseSide - 1);
+    const int j = std::clamp(static_cast<int>((b + 1.0) * kCoarse), 0, kCoarseSide - 1);
+    coarse[(std::size_t(cube_face) * kCoarseSide + std::size_t(j)) * kCoarseSide + std::size_t(i)] = 1;
+    // The side face its azimuth falls in.
+    const double azimuth = std::atan2(d.y, d.x);
+    const int side = static_cast<int>(std::lround(azimuth / (2.0 * std::numbers::pi / ScanImages::kSideFaces)) +
+                                      ScanImages::kSideFaces) % ScanImages::kSideFaces;
+    const FaceAxes axes = face_axes(side);
+    const double z = d.dot(axes.normal);
+    if (!(z > 0.0)) continue;
+    const double v = d.dot(axes.down) / z;
+    if (std::abs(v) < kMiddle) middle.push_back({side, static_cast<float>(d.dot(axes.right) / z), static_cast<float>(v)});
+  }
+  if (count < 16) return given;
+  double solid_angle = 0.0;
+  for (int k = 0; k < 6; ++k) {
+    for (int j = 0; j < kCoarseSide; ++j) {
+      for (int i = 0; i < kCoarseSide; ++i) {
+        if (!coarse[(std::size_t(k) * kCoarseSide + std::size_t(j)) * kCoarseSide + std::size_t(i)]) continue;
+        const double u = (i + 0.5) / kCoarse - 1.0;
+        const double v = (j + 0.5) / kCoarse - 1.0;
+        solid_angle += 1.0 / (kCoarse * kCoarse) / std::pow(1.0 + u * u + v * v, 1.5);
+      }
+    }
+  }
+  const double mean_spacing = std::sqrt(solid_angle / static_cast<double>(count));
+
+  // From a little below the mean spacing, each axis coarsened until few
+  // empty pixels lie between filled ones along it.
+  ScanResolution result{given.horizontal > 0.0 ? given.horizontal : 0.8 * mean_spacing,
+                        given.vertical > 0.0 ? given.vertical : 0.8 * mean_spacing};
+  std::vector<std::uint8_t> filled;
+  constexpr int kReach = 4;  // a gap is at most this many pixels from a filled one on either side
+  for (int round = 0; round < 16; ++round) {
+    const int wide = 2 * static_cast<int>(std::ceil(kSideHalfWidth / result.horizontal));
+    const int high = 2 * static_cast<int>(std::ceil(kMiddle / result.vertical));
+    filled.assign(std::size_t(ScanImages::kSideFaces) * std::size_t(wide) * std::size_t(high), 0);
+    for (const OnFace& q : middle) {
+      const int i = std::clamp(static_cast<int>((q.u / kSideHalfWidth + 1.0) * 0.5 * wide), 0, wide - 1);
+      const int j = std::clamp(static_cast<int>((q.v / kMiddle + 1.0) * 0.5 * high), 0, high - 1);
+      filled[(std::size_t(q.face) * std::size_t(high) + std::size_t(j)) * std::size_t(wide) + std::size_t(i)] = 1;
+    }
+    std::size_t cells = 0;
+    std::size_t row_gaps = 0;
+    std::size_t column_gaps = 0;
+    for (int k = 0; k < ScanImages::kSideFaces; ++k) {
+      const std::uint8_t* face = &filled[std::size_t(k) * std::size_t(wide) * std::size_t(high)];
+      auto at = [&](int i, int j) { return face[std::size_t(j) * std::size_t(wide) + std::size_t(i)] != 0; };
+      for (int j = 0; j < high; ++j) {
+        for (int i = 0; i < wide; ++i) {
+          if (at(i, j)) {
+            ++cells;
+            continue;
+          }
+          bool left = false;
+          bool right = false;
+          bool above = false;
+          bool below = false;
+          for (int step = 1; step <= kReach; ++step) {
+            left = left || (i - step >= 0 && at(i - step, j));
+            right = right || (i + step < wide && at(i + step, j));
+            above = above || (j - step >= 0 && at(i, j - step));
+            below = below || (j + step < high && at(i, j + step));
+          }
+          row_gaps += left && right ? 1 : 0;
+          column_gaps += above && below ? 1 : 0;
+        }
+      }
+    }
+    const bool coarser_rows = given.horizontal <= 0.0 && row_gaps * 50 > cells;
+    const bool coarser_columns = given.vertical <= 0.0 && column_gaps * 50 > cells;
+    if (!coarser_rows && !coarser_columns) break;
+    if (coarser_rows) result.horizontal *= 1.2;
+    if (coarser_columns) result.vertical *= 1.2;
+  }
+  return result;
+}
+
+}  // namespace umbra
