@@ -84,7 +84,8 @@ def test_back_project_follows_the_pinhole_model():
     read = np.isfinite(z) & (z > 0)
     np.testing.assert_array_equal(pixels, np.flatnonzero(read))
     assert pixels.dtype == np.uint32
-    want = np.stack([(u - 1.5) / 2.0 * z, (v - 1.0) / 3.0 * z, z], axis=1)[read]
+    with np.errstate(invalid="ignore"):  # the NaN and infinite pixels, dropped by [read]
+        want = np.stack([(u - 1.5) / 2.0 * z, (v - 1.0) / 3.0 * z, z], axis=1)[read]
     assert points.dtype == np.float32 and points.shape == (read.sum(), 3)
     np.testing.assert_allclose(points, want, rtol=1e-6)
 
@@ -98,6 +99,8 @@ def test_back_project_follows_the_pinhole_model():
     raw = np.array([[1000, 0], [2500, 65535]], dtype=np.uint16)
     points = umbra.back_project(raw, camera, depth_scale=1000.0)
     np.testing.assert_allclose(points[:, 2], [1.0, 2.5, 65.535], rtol=1e-7)
+    tum = umbra.back_project(raw, camera, depth_scale=5000.0)  # TUM RGB-D's units
+    np.testing.assert_allclose(tum[:, 2], [0.2, 0.5, 13.107], rtol=1e-7)
     big_endian = umbra.back_project(raw.astype(">u2"), camera, depth_scale=1000.0)
     np.testing.assert_array_equal(big_endian, points)
 
@@ -247,6 +250,56 @@ def test_colour_errors_name_the_argument():
     too_bright[1, 2, 0] = 300
     with pytest.raises(ValueError, match=r"colors\[66\] holds 300, outside \[0, 255\]"):  # pixel v * W + u
         m.insert_depth_image(wall(), CAMERA, ALONG_X, too_bright)
+    assert m.node_counts().total == 1, "the map is unchanged after an error"
+
+
+def test_non_contiguous_arrays_are_read_as_their_values():
+    """Views with strides (every other column, a transposed image, Fortran order) give the map of their copies."""
+    wide = np.repeat(scene(), 2, axis=1)
+    wide[:, 1::2] = 7.0  # the columns the view skips: a reader ignoring strides would see them
+    colors = np.random.default_rng(9).integers(0, 256, size=(HEIGHT, 2 * WIDTH, 3), dtype=np.uint8)
+    pose = yawed(ALONG_X, 0.5)
+    views = [
+        (wide[:, ::2], colors[:, ::2]),
+        (np.asfortranarray(scene()), np.asfortranarray(colors[:, ::2])),
+        (np.ascontiguousarray(scene().T).T, colors[:, ::2].copy()),
+    ]
+    reference = umbra.OccupancyMap(0.05, color=True)
+    reference.insert_depth_image(scene(), CAMERA, pose, colors[:, ::2].copy())
+    for depth, color_view in views:
+        assert not depth.flags.c_contiguous
+        m = umbra.OccupancyMap(0.05, color=True)
+        m.insert_depth_image(depth, CAMERA, pose, color_view)
+        leaves_equal(m, reference)
+        np.testing.assert_array_equal(umbra.back_project(depth, CAMERA, pose), umbra.back_project(scene(), CAMERA, pose))
+    # A strided pose (every other column of a wider array) is the same pose.
+    wide_pose = np.repeat(pose, 2, axis=1)
+    m = umbra.OccupancyMap(0.05)
+    m.insert_depth_image(scene(), CAMERA, wide_pose[:, ::2])
+    plain = umbra.OccupancyMap(0.05)
+    plain.insert_depth_image(scene(), CAMERA, pose)
+    leaves_equal(m, plain)
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda m: m.insert_depth_image(wall().astype(np.complex64), CAMERA, ALONG_X),
+         "depth must hold uint16 raw depths (with depth_scale) or float metres, got dtype complex64"),
+        (lambda m: m.insert_depth_image(wall(), np.array([50, 50, 31.5, 23.5], np.complex128), ALONG_X),
+         "camera must hold real numbers, got dtype complex128"),
+        (lambda m: m.insert_depth_image(wall(), CAMERA, ALONG_X.astype(np.complex128)),
+         "pose must hold real numbers, got dtype complex128"),
+        (lambda m: m.insert_depth_image(wall(), CAMERA, ALONG_X, np.zeros((HEIGHT, WIDTH, 3), np.complex64)),
+         "colors must hold integers"),
+        (lambda m: umbra.back_project(wall().astype(np.complex128), CAMERA), "got dtype complex128"),
+    ],
+)
+def test_complex_arrays_are_refused_not_converted(call, message):
+    m = umbra.OccupancyMap(0.1, color=True)
+    with pytest.raises(TypeError) as raised:
+        call(m)
+    assert message in str(raised.value)
     assert m.node_counts().total == 1, "the map is unchanged after an error"
 
 
