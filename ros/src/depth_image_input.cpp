@@ -20,20 +20,20 @@ std::string camera_info_topic(const std::string& image_topic) {
 }  // namespace
 
 DepthImageInput::DepthImageInput(ros::NodeHandle& node, tf2_ros::Buffer& tf, const std::string& map_frame,
-                                 bool colors, Callback callback)
+                                 bool colors, Callback callback, Dropped dropped)
     : callback_(std::move(callback)),
+      dropped_(std::move(dropped)),
       depth_subscriber_(node, "depth/image", kImageQueue),
       depth_filter_(depth_subscriber_, tf, map_frame, kImageQueue, node),
       info_subscriber_(node, camera_info_topic(depth_subscriber_.getTopic()), kMatchQueue) {
   depth_filter_.registerFailureCallback(
-      [](const sensor_msgs::Image::ConstPtr& image, tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
-        const char* why = reason == tf2_ros::filter_failure_reasons::EmptyFrameID
-                              ? "it has no frame_id"
-                              : "tf2 had no transform from its frame to the map frame at its stamp";
-        ROS_WARN_THROTTLE(5.0, "umbra_server: dropped the depth image in frame '%s' at %f: %s",
-                          image->header.frame_id.c_str(), image->header.stamp.toSec(), why);
+      [this](const sensor_msgs::Image::ConstPtr& image, tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
+        dropped_(image, reason == tf2_ros::filter_failure_reasons::EmptyFrameID ? Drop::no_frame_id : Drop::no_transform);
       });
-  depth_subscriber_.registerCallback([this](const sensor_msgs::Image::ConstPtr&) { ++depth_count_; });
+  depth_subscriber_.registerCallback([this](const sensor_msgs::Image::ConstPtr&) {
+    ++depth_count_;
+    ++received_;
+  });
   info_subscriber_.registerCallback([this](const sensor_msgs::CameraInfo::ConstPtr&) { ++info_count_; });
   if (colors) {
     color_subscriber_.subscribe(node, "rgb/image", kMatchQueue);
@@ -45,12 +45,30 @@ DepthImageInput::DepthImageInput(ros::NodeHandle& node, tf2_ros::Buffer& tf, con
     exact_ = std::make_unique<message_filters::Synchronizer<ExactPair>>(ExactPair(kMatchQueue), depth_filter_,
                                                                          info_subscriber_);
     exact_->registerCallback(&DepthImageInput::paired, this);
+    exact_->registerDropCallback(&DepthImageInput::unpaired, this);
   }
   matching_timer_ = node.createWallTimer(ros::WallDuration(kMatchingCheckSeconds), &DepthImageInput::check_matching, this);
 }
 
 void DepthImageInput::paired(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info) {
   matched(depth, info, nullptr);
+}
+
+void DepthImageInput::unpaired(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr&) {
+  // CameraInfos whose image tf2 dropped, or that came without one, are dropped too: nothing to say about them.
+  if (depth) dropped_(depth, Drop::no_camera_info);
+}
+
+std::string DepthImageInput::describe(Drop why) const {
+  switch (why) {
+    case Drop::no_frame_id:
+      return "it has no frame_id";
+    case Drop::no_transform:
+      return "tf2 had no transform from its frame to the map frame at its stamp";
+    case Drop::no_camera_info:
+      return "no CameraInfo with its stamp came on '" + info_subscriber_.getTopic() + "'";
+  }
+  return "an unknown reason";
 }
 
 void DepthImageInput::matched(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info,

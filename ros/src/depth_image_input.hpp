@@ -16,9 +16,10 @@
 // them) or, with colours, with the CameraInfo and the colour image nearest
 // in time (ApproximateTime, as depth_image_proc's point_cloud_xyzrgb pairs
 // colour and depth: drivers stamp the two streams separately). An image
-// tf2 drops (no frame_id, or no transform while 5 newer images came) is
-// warned about, naming its frame; when images come but none finds its
-// partners for 10 s, a
+// tf2 drops (no frame_id, or no transform while 5 newer images came) and an
+// image without a CameraInfo of its stamp (dropped by ExactTime once a newer
+// image is matched, or 10 newer ones wait) go to the `dropped` callback
+// with the reason; when images come but none finds its partners for 10 s, a
 // warning names the topics and what arrived on each (image_transport warns
 // likewise).
 //
@@ -49,9 +50,20 @@ class DepthImageInput {
                                       const sensor_msgs::CameraInfo::ConstPtr& info,
                                       const sensor_msgs::Image::ConstPtr& color)>;
 
+  /// Why a depth image will not be inserted.
+  enum class Drop { no_frame_id, no_transform, no_camera_info };
+  /// Receives a depth image that will not be inserted, and why.
+  using Dropped = std::function<void(const sensor_msgs::Image::ConstPtr& depth, Drop why)>;
+
   /// Subscribes (rgb/image only when `colors`); `tf` must outlive this.
   DepthImageInput(ros::NodeHandle& node, tf2_ros::Buffer& tf, const std::string& map_frame, bool colors,
-                  Callback callback);
+                  Callback callback, Dropped dropped);
+
+  /// The reason in words ("tf2 had no transform from its frame to the map frame at its stamp").
+  [[nodiscard]] std::string describe(Drop why) const;
+
+  /// Depth images received since the start.
+  [[nodiscard]] std::size_t received() const { return received_; }
 
  private:
   using ExactPair = message_filters::sync_policies::ExactTime<sensor_msgs::Image, sensor_msgs::CameraInfo>;
@@ -59,12 +71,15 @@ class DepthImageInput {
       message_filters::sync_policies::ApproximateTime<sensor_msgs::Image, sensor_msgs::CameraInfo, sensor_msgs::Image>;
 
   void paired(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info);
+  /// ExactTime drops a stamp's messages: a depth image among them had no CameraInfo.
+  void unpaired(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info);
   void matched(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info,
                const sensor_msgs::Image::ConstPtr& color);
   /// Every 10 s: warns when images came but none was matched.
   void check_matching(const ros::WallTimerEvent& event);
 
   Callback callback_;
+  Dropped dropped_;
   message_filters::Subscriber<sensor_msgs::Image> depth_subscriber_;
   tf2_ros::MessageFilter<sensor_msgs::Image> depth_filter_;
   message_filters::Subscriber<sensor_msgs::CameraInfo> info_subscriber_;
@@ -77,6 +92,7 @@ class DepthImageInput {
   std::size_t info_count_ = 0;
   std::size_t color_count_ = 0;
   std::size_t matched_count_ = 0;
+  std::size_t received_ = 0;  // since the start
 };
 
 }  // namespace umbra::ros_io

@@ -52,7 +52,8 @@ MapServer::MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, Serve
       cloud_filter_(cloud_subscriber_, tf_buffer_, settings_.frame, kCloudQueue, node),
       image_input_(node, tf_buffer_, settings_.frame, settings_.image_colors,
                    [this](const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info,
-                          const sensor_msgs::Image::ConstPtr& color) { insert_image(depth, info, color); }) {
+                          const sensor_msgs::Image::ConstPtr& color) { insert_image(depth, info, color); },
+                   [this](const sensor_msgs::Image::ConstPtr& depth, DepthImageInput::Drop why) { drop_image(depth, why); }) {
   map_.set_auto_prune(settings_.compress_map);
   cloud_filter_.registerCallback(&MapServer::insert_cloud, this);
   cloud_filter_.registerFailureCallback(
@@ -159,19 +160,40 @@ void MapServer::insert_image(const sensor_msgs::Image::ConstPtr& depth, const se
                         stats.out_of_bounds, name.c_str());
     }
   } catch (const FormatError& e) {  // its message starts with the image's name
-    ROS_ERROR("umbra_server: cannot insert the %s", e.what());
+    ++images_refused_;
+    ROS_ERROR("umbra_server: cannot insert the %s (%s)", e.what(), refused_images_text().c_str());
     set_crash_context("");
     return;
   } catch (const std::exception& e) {
-    ROS_ERROR("umbra_server: cannot insert the %s: %s", name.c_str(), e.what());
+    ++images_refused_;
+    ROS_ERROR("umbra_server: cannot insert the %s: %s (%s)", name.c_str(), e.what(), refused_images_text().c_str());
     set_crash_context("");
     return;
   } catch (...) {
-    ROS_ERROR("umbra_server: cannot insert the %s: an exception of unknown type", name.c_str());
+    ++images_refused_;
+    ROS_ERROR("umbra_server: cannot insert the %s: an exception of unknown type (%s)", name.c_str(),
+              refused_images_text().c_str());
     set_crash_context("");
     return;
   }
   publish_after(name, depth->header.stamp);
+}
+
+void MapServer::drop_image(const sensor_msgs::Image::ConstPtr& depth, DepthImageInput::Drop why) {
+  ++images_refused_;
+  // At most one warning per reason every 5 s: until tf2 knows the camera (or while no CameraInfo matches), every
+  // image is dropped; the count says how many were.
+  ros::WallTime& last = last_drop_warning_[static_cast<std::size_t>(why)];
+  const ros::WallTime now = ros::WallTime::now();
+  if (!last.isZero() && (now - last).toSec() < 5.0) return;
+  last = now;
+  ROS_WARN("umbra_server: dropped the depth image in frame '%s' at %f: %s (%s)", depth->header.frame_id.c_str(),
+           depth->header.stamp.toSec(), image_input_.describe(why).c_str(), refused_images_text().c_str());
+}
+
+std::string MapServer::refused_images_text() const {
+  return "depth images refused so far: " + std::to_string(images_refused_) + " of " +
+         std::to_string(image_input_.received());
 }
 
 void MapServer::publish_after(const std::string& name, const ros::Time& stamp) {

@@ -42,6 +42,7 @@
 #include <tf2_ros/transform_listener.h>
 #include <umbra_msgs/CheckCollision.h>
 
+#include <array>
 #include <memory>
 
 #include "depth_image_input.hpp"
@@ -65,6 +66,10 @@ class MapServer {
   void insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud);
   void insert_image(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info,
                     const sensor_msgs::Image::ConstPtr& color);
+  /// Logs a depth image that will not be inserted (no transform, no CameraInfo) and counts it.
+  void drop_image(const sensor_msgs::Image::ConstPtr& depth, DepthImageInput::Drop why);
+  /// "depth images refused so far: N of M" (malformed or dropped, of those received).
+  [[nodiscard]] std::string refused_images_text() const;
   /// Publishes the map after the message `name` (stamp `stamp`) was inserted; errors are logged.
   void publish_after(const std::string& name, const ros::Time& stamp);
   bool reset(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
@@ -98,6 +103,8 @@ class MapServer {
   Scan scan_;
   DecodedDepthImage decoded_image_;
   std::vector<Rgb> image_colors_;
+  std::size_t images_refused_ = 0;  ///< depth images malformed or dropped since the start
+  std::array<ros::WallTime, 3> last_drop_warning_{};  ///< per DepthImageInput::Drop
 };
 
 }  // namespace umbra::ros_io

@@ -76,7 +76,7 @@ TEST(ImageMessage, MillimetreImagesInEitherByteOrderWithPaddedRows) {
         const std::size_t index = v * 5 + u;
         const std::uint16_t want = static_cast<std::uint16_t>(u == 1 && v == 2 ? 0 : 1000 + 300 * v + u);
         EXPECT_EQ(view.raw_depths()[index], want) << "pixel " << u << ", " << v << (big_endian ? " big-endian" : "");
-        EXPECT_EQ(view.depth(index), want / 1000.0);
+        EXPECT_DOUBLE_EQ(view.depth(index), want / 1000.0);  // the library multiplies by 1 / 1000
       }
     }
   }
