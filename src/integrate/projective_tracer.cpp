@@ -100,12 +100,13 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth)
   const double height = frame.height;
   // The four planes through the camera and the image's edges, moved out by
   // the farthest a window reaches (the top level's) and by the edge reach:
-  // a node wholly outside one of them is not seen. Tested on every node, as
-  // the projections below are unstable for nodes near the camera plane (a
-  // pad over a tiny depth covers the whole image: a camera whose image plane
-  // lay on a face of the map's largest nodes split every node along that
-  // plane down to bricks, minutes for one image).
-  {
+  // whether the node lies wholly outside one of them (then it is not seen).
+  // Asked where the projections below are unstable: across or near the
+  // camera plane, where a pad over a tiny depth covers the whole image (a
+  // camera whose image plane lay on a face of the map's largest nodes split
+  // every node along that plane down to bricks, minutes for one image).
+  // Asked of every node it cost 5% of the walk.
+  const auto outside_planes = [&] {
     const double reach = 1.5 * std::ldexp(1.0, rule_.top_level) + 1.0;
     const double left_offset = u_offset + reach;
     const double right_offset = u_offset - width - reach;
@@ -132,13 +133,10 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth)
     const double plane_pad = 1e-5 * (scale + edge) +
                              (fx + fy + std::abs(left_offset) + std::abs(right_offset) + std::abs(top_offset) +
                               std::abs(bottom_offset)) * pad + 1e-9;
-    if (left + edge < -plane_pad || right + edge < -plane_pad || top + edge < -plane_pad ||
-        bottom + edge < -plane_pad) {
-      return Decision::none;
-    }
-  }
-  // Across the camera plane: no projection (a point with z <= 0 is not cleared anyway).
-  if (z_min - pad <= 0.0) return Decision::split;
+    return left + edge < -plane_pad || right + edge < -plane_pad || top + edge < -plane_pad ||
+           bottom + edge < -plane_pad;
+  };
+  if (z_min - pad <= 0.0) return outside_planes() ? Decision::none : Decision::split;
 
   // In front of the camera: the pixels the voxel centres can project onto.
   double u_min = 1e300;
@@ -160,6 +158,7 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth)
   const double spread = pad * (1.0 + lateral / near) / near;
   const double u_pad = 1e-3 + fx * spread + 1e-6 * std::max(std::abs(u_min), std::abs(u_max));
   const double v_pad = 1e-3 + fy * spread + 1e-6 * std::max(std::abs(v_min), std::abs(v_max));
+  if ((u_pad > 1.0 || v_pad > 1.0) && outside_planes()) return Decision::none;
   const double u0 = std::floor(u_min - u_pad);
   const double u1 = std::floor(u_max + u_pad);
   const double v0 = std::floor(v_min - v_pad);
