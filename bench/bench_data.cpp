@@ -1,6 +1,7 @@
 #include "bench_data.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "umbra/sim/depth_camera.hpp"
@@ -16,12 +17,26 @@ std::string dataset_path(const std::string& name, const DatasetOptions& options)
 }
 
 std::vector<Scan> simulated_camera_frames() {
-  const std::vector<sim::DepthFrame> frames = sim::demo_depth_sequence();
+  // Depth images, as the camera gives them; their points are back_project()'s.
+  const std::vector<sim::SimulatedDepthImage> frames = sim::demo_depth_images();
   std::vector<Scan> scans(frames.size());
   for (std::size_t i = 0; i < frames.size(); ++i) {
-    scans[i].origin = frames[i].origin;
-    scans[i].points = frames[i].points;
-    scans[i].name = "sim-camera frame " + std::to_string(i);
+    const sim::SimulatedDepthImage& frame = frames[i];
+    Scan& scan = scans[i];
+    scan.origin = frame.pose.translation();
+    scan.name = "sim-camera frame " + std::to_string(i);
+    // Millimetre steps, as a 16-bit depth camera delivers them.
+    ScanImage& image = scan.image.emplace();
+    image.width = frame.width;
+    image.height = frame.height;
+    image.units_per_metre = 1000.0;
+    image.raw.resize(frame.depth.size());
+    for (std::size_t p = 0; p < frame.depth.size(); ++p) {
+      image.raw[p] = static_cast<std::uint16_t>(std::lround(std::min(frame.depth[p], 65.0f) * 1000.0f));
+    }
+    image.camera = frame.camera;
+    image.pose = frame.pose;
+    back_project(image.view(), image.camera, image.pose, scan.points);
   }
   return scans;
 }

@@ -4,9 +4,10 @@
 //   scan.dat    one LiDAR scan, 88,206 points (octomap/scan.dat.bz2)
 //   3dtk        three registered LiDAR scans (3dtk/3dtk_registered.graph)
 //   tum         ten Kinect frames (tum_fr2_pioneer_slam2), max range --tum-max-range
-//   sim-camera  sim::demo_depth_sequence(): sixteen frames of a simulated
+//   sim-camera  sim::demo_depth_images(): sixteen frames of a simulated
 //               depth camera (640 x 240 pixels, hfov 115, vfov 60, 6.5 m,
-//               Kinect-like noise) through the procedural building, seed 1
+//               Kinect-like noise) through the procedural building, seed 1,
+//               as 16-bit images in millimetres and their points
 // Anything else is taken as a path for umbra::open_scan_source.
 #pragma once
 

@@ -5,7 +5,7 @@
 // Every run is a fresh process, measured by wait4(): wall-clock time from
 // fork to exit, CPU time (user + system, all threads) and peak RSS
 // (ru_maxrss). Methods:
-//   umbra-simple / -discrete / -fast-n2 / -fast-n0
+//   umbra-simple / -discrete / -fast-n2 / -fast-n0 / -projective
 //       the `umbra` program given with --umbra: `umbra build INPUT -o
 //       OUT.umb --res R --integrator K [--fine-steps N] --max-range M
 //       --threads T`, exactly what a user runs (pre-flight, reading,
@@ -79,6 +79,7 @@ const std::vector<Method> kAllMethods = {
     {"umbra-discrete", false, false, false, "discrete", 0, "octomap-discrete"},
     {"umbra-fast-n2", false, false, false, "fast", 2, "octomap-discrete"},
     {"umbra-fast-n0", false, false, false, "fast", 0, "octomap-discrete"},
+    {"umbra-projective", false, false, false, "projective", 0, "octomap-discrete"},
 };
 
 /// One process, as wait4() and its output saw it.

@@ -41,6 +41,7 @@ const std::vector<Method> kMethods = {
     {"discrete", IntegratorKind::discrete, 0},
     {"fast-n2", IntegratorKind::fast, 2},
     {"fast-n0", IntegratorKind::fast, 0},
+    {"projective", IntegratorKind::projective, 0},
 };
 
 OccupancyMap build(const bench::Dataset& data, double resolution, const Method& method, int clear_depth,
@@ -53,7 +54,13 @@ OccupancyMap build(const bench::Dataset& data, double resolution, const Method& 
   options.max_range = data.max_range;
   options.threads = 1;
   const auto start = std::chrono::steady_clock::now();
-  for (const Scan& scan : data.scans) map.insert_point_cloud(scan.origin, scan.points, options);
+  for (const Scan& scan : data.scans) {
+    if (method.kind == IntegratorKind::projective && scan.image) {
+      map.insert_depth_image(scan.image->view(), scan.image->camera, scan.image->pose, {}, options);
+    } else {
+      map.insert_point_cloud(scan.origin, scan.points, options);
+    }
+  }
   seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return map;
 }
@@ -92,7 +99,7 @@ int main(int argc, char** argv) {
     else if (arg == "--markdown") markdown_path = value();
     else if (arg == "--help" || arg == "-h") {
       std::printf("usage: umbra_fidelity_benchmark [--data DIR] [--datasets tum,3dtk,sim-camera] [--res 0.04,0.02]\n"
-                  "         [--methods discrete,fast-n2,fast-n0] [--clear-depth -1] [--max-range 30]\n"
+                  "         [--methods discrete,fast-n2,fast-n0,projective] [--clear-depth -1] [--max-range 30]\n"
                   "         [--tum-max-range 5] [--markdown FILE]\n");
       return 0;
     } else {
@@ -111,7 +118,7 @@ int main(int argc, char** argv) {
       }
     }
     if (!found) {
-      std::fprintf(stderr, "unknown method %s (discrete, fast-n2, fast-n0)\n", name.c_str());
+      std::fprintf(stderr, "unknown method %s (discrete, fast-n2, fast-n0, projective)\n", name.c_str());
       return 2;
     }
   }

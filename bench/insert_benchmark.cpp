@@ -14,6 +14,9 @@
 //   umbra-discrete    IntegratorKind::discrete (same voxels as octomap-discrete)
 //   umbra-fast-n2     IntegratorKind::fast, fine_steps 2, clear depth at 16 cm
 //   umbra-fast-n0     IntegratorKind::fast, fine_steps 0, clear depth at 16 cm
+//   umbra-projective  IntegratorKind::projective: depth images as images
+//                     (OccupancyMap::insert_depth_image; TUM, sim-camera),
+//                     other scans binned into range images
 // Each umbra method is compared with the OctoMap method of its semantics:
 // simple with octomap-plain, the others with octomap-discrete. OctoMap runs
 // single-threaded whatever --threads says.
@@ -78,6 +81,7 @@ const std::vector<Method> kAllMethods = {
     {"umbra-discrete", false, false, umbra::IntegratorKind::discrete, 0, "octomap-discrete"},
     {"umbra-fast-n2", false, false, umbra::IntegratorKind::fast, 2, "octomap-discrete"},
     {"umbra-fast-n0", false, false, umbra::IntegratorKind::fast, 0, "octomap-discrete"},
+    {"umbra-projective", false, false, umbra::IntegratorKind::projective, 0, "octomap-discrete"},
 };
 
 /// What one child measured.
@@ -160,7 +164,12 @@ Measurement measure_in_this_process(const Dataset& data, const Method& method, d
       const umbra::Scan& scan = data.scans[i];
       const auto start = Clock::now();
       const double cpu_start = process_cpu_seconds();
-      if (color && !scan.colors.empty()) {
+      if (method.kind == umbra::IntegratorKind::projective && scan.image) {
+        const umbra::ScanImage& image = *scan.image;
+        map.insert_depth_image(image.view(), image.camera, image.pose,
+                               color ? std::span<const umbra::Rgb>(image.colors) : std::span<const umbra::Rgb>(),
+                               options);
+      } else if (color && !scan.colors.empty()) {
         map.insert_point_cloud(scan.origin, scan.points, scan.colors, options);
       } else {
         map.insert_point_cloud(scan.origin, scan.points, options);

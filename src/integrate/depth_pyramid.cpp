@@ -15,9 +15,9 @@ void DepthPyramid::build(const float* nearest, const float* farthest, int width,
   Level& base = levels_[0];
   base.width = width;
   base.height = height;
-  const std::size_t pixels = std::size_t(width) * std::size_t(height);
-  base.min.assign(nearest, nearest + pixels);
-  base.max.assign(farthest, farthest + pixels);
+  // Level 0 is the images themselves (not copied).
+  base.min_cells = nearest;
+  base.max_cells = farthest;
   for (std::size_t l = 1; l < count; ++l) {
     const Level& below = levels_[l - 1];
     Level& level = levels_[l];
@@ -26,6 +26,8 @@ void DepthPyramid::build(const float* nearest, const float* farthest, int width,
     const std::size_t cells = std::size_t(level.width) * std::size_t(level.height);
     level.min.resize(cells);
     level.max.resize(cells);
+    level.min_cells = level.min.data();
+    level.max_cells = level.max.data();
     for (int y = 0; y < level.height; ++y) {
       const std::size_t row0 = std::size_t(2 * y) * below.width;
       const std::size_t row1 = std::size_t(std::min(2 * y + 1, below.height - 1)) * below.width;
@@ -33,10 +35,10 @@ void DepthPyramid::build(const float* nearest, const float* farthest, int width,
         const std::size_t x0 = std::size_t(2 * x);
         const std::size_t x1 = std::size_t(std::min(2 * x + 1, below.width - 1));
         const std::size_t cell = std::size_t(y) * level.width + x;
-        level.min[cell] = std::min(std::min(below.min[row0 + x0], below.min[row0 + x1]),
-                                   std::min(below.min[row1 + x0], below.min[row1 + x1]));
-        level.max[cell] = std::max(std::max(below.max[row0 + x0], below.max[row0 + x1]),
-                                   std::max(below.max[row1 + x0], below.max[row1 + x1]));
+        level.min[cell] = std::min(std::min(below.min_cells[row0 + x0], below.min_cells[row0 + x1]),
+                                   std::min(below.min_cells[row1 + x0], below.min_cells[row1 + x1]));
+        level.max[cell] = std::max(std::max(below.max_cells[row0 + x0], below.max_cells[row0 + x1]),
+                                   std::max(below.max_cells[row1 + x0], below.max_cells[row1 + x1]));
       }
     }
     // Its 2 x 2 windows, from a = -1 and b = -1 on.
@@ -44,7 +46,7 @@ void DepthPyramid::build(const float* nearest, const float* farthest, int width,
     level.window.resize(std::size_t(wide) * std::size_t(level.height + 1));
     auto cell_max = [&level](int x, int y) {
       return x < 0 || y < 0 || x >= level.width || y >= level.height ? 0.0f
-                                                                     : level.max[std::size_t(y) * level.width + x];
+                                                                     : level.max_cells[std::size_t(y) * level.width + x];
     };
     for (int b = -1; b < level.height; ++b) {
       for (int a = -1; a < level.width; ++a) {
@@ -65,12 +67,12 @@ DepthPyramid::Range DepthPyramid::range(int u0, int v0, int u1, int v1) const {
   const int x1 = u1 >> l;
   const int y0 = v0 >> l;
   const int y1 = v1 >> l;
-  Range result{level.min[std::size_t(y0) * level.width + x0], 0.0f};
+  Range result{level.min_cells[std::size_t(y0) * level.width + x0], 0.0f};
   for (int y = y0; y <= y1; ++y) {
     const std::size_t row = std::size_t(y) * level.width;
     for (int x = x0; x <= x1; ++x) {
-      result.min = std::min(result.min, level.min[row + x]);
-      result.max = std::max(result.max, level.max[row + x]);
+      result.min = std::min(result.min, level.min_cells[row + x]);
+      result.max = std::max(result.max, level.max_cells[row + x]);
     }
   }
   return result;

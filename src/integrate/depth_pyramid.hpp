@@ -31,6 +31,7 @@ class DepthPyramid {
   /// Builds the levels over an image (metres, 0: no reading), row by row:
   /// the minima from `nearest`, the maxima from `farthest` (the same image
   /// for a depth image; a scan's images keep several readings a pixel).
+  /// Both must outlive the pyramid's use: level 0 reads them in place.
   void build(const float* nearest, const float* farthest, int width, int height);
 
   /// The range over pixels [u0, u1] x [v0, v1] (inclusive; inside the image).
@@ -40,7 +41,7 @@ class DepthPyramid {
   [[nodiscard]] int width(int level) const { return levels_[static_cast<std::size_t>(level)].width; }
   [[nodiscard]] int height(int level) const { return levels_[static_cast<std::size_t>(level)].height; }
   /// The maxima of a level, row by row (level 0: `farthest` itself).
-  [[nodiscard]] const float* level_max(int level) const { return levels_[static_cast<std::size_t>(level)].max.data(); }
+  [[nodiscard]] const float* level_max(int level) const { return levels_[static_cast<std::size_t>(level)].max_cells; }
   /// The 2 x 2 windows of level `level` >= 1, (width + 1) x (height + 1)
   /// of them: entry (b + 1) (width + 1) + (a + 1) is the maximum of the
   /// cells (a, a + 1) x (b, b + 1) that lie in the level, for a in [-1,
@@ -56,8 +57,10 @@ class DepthPyramid {
   struct Level {
     int width = 0;
     int height = 0;
-    std::vector<float> min;
+    std::vector<float> min;     // level >= 1 (level 0 is the images build() was given)
     std::vector<float> max;
+    const float* min_cells = nullptr;  // min's or the image's data
+    const float* max_cells = nullptr;
     std::vector<float> window;  // level >= 1: see window_max()
   };
   std::vector<Level> levels_;

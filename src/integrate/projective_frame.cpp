@@ -25,7 +25,13 @@ void ProjectiveFrame::set(const DepthImage& image, const PinholeCamera& camera, 
   width = image.width();
   height = image.height();
   depth.resize(image.pixel_count());
-  for (std::size_t i = 0; i < depth.size(); ++i) depth[i] = static_cast<float>(image.depth(i));
+  if (image.is_raw()) {  // one loop per kind, as back_project
+    const std::span<const std::uint16_t> raw = image.raw_depths();
+    const double scale = image.metres_per_unit();
+    for (std::size_t i = 0; i < depth.size(); ++i) depth[i] = static_cast<float>(raw[i] * scale);
+  } else {
+    for (std::size_t i = 0; i < depth.size(); ++i) depth[i] = static_cast<float>(image.depth(i));
+  }
   depth_halves.clear();
   pyramid.build(depth.data(), depth.data(), width, height);
   fx = camera.fx;

@@ -100,6 +100,9 @@ struct ProjectiveFrame {
   /// pixel, (2 width) x (2 height), 0 where none; `depth` holds each pixel's
   /// nearest. Empty for depth images (one reading a pixel).
   std::vector<float> depth_halves;
+  /// With depth_halves: the largest of each pixel's four halves (the
+  /// pyramid's maxima start from it).
+  std::vector<float> farthest_half;
   DepthPyramid pyramid;      ///< of `depth` (its maxima of depth_halves' where there are)
 
   double fx = 0.0;
@@ -131,7 +134,8 @@ struct ProjectiveFrame {
   void set_rays(std::span<const Vec3f> ends, std::span<const std::uint32_t> pixels);
 
   [[nodiscard]] std::size_t memory_bytes() const {
-    return (depth.capacity() + depth_halves.capacity()) * sizeof(float) + pyramid.memory_bytes() +
+    return (depth.capacity() + depth_halves.capacity() + farthest_half.capacity()) * sizeof(float) +
+           pyramid.memory_bytes() +
            (pixel_rays.capacity() + ray_order.capacity()) * sizeof(std::uint32_t);
   }
 };

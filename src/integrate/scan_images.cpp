@@ -93,10 +93,10 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
       ray_points[k].push_back(static_cast<std::uint32_t>(index));
     }
   }
-  std::vector<float> farthest;
   for (std::size_t k = 0; k < faces_.size(); ++k) {
     ProjectiveFrame& face = faces_[k];
     // The pyramid's maxima: each pixel's farthest half (by its nearest reading).
+    std::vector<float>& farthest = face.farthest_half;
     farthest.assign(face.depth.size(), 0.0f);
     const std::size_t wide = 2 * std::size_t(face.width);
     for (std::size_t y = 0; y < std::size_t(face.height); ++y) {

@@ -481,6 +481,10 @@ void OccupancyTree::apply_everywhere(int depth, std::uint32_t group, unsigned sl
     set_childless(node, slot, range_.add(node.log_odds[slot], delta));
     return;
   }
+  // A miss changes nothing below a node whose maximum is already the
+  // clamping minimum: every voxel there is at it (free space seen again and
+  // again, kept unpruned by differences elsewhere).
+  if (delta <= 0.0f && node.log_odds[slot] == range_.min) return;
   if (depth == 1) {
     for (float& v : leaves_[child].log_odds) v = range_.add(v, delta);
   } else {
