@@ -44,18 +44,6 @@ py::array_t<T> per_point(const OccupancyMap& map, py::handle object, int depth, 
   return answers;
 }
 
-InsertOptions insert_options(const std::string& integrator, double max_range, int clear_depth, int fine_steps,
-                             int threads) {
-  if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0: all cores), got " + std::to_string(threads));
-  InsertOptions options;
-  options.integrator = parse_integrator_kind(integrator);
-  options.max_range = max_range;
-  options.clear_depth = clear_depth;
-  options.fine_steps = fine_steps;
-  options.threads = static_cast<unsigned>(threads);
-  return options;
-}
-
 InsertStats insert(OccupancyMap& map, py::handle points_object, py::handle origin_object, py::handle colors_object,
                    const std::string& integrator, double max_range, int clear_depth, int fine_steps, int threads) {
   const ScanPoints points(points_object, "points");
@@ -232,6 +220,18 @@ void bind_point_lookups(MapClass& map) {
 }
 
 }  // namespace
+
+InsertOptions insert_options(const std::string& integrator, double max_range, int clear_depth, int fine_steps,
+                             int threads) {
+  if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0: all cores), got " + std::to_string(threads));
+  InsertOptions options;
+  options.integrator = parse_integrator_kind(integrator);
+  options.max_range = max_range;
+  options.clear_depth = clear_depth;
+  options.fine_steps = fine_steps;
+  options.threads = static_cast<unsigned>(threads);
+  return options;
+}
 
 MapClass bind_map(py::module_& m) {
   MapClass map(m, "OccupancyMap",

@@ -17,6 +17,7 @@
 #include <pybind11/pybind11.h>
 
 #include "umbra/core/node.hpp"
+#include "umbra/map/insert_options.hpp"
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/query/predicate.hpp"
 
@@ -57,6 +58,10 @@ struct PyPredicate {
 /// The predicate argument of a query: None (every node) or a umbra.pred value.
 Predicate predicate_of(const py::object& object);
 
+/// The options insert() and insert_depth_image() share; ValueError for negative threads or an unknown integrator.
+InsertOptions insert_options(const std::string& integrator, double max_range, int clear_depth, int fine_steps,
+                             int threads);
+
 void bind_values(py::module_& m);
 void bind_shapes(py::module_& m);
 void bind_predicates(py::module_& m);
@@ -64,6 +69,7 @@ MapClass bind_map(py::module_& m);
 void bind_queries(py::module_& m, MapClass& map);
 void bind_gain(py::module_& m, MapClass& map);
 void bind_io(py::module_& m, MapClass& map);
+void bind_depth(py::module_& m, MapClass& map);
 void bind_sim(py::module_& m);
 
 }  // namespace umbra::python

@@ -17,5 +17,6 @@ PYBIND11_MODULE(_umbra, m) {
   bind_queries(m, map);
   bind_gain(m, map);
   bind_io(m, map);
+  bind_depth(m, map);
   bind_sim(m);
 }

@@ -1,6 +1,9 @@
 #include "numpy_arrays.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
 #include <type_traits>
 #include <utility>
 
@@ -173,6 +176,104 @@ ColorArray::ColorArray(py::handle object, const char* name) {
   }
   count_ = static_cast<std::size_t>(array_.shape(0));
   data_ = reinterpret_cast<const Rgb*>(array_.data());
+}
+
+DepthArray::DepthArray(py::handle object, const char* name, std::optional<double> units_per_metre,
+                       const char* scale_name) {
+  const py::array any = any_array(object, name, std::string(name) + " must be an array of depths, got " + type_name(object));
+  const char kind = any.dtype().kind();
+  const bool raw = kind == 'u' && any.dtype().itemsize() == 2;  // uint16, in either byte order
+  if (!raw && kind != 'f') {
+    throw py::type_error(std::string(name) + " must hold uint16 raw depths (with " + scale_name +
+                         ") or float metres, got dtype " + std::string(py::str(any.dtype())));
+  }
+  if (any.ndim() != 2) {
+    throw py::value_error(std::string(name) + " must be an image of shape (H, W), got shape " + shape_text(any));
+  }
+  if (any.shape(0) == 0 || any.shape(1) == 0) {
+    throw py::value_error(std::string(name) + " has no pixels: shape " + shape_text(any));
+  }
+  if (any.shape(0) > std::numeric_limits<int>::max() || any.shape(1) > std::numeric_limits<int>::max()) {
+    throw py::value_error(std::string(name) + " is too large: shape " + shape_text(any));
+  }
+  height_ = static_cast<int>(any.shape(0));
+  width_ = static_cast<int>(any.shape(1));
+  if (raw) {
+    if (!units_per_metre) {
+      throw py::value_error(std::string(scale_name) + " is needed for uint16 " + name +
+                            ": raw units per metre (1000 for millimetres, 5000 for TUM RGB-D)");
+    }
+    if (!(std::isfinite(*units_per_metre) && *units_per_metre > 0.0)) {
+      throw py::value_error(std::string(scale_name) + " must be finite and > 0 (raw units per metre), got " +
+                            std::to_string(*units_per_metre));
+    }
+    units_per_metre_ = *units_per_metre;
+    raw_ = converted(name, std::string(name) + " must be an array of depths", [&] { return decltype(raw_)(any); });
+  } else {
+    if (units_per_metre) {
+      throw py::value_error(std::string(scale_name) + " is for uint16 raw depths; " + name + " holds " +
+                            std::string(py::str(any.dtype())) + " metres already");
+    }
+    metres_ = converted(name, std::string(name) + " must be an array of depths", [&] { return decltype(metres_)(any); });
+  }
+}
+
+DepthImage DepthArray::view() const {
+  const std::size_t pixels = std::size_t(width_) * std::size_t(height_);
+  if (units_per_metre_ > 0.0) return DepthImage::raw({raw_.data(), pixels}, width_, height_, units_per_metre_);
+  return DepthImage::metres({metres_.data(), pixels}, width_, height_);
+}
+
+PinholeCamera camera_of(py::handle object, const char* name) {
+  PinholeCamera camera;
+  if (py::isinstance<PinholeCamera>(object)) {
+    camera = object.cast<PinholeCamera>();
+  } else {
+    const auto numbers = as_array<Float64>(object, name);
+    if (numbers.ndim() != 1 || numbers.shape(0) != 4) {
+      throw py::value_error(std::string(name) + " must be a PinholeCamera or four numbers (fx, fy, cx, cy), got shape " +
+                            shape_text(numbers));
+    }
+    camera = PinholeCamera{numbers.at(0), numbers.at(1), numbers.at(2), numbers.at(3)};
+  }
+  try {
+    camera.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(std::string(name) + ": " + e.what());
+  }
+  return camera;
+}
+
+Pose pose_of(py::handle object, const char* name) {
+  const auto array = as_array<Float64>(object, name);
+  const bool square = array.ndim() == 2 && array.shape(0) == 4 && array.shape(1) == 4;
+  if (!square && !(array.ndim() == 2 && array.shape(0) == 3 && array.shape(1) == 4)) {
+    throw py::value_error(std::string(name) + " must be an array of shape (4, 4) or (3, 4), got shape " +
+                          shape_text(array));
+  }
+  if (square && !(array.at(3, 0) == 0.0 && array.at(3, 1) == 0.0 && array.at(3, 2) == 0.0 && array.at(3, 3) == 1.0)) {
+    throw py::value_error(std::string(name) + "'s last row must be (0, 0, 0, 1), got (" +
+                          std::string(py::repr(py::float_(array.at(3, 0)))) + ", " +
+                          std::string(py::repr(py::float_(array.at(3, 1)))) + ", " +
+                          std::string(py::repr(py::float_(array.at(3, 2)))) + ", " +
+                          std::string(py::repr(py::float_(array.at(3, 3)))) + ")");
+  }
+  Pose pose;
+  for (py::ssize_t row = 0; row < 3; ++row) {
+    for (py::ssize_t column = 0; column < 4; ++column) {
+      pose.m[static_cast<std::size_t>(row)][static_cast<std::size_t>(column)] = array.at(row, column);
+    }
+  }
+  return pose;
+}
+
+ColorArray image_colors(py::handle object, const char* name, int height, int width) {
+  py::array any = any_array(object, name, std::string(name) + " must be an array of integers in [0, 255]");
+  if (any.ndim() != 3 || any.shape(0) != height || any.shape(1) != width || any.shape(2) != 3) {
+    throw py::value_error(std::string(name) + " must be an array of shape (" + std::to_string(height) + ", " +
+                          std::to_string(width) + ", 3), one colour per pixel, got shape " + shape_text(any));
+  }
+  return ColorArray(any.reshape({py::ssize_t(height) * width, py::ssize_t{3}}), name);
 }
 
 BoolArray::BoolArray(std::size_t n) : array(static_cast<py::ssize_t>(n)) {

@@ -32,7 +32,9 @@
 #include <pybind11/pybind11.h>
 
 #include "umbra/core/color.hpp"
+#include "umbra/core/pose.hpp"
 #include "umbra/core/vec3.hpp"
+#include "umbra/map/depth_image.hpp"
 
 namespace umbra::python {
 
@@ -130,6 +132,40 @@ class ColorArray {
   const Rgb* data_ = nullptr;
   std::size_t count_ = 0;
 };
+
+/// A depth image (H, W): uint16 raw depths, `units_per_metre` per metre, read
+/// in place; or float metres (float32 read in place, other float dtypes
+/// converted to float32 once). Throws TypeError for another dtype, ValueError
+/// for another shape, for no pixels, and for a units_per_metre that is
+/// missing (uint16), given (float) or not finite and > 0; `scale_name` is
+/// how the caller's argument for it is called.
+class DepthArray {
+ public:
+  DepthArray(py::handle object, const char* name, std::optional<double> units_per_metre, const char* scale_name);
+  [[nodiscard]] DepthImage view() const;
+  [[nodiscard]] int width() const { return width_; }
+  [[nodiscard]] int height() const { return height_; }
+
+ private:
+  py::array_t<std::uint16_t, py::array::c_style | py::array::forcecast> raw_;
+  py::array_t<float, py::array::c_style | py::array::forcecast> metres_;
+  double units_per_metre_ = 0.0;
+  int width_ = 0;
+  int height_ = 0;
+};
+
+/// Pinhole intrinsics: a umbra.PinholeCamera, or four numbers (fx, fy, cx,
+/// cy) (ValueError for another shape, or intrinsics the library refuses).
+PinholeCamera camera_of(py::handle object, const char* name);
+
+/// A rigid or affine transform: a (4, 4) array whose last row is (0, 0, 0,
+/// 1), or a (3, 4) array [R | t] (ValueError otherwise).
+Pose pose_of(py::handle object, const char* name);
+
+/// Colours of an image, (H, W, 3) of integers in [0, 255] as ColorArray
+/// reads them, one per pixel of an image of `height` x `width` (ValueError
+/// for another shape).
+ColorArray image_colors(py::handle object, const char* name, int height, int width);
 
 /// A new (N,) bool array and its bytes (numpy's bool is one byte, 0 or 1).
 struct BoolArray {

@@ -7,7 +7,7 @@ one (3,) row for all, (N,) values or one number, and answers (N,).
 """
 
 import os
-from typing import Iterator, Optional, Sequence, Tuple, Union, overload
+from typing import Iterator, Literal, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -411,6 +411,22 @@ class OccupancyMap:
         threads: int = 0,
     ) -> InsertStats:
         """Integrates one scan: points (N, 3) seen from origin (3,), optionally colors (N, 3) uint8. Returns InsertStats. integrator: 'discrete' (OctoMap's discretize=true), 'simple' (discretize=false) or 'fast' (free space cleared at clear_depth, -1: 16 cm nodes; fine_steps coarse nodes before each end point traced voxel by voxel). max_range <= 0: unlimited. threads: 0 for all cores."""
+    def insert_depth_image(
+        self,
+        depth: ArrayLike,
+        camera: Union[PinholeCamera, Sequence[float]],
+        pose: ArrayLike,
+        colors: Optional[ArrayLike] = None,
+        *,
+        depth_scale: Optional[float] = None,
+        integrator: str = "projective",
+        max_range: float = -1.0,
+        surface_margin: float = 0.0,
+        clear_depth: int = -1,
+        fine_steps: int = 2,
+        threads: int = 0,
+    ) -> InsertStats:
+        """Integrates one depth image taken from pose: depth (H, W) uint16 raw units (depth_scale units per metre, e.g. 1000 for millimetres) or float metres (0, negative, NaN or infinite: no reading); camera a PinholeCamera or (fx, fy, cx, cy); pose (4, 4) or (3, 4) camera-to-map, a rotation and a translation (the optical frame: x right, y down, z forward); colors (H, W, 3) uint8, one per pixel (the map needs colour). Returns InsertStats. integrator 'projective': free space from the image itself, a voxel cleared when it lies more than surface_margin voxels in front of the reading it projects onto, hits from the image's points as 'discrete' gives them; any other integrator inserts back_project's points from the camera's position as insert() does. max_range <= 0: unlimited. threads: 0 for all cores."""
     def update_hit(self, points: ArrayLike) -> None:
         """One hit for the voxel of each point (..., 3)."""
     def update_miss(self, points: ArrayLike) -> None:
@@ -558,6 +574,43 @@ class DepthCamera:
     @property
     def depth_scale(self) -> float:
         """Raw depth units per metre."""
+
+class PinholeCamera:
+    """Pinhole intrinsics in pixels: pixel (u, v) (from 0 at the top-left pixel's centre) with depth z lies at x = (u - cx) z / fx, y = (v - cy) z / fy in the optical frame (x right, y down, z forward)."""
+    def __init__(self, fx: float, fy: float, cx: float, cy: float) -> None: ...
+    @property
+    def fx(self) -> float:
+        """Focal length along u, pixels."""
+    @property
+    def fy(self) -> float:
+        """Focal length along v, pixels."""
+    @property
+    def cx(self) -> float:
+        """Principal point u, pixels."""
+    @property
+    def cy(self) -> float:
+        """Principal point v, pixels."""
+    def __eq__(self, other: object) -> bool: ...
+
+@overload
+def back_project(
+    depth: ArrayLike,
+    camera: Union[PinholeCamera, Sequence[float]],
+    pose: Optional[ArrayLike] = None,
+    *,
+    depth_scale: Optional[float] = None,
+    return_pixels: Literal[False] = False,
+) -> NDArray[np.float32]: ...
+@overload
+def back_project(
+    depth: ArrayLike,
+    camera: Union[PinholeCamera, Sequence[float]],
+    pose: Optional[ArrayLike] = None,
+    *,
+    depth_scale: Optional[float] = None,
+    return_pixels: Literal[True],
+) -> Tuple[NDArray[np.float32], NDArray[np.uint32]]:
+    """The points (N, 3) float32 of the pixels of a depth image that have a reading, row by row: depth (H, W) uint16 raw units (depth_scale units per metre) or float metres (0, negative, NaN or infinite: no reading); camera a PinholeCamera or (fx, fy, cx, cy); pose (4, 4) or (3, 4) camera-to-map, None for the camera frame. With return_pixels, (points, pixels): each point's pixel index v * W + u, (N,) uint32. insert_depth_image inserts these very points."""
 
 Scan = Tuple[NDArray[np.float32], NDArray[np.float32], Optional[NDArray[np.uint8]]]
 

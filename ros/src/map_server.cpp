@@ -49,7 +49,11 @@ MapServer::MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, Serve
       tf_buffer_(ros::Duration(60.0)),
       tf_listener_(tf_buffer_, node),
       cloud_subscriber_(node, "cloud_in", kCloudQueue),
-      cloud_filter_(cloud_subscriber_, tf_buffer_, settings_.frame, kCloudQueue, node) {
+      cloud_filter_(cloud_subscriber_, tf_buffer_, settings_.frame, kCloudQueue, node),
+      image_input_(node, tf_buffer_, settings_.frame, settings_.image_colors,
+                   [this](const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info,
+                          const sensor_msgs::Image::ConstPtr& color) { insert_image(depth, info, color); },
+                   [this](const sensor_msgs::Image::ConstPtr& depth, DepthImageInput::Drop why) { drop_image(depth, why); }) {
   map_.set_auto_prune(settings_.compress_map);
   cloud_filter_.registerCallback(&MapServer::insert_cloud, this);
   cloud_filter_.registerFailureCallback(
@@ -124,9 +128,78 @@ void MapServer::insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
     set_crash_context("");
     return;
   }
+  publish_after(name, cloud->header.stamp);
+}
+
+void MapServer::insert_image(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info,
+                             const sensor_msgs::Image::ConstPtr& color) {
+  const std::string name =
+      "depth image in frame '" + depth->header.frame_id + "' at " + std::to_string(depth->header.stamp.toSec());
+  // As for clouds: whatever is wrong with one image is logged, naming it, and the image dropped.
+  set_crash_context("inserting the " + name);
+  try {
+    decode_depth_image(*depth, decoded_image_, name);
+    const PinholeCamera camera = camera_of(*info, decoded_image_.width, decoded_image_.height, name);
+    if (color) decode_color_image(*color, decoded_image_.width, decoded_image_.height, image_colors_, name);
+    // The image's frame is the camera's optical frame (x right, y down, z forward), as Pose expects.
+    Pose pose;
+    const std::string image_frame = tf2_frame(depth->header.frame_id);
+    if (image_frame != settings_.frame) {
+      const geometry_msgs::Transform to_map =
+          tf_buffer_.lookupTransform(settings_.frame, image_frame, depth->header.stamp).transform;
+      pose = Pose::from_translation_quaternion(to_map.translation.x, to_map.translation.y, to_map.translation.z,
+                                               to_map.rotation.w, to_map.rotation.x, to_map.rotation.y,
+                                               to_map.rotation.z);
+    }
+    const InsertStats stats =
+        map_.insert_depth_image(decoded_image_.view(), camera, pose,
+                                color ? std::span<const Rgb>(image_colors_) : std::span<const Rgb>(),
+                                settings_.image_insert);
+    if (stats.out_of_bounds > 0) {
+      ROS_WARN_THROTTLE(5.0, "umbra_server: %zu points of the %s lie outside the map and were skipped",
+                        stats.out_of_bounds, name.c_str());
+    }
+  } catch (const FormatError& e) {  // its message starts with the image's name
+    ++images_refused_;
+    ROS_ERROR("umbra_server: cannot insert the %s (%s)", e.what(), refused_images_text().c_str());
+    set_crash_context("");
+    return;
+  } catch (const std::exception& e) {
+    ++images_refused_;
+    ROS_ERROR("umbra_server: cannot insert the %s: %s (%s)", name.c_str(), e.what(), refused_images_text().c_str());
+    set_crash_context("");
+    return;
+  } catch (...) {
+    ++images_refused_;
+    ROS_ERROR("umbra_server: cannot insert the %s: an exception of unknown type (%s)", name.c_str(),
+              refused_images_text().c_str());
+    set_crash_context("");
+    return;
+  }
+  publish_after(name, depth->header.stamp);
+}
+
+void MapServer::drop_image(const sensor_msgs::Image::ConstPtr& depth, DepthImageInput::Drop why) {
+  ++images_refused_;
+  // At most one warning per reason every 5 s: until tf2 knows the camera (or while no CameraInfo matches), every
+  // image is dropped; the count says how many were.
+  ros::WallTime& last = last_drop_warning_[static_cast<std::size_t>(why)];
+  const ros::WallTime now = ros::WallTime::now();
+  if (!last.isZero() && (now - last).toSec() < 5.0) return;
+  last = now;
+  ROS_WARN("umbra_server: dropped the depth image in frame '%s' at %f: %s (%s)", depth->header.frame_id.c_str(),
+           depth->header.stamp.toSec(), image_input_.describe(why).c_str(), refused_images_text().c_str());
+}
+
+std::string MapServer::refused_images_text() const {
+  return "depth images refused so far: " + std::to_string(images_refused_) + " of " +
+         std::to_string(image_input_.received());
+}
+
+void MapServer::publish_after(const std::string& name, const ros::Time& stamp) {
   set_crash_context("publishing the map after the " + name);
   try {
-    publish_all(cloud->header.stamp);
+    publish_all(stamp);
   } catch (const std::exception& e) {
     ROS_ERROR("umbra_server: cannot publish the map after the %s: %s", name.c_str(), e.what());
   }

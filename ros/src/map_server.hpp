@@ -4,8 +4,13 @@
 // holds each cloud until the transform from its frame to ~frame_id at its
 // stamp is known, then the cloud is decoded, moved into the map frame,
 // cut to (pointcloud_min_z, pointcloud_max_z) and inserted with umbra's
-// integrator from the sensor frame's origin. After every cloud (and after a
-// reset or a box clearing) it publishes, with the cloud's stamp:
+// integrator from the sensor frame's origin. It also subscribes to depth
+// images (`depth/image` with `depth/camera_info`, and `rgb/image` with
+// ~image_colors: depth_image_input.hpp): each is placed with the transform
+// from its frame (the camera's optical frame) to ~frame_id at its stamp and
+// inserted as an image (OccupancyMap::insert_depth_image, ~image_integrator).
+// After every cloud or image (and after a reset or a box clearing) it
+// publishes, with the cloud's or image's stamp:
 //   octomap_binary   octomap_msgs/Octomap, .bt tree data (free/occupied)
 //   octomap_full     octomap_msgs/Octomap, .ot tree data (log-odds)
 //   occupied_cells_vis_array   visualization_msgs/MarkerArray
@@ -20,7 +25,7 @@
 // Threads: ROS callbacks run one at a time (ros::spin); each insertion
 // uses ~threads cores inside umbra.
 //
-// Cost per cloud: the insertion, then one pass over the map per published
+// Cost per cloud or image: the insertion, then one pass over the map per published
 // message kind (as octomap_server). Clearing a box sets each known voxel in
 // it that is not already at the clamping minimum, one by one (boxes of more
 // than 2^26 such voxels are refused with an error).
@@ -37,8 +42,11 @@
 #include <tf2_ros/transform_listener.h>
 #include <umbra_msgs/CheckCollision.h>
 
+#include <array>
 #include <memory>
 
+#include "depth_image_input.hpp"
+#include "image_message.hpp"
 #include "server_settings.hpp"
 #include "umbra/io/scan_source.hpp"
 #include "umbra/map/occupancy_map.hpp"
@@ -56,6 +64,14 @@ class MapServer {
 
  private:
   void insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud);
+  void insert_image(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info,
+                    const sensor_msgs::Image::ConstPtr& color);
+  /// Logs a depth image that will not be inserted (no transform, no CameraInfo) and counts it.
+  void drop_image(const sensor_msgs::Image::ConstPtr& depth, DepthImageInput::Drop why);
+  /// "depth images refused so far: N of M" (malformed or dropped, of those received).
+  [[nodiscard]] std::string refused_images_text() const;
+  /// Publishes the map after the message `name` (stamp `stamp`) was inserted; errors are logged.
+  void publish_after(const std::string& name, const ros::Time& stamp);
   bool reset(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
   bool clear_bbx(octomap_msgs::BoundingBoxQuery::Request& request, octomap_msgs::BoundingBoxQuery::Response& response);
   bool get_binary(octomap_msgs::GetOctomap::Request& request, octomap_msgs::GetOctomap::Response& response);
@@ -72,6 +88,7 @@ class MapServer {
   tf2_ros::TransformListener tf_listener_;
   message_filters::Subscriber<sensor_msgs::PointCloud2> cloud_subscriber_;
   tf2_ros::MessageFilter<sensor_msgs::PointCloud2> cloud_filter_;
+  DepthImageInput image_input_;
   ros::Publisher binary_publisher_;
   ros::Publisher full_publisher_;
   ros::Publisher occupied_publisher_;
@@ -84,6 +101,10 @@ class MapServer {
   ros::ServiceServer check_collision_service_;
   DecodedCloud decoded_;
   Scan scan_;
+  DecodedDepthImage decoded_image_;
+  std::vector<Rgb> image_colors_;
+  std::size_t images_refused_ = 0;  ///< depth images malformed or dropped since the start
+  std::array<ros::WallTime, 3> last_drop_warning_{};  ///< per DepthImageInput::Drop
 };
 
 }  // namespace umbra::ros_io

@@ -76,10 +76,26 @@ ServerSettings read_settings(const ros::NodeHandle& node) {
   check("~integrator", [&] { s.insert.integrator = parse_integrator_kind(integrator); });
   s.insert.clear_depth = param(node, "clear_depth", s.insert.clear_depth);
   s.insert.fine_steps = param(node, "fine_steps", s.insert.fine_steps);
+  s.insert.surface_margin = param(node, "surface_margin", s.insert.surface_margin);
+  s.insert.scan_resolution.horizontal = param(node, "scan_resolution/horizontal", s.insert.scan_resolution.horizontal);
+  s.insert.scan_resolution.vertical = param(node, "scan_resolution/vertical", s.insert.scan_resolution.vertical);
   const int threads = param(node, "threads", 0);
   if (threads < 0) throw std::invalid_argument("bad parameter ~threads: " + std::to_string(threads) + " (0: all cores)");
   s.insert.threads = static_cast<unsigned>(threads);
-  check("~integrator/~clear_depth/~fine_steps", [&] { s.insert.validate(16); });
+  check("~integrator/~clear_depth/~fine_steps/~surface_margin/~scan_resolution", [&] { s.insert.validate(16); });
+
+  // Depth images: the same settings but for the integrator (the projective one reads images as images) and the
+  // range (depth cameras reach a few metres, a LiDAR on the same robot tens).
+  s.image_insert = s.insert;
+  const std::string image_integrator = param<std::string>(node, "image_integrator", "projective");
+  check("~image_integrator", [&] { s.image_insert.integrator = parse_integrator_kind(image_integrator); });
+  s.image_insert.max_range = param(node, "image_max_range", s.insert.max_range);
+  check("~image_max_range", [&] { s.image_insert.validate(16); });
+  s.image_colors = param(node, "image_colors", s.image_colors);
+  if (s.image_colors && !s.color) {
+    throw std::invalid_argument("bad parameter ~image_colors: true needs ~keep_colors true (a map without colour "
+                                "cannot take the colour images)");
+  }
 
   const auto ignored_if = [&](const std::string& name, const std::string& instead) {
     if (param(node, name, false)) s.ignored.push_back(name + ": " + instead);

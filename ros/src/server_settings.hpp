@@ -10,9 +10,13 @@
 // base_frame_id, incremental_2D_projection, the projected 2D map) are
 // reported by name when set, never silently ignored.
 //
-// umbra's own: integrator (simple | discrete | fast), clear_depth,
-// fine_steps, threads, keep_colors (keep an RGB per voxel from clouds with
-// rgb; then the full map is a ColorOcTree).
+// umbra's own: integrator (simple | discrete | fast | projective),
+// clear_depth, fine_steps, surface_margin, scan_resolution/{horizontal,
+// vertical}, threads, keep_colors (keep an RGB per voxel from clouds with
+// rgb; then the full map is a ColorOcTree); for depth images (the topics
+// depth/image and depth/camera_info): image_integrator (projective by
+// default: free space from the image itself), image_max_range (default:
+// sensor_model/max_range), image_colors (colour the voxels from rgb/image).
 #pragma once
 
 #include <ros/node_handle.h>
@@ -38,7 +42,10 @@ struct ServerSettings {
   bool latch = true;
   bool compress_map = true;  ///< prune after every cloud (umbra's automatic pruning)
   bool color = false;  ///< keep_colors
-  InsertOptions insert;  ///< max_range from sensor_model/max_range; integrator, clear_depth, fine_steps, threads
+  InsertOptions insert;  ///< clouds: max_range from sensor_model/max_range; integrator, clear_depth, ...
+  /// Depth images: integrator from image_integrator, max_range from image_max_range, the rest as `insert`.
+  InsertOptions image_insert;
+  bool image_colors = false;  ///< image_colors: colours from rgb/image (needs keep_colors)
   /// octomap_server parameters that are set but not implemented, as "name: what happens instead".
   std::vector<std::string> ignored;
 };

@@ -98,12 +98,14 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth)
   const double v_offset = frame.cy + 0.5;
   const double width = frame.width;
   const double height = frame.height;
-  if (z_min - pad <= 0.0) {
-    // Across the camera plane: no projection, but the four planes through the
-    // camera and the image's edges, moved out by the farthest a window
-    // reaches (the top level's: the bricks nearest the camera have it), can
-    // still show the node outside the view (a point with z <= 0 is not
-    // cleared anyway).
+  // The four planes through the camera and the image's edges, moved out by
+  // the farthest a window reaches (the top level's) and by the edge reach:
+  // a node wholly outside one of them is not seen. Tested on every node, as
+  // the projections below are unstable for nodes near the camera plane (a
+  // pad over a tiny depth covers the whole image: a camera whose image plane
+  // lay on a face of the map's largest nodes split every node along that
+  // plane down to bricks, minutes for one image).
+  {
     const double reach = 1.5 * std::ldexp(1.0, rule_.top_level) + 1.0;
     const double left_offset = u_offset + reach;
     const double right_offset = u_offset - width - reach;
@@ -123,10 +125,20 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth)
                                   (std::abs(left_offset) + std::abs(right_offset) + std::abs(top_offset) +
                                    std::abs(bottom_offset)) * std::abs(c.z));
     }
-    const double plane_pad = 1e-5 * scale + 1e-9;
-    if (left < -plane_pad || right < -plane_pad || top < -plane_pad || bottom < -plane_pad) return Decision::none;
-    return Decision::split;
+    // A centre within the edge reach, edge_reach / z pixels outside, counts
+    // as inside: u >= -edge_reach / z is fx x + (cx + 1/2) z + edge_reach >= 0.
+    const double edge = rule_.edge_reach * (1.0 + kRelativeError);
+    // Float rounding (relative to the terms) and coordinates off by `pad`.
+    const double plane_pad = 1e-5 * (scale + edge) +
+                             (fx + fy + std::abs(left_offset) + std::abs(right_offset) + std::abs(top_offset) +
+                              std::abs(bottom_offset)) * pad + 1e-9;
+    if (left + edge < -plane_pad || right + edge < -plane_pad || top + edge < -plane_pad ||
+        bottom + edge < -plane_pad) {
+      return Decision::none;
+    }
   }
+  // Across the camera plane: no projection (a point with z <= 0 is not cleared anyway).
+  if (z_min - pad <= 0.0) return Decision::split;
 
   // In front of the camera: the pixels the voxel centres can project onto.
   double u_min = 1e300;
@@ -159,7 +171,9 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth)
   const int level = w < 1.0 ? 0
                             : std::min(static_cast<int>(std::bit_width(static_cast<unsigned>(std::min(w, 1048576.0)))),
                                        rule_.top_level);
-  const double reach = level == 0 ? 0.0 : 1.5 * std::ldexp(1.0, level) + 1.0;
+  // Centres within the edge reach outside the image read its edge (clamped).
+  const double edge = rule_.edge_reach * (1.0 + kRelativeError) / near + 1.0;
+  const double reach = (level == 0 ? 0.0 : 1.5 * std::ldexp(1.0, level) + 1.0) + edge;
   if (u1 + reach < 0.0 || v1 + reach < 0.0 || u0 - reach >= width || v0 - reach >= height) return Decision::none;
   const DepthPyramid::Range wide = frame.pyramid.range(
       static_cast<int>(std::max(u0 - reach, 0.0)), static_cast<int>(std::max(v0 - reach, 0.0)),

@@ -11,7 +11,10 @@
 // messages for the simulated office; the .graph file itself for the shared
 // 3DTK scans) and the library makes from the simulator's points directly.
 // Then ~clear_bbx must free exactly the known voxels of a box, and ~reset
-// must empty the map. Every process the test starts is stopped by its id at
+// must empty the map. Depth images (16UC1 and 32FC1, with their CameraInfo,
+// a colour image, and TF for the camera's optical frame) must give the map
+// the library's insert_depth_image makes of the same images, and malformed
+// ones a log line naming the image while the node goes on. Every process the test starts is stopped by its id at
 // the end. Without roscore or umbra_server the test is skipped with a message.
 //
 // Waiting has generous limits (a hung node fails the test instead of hanging
@@ -27,13 +30,17 @@
 #include <octomap_msgs/Octomap.h>
 #include <ros/ros.h>
 #include <rosbag/bag.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_srvs/Empty.h>
 #include <umbra_msgs/CheckCollision.h>
 #include <tf2_msgs/TFMessage.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <cstdlib>
@@ -47,6 +54,8 @@
 #include "ros_test_support.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
+#include "umbra/sim/depth_camera.hpp"
+#include "umbra/sim/scene.hpp"
 
 #include <gtest/gtest.h>
 
@@ -242,6 +251,9 @@ class Loopback : public ::testing::Test {
     markers_sub_.shutdown();
     cloud_pub_.shutdown();
     tf_pub_.shutdown();
+    depth_pub_.shutdown();
+    info_pub_.shutdown();
+    color_pub_.shutdown();
     server_.reset();  // stops umbra_server
   }
 
@@ -252,6 +264,7 @@ class Loopback : public ::testing::Test {
     ros::param::del("/umbra_server");
     std::vector<std::string> argv{UMBRA_SERVER_PATH,
                                   "cloud_in:=/robot/points",
+                                  "depth/image:=/camera/depth/image_rect_raw",
                                   "_frame_id:=/map",
                                   "_resolution:=" + std::to_string(resolution),
                                   "_sensor_model/min:=0.1192",
@@ -267,11 +280,18 @@ class Loopback : public ::testing::Test {
         "/occupied_cells_vis_array", 5, [this](const visualization_msgs::MarkerArray::ConstPtr& m) { markers_.take(m); });
     cloud_pub_ = node_->advertise<sensor_msgs::PointCloud2>("/robot/points", 10);
     tf_pub_ = node_->advertise<tf2_msgs::TFMessage>("/tf", 100);
-    ASSERT_TRUE(wait_for([&] { return (cloud_pub_.getNumSubscribers() > 0 && tf_pub_.getNumSubscribers() > 0) ||
+    // A camera driver's topics; the node's depth/image is remapped to the image, and finds the CameraInfo
+    // beside it (image_transport's rule). The colour image is remapped only where a test asks for colours.
+    depth_pub_ = node_->advertise<sensor_msgs::Image>("/camera/depth/image_rect_raw", 10);
+    info_pub_ = node_->advertise<sensor_msgs::CameraInfo>("/camera/depth/camera_info", 10);
+    color_pub_ = node_->advertise<sensor_msgs::Image>("/camera/color/image_raw", 10);
+    ASSERT_TRUE(wait_for([&] { return (cloud_pub_.getNumSubscribers() > 0 && tf_pub_.getNumSubscribers() > 0 &&
+                                       depth_pub_.getNumSubscribers() > 0 && info_pub_.getNumSubscribers() > 0) ||
                                       !server_->running(); },
                          kStartLimit) &&
                 server_->running())
-        << "umbra_server did not subscribe to the cloud and /tf:\n" << log_text(dir_ / "umbra_server.log");
+        << "umbra_server did not subscribe to the cloud, /tf, the depth image and its CameraInfo:\n"
+        << log_text(dir_ / "umbra_server.log");
   }
 
   /// Publishes the scans one at a time (pose first), each time waiting for both maps with its stamp.
@@ -329,6 +349,29 @@ class Loopback : public ::testing::Test {
     return mapped;
   }
 
+  /// Publishes a depth image with its CameraInfo (and colour image) and waits for the maps with its stamp, a log
+  /// line saying the node cannot insert it, or the node's end; true when the maps came.
+  bool insert_image(const sensor_msgs::Image& depth, const sensor_msgs::CameraInfo& info,
+                    const sensor_msgs::Image* color = nullptr) {
+    const fs::path log = dir_ / "umbra_server.log";
+    const std::string name = "depth image in frame '" + depth.header.frame_id + "' at " +
+                             std::to_string(depth.header.stamp.toSec());
+    info_pub_.publish(info);
+    if (color != nullptr) color_pub_.publish(*color);
+    depth_pub_.publish(depth);
+    bool mapped = false;
+    EXPECT_TRUE(wait_for(
+        [&] {
+          const auto b = binary_.get();
+          const auto f = full_.get();
+          mapped = b && f && b->header.stamp == depth.header.stamp && f->header.stamp == depth.header.stamp;
+          return mapped || log_text(log).find("cannot insert the " + name) != std::string::npos || !server_->running();
+        },
+        kMessageLimit))
+        << "neither a map nor an error for the " << name << ":\n" << log_text(log);
+    return mapped;
+  }
+
   fs::path dir_;
   ros::NodeHandle* node_ = nullptr;
   std::unique_ptr<Child> server_;
@@ -337,6 +380,9 @@ class Loopback : public ::testing::Test {
   ros::Subscriber markers_sub_;
   ros::Publisher cloud_pub_;
   ros::Publisher tf_pub_;
+  ros::Publisher depth_pub_;
+  ros::Publisher info_pub_;
+  ros::Publisher color_pub_;
   Latest<octomap_msgs::Octomap> binary_;
   Latest<octomap_msgs::Octomap> full_;
   Latest<visualization_msgs::MarkerArray> markers_;
@@ -496,6 +542,8 @@ TEST_F(Loopback, BadParametersStopTheNodeWithAMessage) {
       {"_integrator:=bogus", "bad parameter ~integrator"},
       {"_resolution:=-0.1", "bad parameter ~resolution"},
       {"_sensor_model/hit:=0.3", "bad parameter ~sensor_model/{hit,miss,min,max}"},
+      {"_image_integrator:=rays", "bad parameter ~image_integrator"},
+      {"_image_colors:=true", "bad parameter ~image_colors: true needs ~keep_colors true"},
   };
   int run = 0;
   for (const auto& [argument, expected] : cases) {
@@ -594,6 +642,370 @@ TEST_F(Loopback, OnePointOfTinyCoordinatesIsMapped) {
   }
   ASSERT_TRUE(server_->running()) << log_text(log);
   EXPECT_TRUE(insert(map_cloud({{1.0f, 1.0f, 1.0f}}, ros::Time(6001.0)))) << log_text(log);
+}
+
+// --- depth images (issue 22) -----------------------------------------------------------------------------
+
+const std::string kOpticalFrame = "camera_depth_optical_frame";
+
+/// Where a camera's optical frame is, as TF carries it: a translation and a unit quaternion (w, x, y, z).
+struct CameraPlacement {
+  Vec3d position;
+  double qw = 1.0;
+  double qx = 0.0;
+  double qy = 0.0;
+  double qz = 0.0;
+
+  /// The pose the node makes of the transform (the same function on the same numbers).
+  [[nodiscard]] Pose pose() const {
+    return Pose::from_translation_quaternion(position.x, position.y, position.z, qw, qx, qy, qz);
+  }
+  /// map -> the optical frame at `stamp`, on /tf.
+  [[nodiscard]] tf2_msgs::TFMessage transform(const ros::Time& stamp) const {
+    geometry_msgs::TransformStamped t;
+    t.header.frame_id = "map";
+    t.header.stamp = stamp;
+    t.child_frame_id = kOpticalFrame;
+    t.transform.translation.x = position.x;
+    t.transform.translation.y = position.y;
+    t.transform.translation.z = position.z;
+    t.transform.rotation.w = qw;
+    t.transform.rotation.x = qx;
+    t.transform.rotation.y = qy;
+    t.transform.rotation.z = qz;
+    tf2_msgs::TFMessage message;
+    message.transforms.push_back(t);
+    return message;
+  }
+};
+
+/// The placement of a rigid pose: its rotation as a quaternion (Shepperd's method, from the largest of w, x, y, z).
+CameraPlacement placement_of(const Pose& pose) {
+  const auto& m = pose.m;
+  CameraPlacement p;
+  p.position = pose.translation_d();
+  const double trace = m[0][0] + m[1][1] + m[2][2];
+  if (trace > 0.0) {
+    const double s = 2.0 * std::sqrt(1.0 + trace);
+    p.qw = s / 4.0;
+    p.qx = (m[2][1] - m[1][2]) / s;
+    p.qy = (m[0][2] - m[2][0]) / s;
+    p.qz = (m[1][0] - m[0][1]) / s;
+  } else if (m[0][0] > m[1][1] && m[0][0] > m[2][2]) {
+    const double s = 2.0 * std::sqrt(1.0 + m[0][0] - m[1][1] - m[2][2]);
+    p.qw = (m[2][1] - m[1][2]) / s;
+    p.qx = s / 4.0;
+    p.qy = (m[0][1] + m[1][0]) / s;
+    p.qz = (m[0][2] + m[2][0]) / s;
+  } else if (m[1][1] > m[2][2]) {
+    const double s = 2.0 * std::sqrt(1.0 + m[1][1] - m[0][0] - m[2][2]);
+    p.qw = (m[0][2] - m[2][0]) / s;
+    p.qx = (m[0][1] + m[1][0]) / s;
+    p.qy = s / 4.0;
+    p.qz = (m[1][2] + m[2][1]) / s;
+  } else {
+    const double s = 2.0 * std::sqrt(1.0 + m[2][2] - m[0][0] - m[1][1]);
+    p.qw = (m[1][0] - m[0][1]) / s;
+    p.qx = (m[0][2] + m[2][0]) / s;
+    p.qy = (m[1][2] + m[2][1]) / s;
+    p.qz = s / 4.0;
+  }
+  return p;
+}
+
+/// One depth image as a driver publishes it (16UC1 millimetres or 32FC1 metres) and as the library takes it.
+struct CameraFrame {
+  int width = 0;
+  int height = 0;
+  PinholeCamera camera;
+  std::vector<std::uint16_t> millimetres;  ///< a 16UC1 frame (0: no reading)
+  std::vector<float> metres;               ///< a 32FC1 frame (NaN: no reading)
+
+  [[nodiscard]] DepthImage view() const {
+    return millimetres.empty() ? DepthImage::metres(metres, width, height)
+                               : DepthImage::raw(millimetres, width, height, 1000.0);
+  }
+
+  [[nodiscard]] sensor_msgs::Image image(const std::string& frame, const ros::Time& stamp) const {
+    sensor_msgs::Image m;
+    m.header.frame_id = frame;
+    m.header.stamp = stamp;
+    m.width = static_cast<std::uint32_t>(width);
+    m.height = static_cast<std::uint32_t>(height);
+    m.is_bigendian = 0;  // this machine's order, as drivers publish
+    const bool raw = !millimetres.empty();
+    m.encoding = raw ? "16UC1" : "32FC1";
+    m.step = m.width * (raw ? 2u : 4u);
+    m.data.resize(std::size_t{m.step} * m.height);
+    std::memcpy(m.data.data(), raw ? static_cast<const void*>(millimetres.data()) : metres.data(), m.data.size());
+    return m;
+  }
+
+  /// The calibration as a driver gives it: K and P (rectified: the same intrinsics), no distortion.
+  [[nodiscard]] sensor_msgs::CameraInfo info(const std::string& frame, const ros::Time& stamp) const {
+    sensor_msgs::CameraInfo m;
+    m.header.frame_id = frame;
+    m.header.stamp = stamp;
+    m.width = static_cast<std::uint32_t>(width);
+    m.height = static_cast<std::uint32_t>(height);
+    m.distortion_model = "plumb_bob";
+    m.D.assign(5, 0.0);
+    m.K = {camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0};
+    m.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+    m.P = {camera.fx, 0.0, camera.cx, 0.0, 0.0, camera.fy, camera.cy, 0.0, 0.0, 0.0, 1.0, 0.0};
+    return m;
+  }
+};
+
+/// 64 x 48 pixels of a flat wall 2 m ahead (16UC1), with no reading in the top-left 16 x 16 pixels.
+CameraFrame wall_frame() {
+  CameraFrame frame;
+  frame.width = 64;
+  frame.height = 48;
+  frame.camera = PinholeCamera{50.0, 50.0, 31.5, 23.5};
+  frame.millimetres.assign(64 * 48, 2000);
+  for (int v = 0; v < 16; ++v) {
+    for (int u = 0; u < 16; ++u) frame.millimetres[std::size_t(v * 64 + u)] = 0;
+  }
+  return frame;
+}
+
+/// A frame of the simulated depth camera in the office, in metres (NaN where nothing was seen) or millimetres.
+CameraFrame office_frame(const sim::SimulatedDepthImage& simulated, bool millimetres) {
+  CameraFrame frame;
+  frame.width = simulated.width;
+  frame.height = simulated.height;
+  frame.camera = simulated.camera;
+  for (const float z : simulated.depth) {
+    if (millimetres) {
+      frame.millimetres.push_back(static_cast<std::uint16_t>(std::lround(std::min(double(z) * 1000.0, 65535.0))));
+    } else {
+      frame.metres.push_back(z > 0.0f ? z : std::numeric_limits<float>::quiet_NaN());
+    }
+  }
+  return frame;
+}
+
+sim::SimulatedDepthImage simulated_office_image(int pose_index) {
+  sim::DepthCameraModel model = sim::noisy_depth_camera(7);
+  model.width = 160;
+  model.height = 60;
+  return sim::simulate_depth_frame(sim::make_demo_scene(), sim::demo_camera_path()[std::size_t(pose_index)], model);
+}
+
+/// A colour image registered to a width x height depth image (rgb8, or bgr8), and its colours for the library.
+sensor_msgs::Image color_image(int width, int height, bool bgr, const ros::Time& stamp, std::vector<Rgb>& colors) {
+  sensor_msgs::Image m;
+  m.header.frame_id = "camera_color_optical_frame";  // ignored: the colours are the depth image's pixels'
+  m.header.stamp = stamp;
+  m.width = static_cast<std::uint32_t>(width);
+  m.height = static_cast<std::uint32_t>(height);
+  m.encoding = bgr ? "bgr8" : "rgb8";
+  m.step = 3 * m.width;
+  colors.clear();
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const Rgb c{static_cast<std::uint8_t>(4 * u), static_cast<std::uint8_t>(5 * v), static_cast<std::uint8_t>(200 - u)};
+      colors.push_back(c);
+      const std::array<std::uint8_t, 3> bytes = bgr ? std::array{c.b, c.g, c.r} : std::array{c.r, c.g, c.b};
+      m.data.insert(m.data.end(), bytes.begin(), bytes.end());
+    }
+  }
+  return m;
+}
+
+// Issue 22, item 5: depth images through ROS give the map the library makes of the same images (the
+// projective integrator by default); the wall's map holds free space in front of it, the wall, and nothing
+// known behind it or in front of the pixels without a reading.
+TEST_F(Loopback, DepthImagesGiveTheLibrarysMap) {
+  const double resolution = 0.1;
+  ASSERT_NO_FATAL_FAILURE(start_server(resolution));
+  const fs::path log = dir_ / "umbra_server.log";
+  OccupancyMap expected(resolution, kOctoMapDepthLevels);
+  InsertOptions options;
+  options.integrator = IntegratorKind::projective;
+
+  // The wall, 16UC1, from a camera looking along +x (optical z = map x, optical x = map -y, optical y = map -z).
+  const CameraFrame wall = wall_frame();
+  const CameraPlacement along_x{{1.02, 2.03, 1.47}, 0.5, -0.5, 0.5, -0.5};
+  const ros::Time first(4000.0);
+  tf_pub_.publish(along_x.transform(first));
+  ASSERT_TRUE(insert_image(wall.image(kOpticalFrame, first), wall.info(kOpticalFrame, first))) << log_text(log);
+  expected.insert_depth_image(wall.view(), wall.camera, along_x.pose(), {}, options);
+  ASSERT_NO_FATAL_FAILURE(expect_published(expected));
+  const OccupancyMap published = ros_io::map_from_message(*full_.get());
+  EXPECT_EQ(published.state({2.02, 2.03, 1.47}), OccupancyState::free);      // 1 m in front of the wall
+  EXPECT_EQ(published.state({3.02, 2.03, 1.47}), OccupancyState::occupied);  // the wall, 2 m ahead
+  EXPECT_EQ(published.state({4.02, 2.03, 1.47}), OccupancyState::unknown);   // 1 m behind it
+  // 1 m ahead, on the rays of pixel (8, 8), in the corner without readings, and of pixel (55, 39) opposite.
+  EXPECT_EQ(published.state({2.02, 2.03 + 0.47, 1.47 + 0.31}), OccupancyState::unknown);
+  EXPECT_EQ(published.state({2.02, 2.03 - 0.47, 1.47 - 0.31}), OccupancyState::free);
+
+  // The simulated office, 32FC1 metres with NaN where nothing was seen, from a pose of its own.
+  const sim::SimulatedDepthImage simulated = simulated_office_image(3);
+  const CameraFrame office = office_frame(simulated, false);
+  const CameraPlacement placement = placement_of(simulated.pose);
+  const ros::Time second(4001.0);
+  tf_pub_.publish(placement.transform(second));
+  ASSERT_TRUE(insert_image(office.image(kOpticalFrame, second), office.info(kOpticalFrame, second))) << log_text(log);
+  expected.insert_depth_image(office.view(), office.camera, placement.pose(), {}, options);
+  ASSERT_NO_FATAL_FAILURE(expect_published(expected));
+
+  // The wall again from elsewhere, as big-endian 16UC1 with rows padded by 6 bytes: read, not refused.
+  const CameraPlacement lower{{0.52, 1.03, 1.21}, 0.5, -0.5, 0.5, -0.5};
+  const ros::Time third(4002.0);
+  tf_pub_.publish(lower.transform(third));
+  const sensor_msgs::Image little = wall.image(kOpticalFrame, third);
+  sensor_msgs::Image big = little;
+  big.is_bigendian = 1;
+  big.step = little.step + 6;
+  big.data.assign(std::size_t{big.step} * big.height, 0xEE);
+  for (std::size_t row = 0; row < big.height; ++row) {
+    for (std::size_t byte = 0; byte < little.step; ++byte) {
+      big.data[row * big.step + (byte ^ 1u)] = little.data[row * little.step + byte];  // swap each pixel's 2 bytes
+    }
+  }
+  ASSERT_TRUE(insert_image(big, wall.info(kOpticalFrame, third))) << log_text(log);
+  expected.insert_depth_image(wall.view(), wall.camera, lower.pose(), {}, options);
+  ASSERT_NO_FATAL_FAILURE(expect_published(expected));
+
+  // Not the map of the images' points inserted as clouds: the node read them as images.
+  OccupancyMap as_points(resolution, kOctoMapDepthLevels);
+  std::vector<Vec3f> points;
+  back_project(wall.view(), wall.camera, along_x.pose(), points);
+  as_points.insert_point_cloud(along_x.pose().translation(), points);
+  back_project(office.view(), office.camera, placement.pose(), points);
+  as_points.insert_point_cloud(placement.pose().translation(), points);
+  back_project(wall.view(), wall.camera, lower.pose(), points);
+  as_points.insert_point_cloud(lower.pose().translation(), points);
+  EXPECT_NE(data_of(*full_.get()), tree_bytes(as_points, OctoMapFormat::ot));
+}
+
+// Colour from a registered colour image (~image_colors), and the image parameters reaching the integrator.
+TEST_F(Loopback, ColourImagesAndImageParameters) {
+  const double resolution = 0.1;
+  ASSERT_NO_FATAL_FAILURE(start_server(resolution, {"rgb/image:=/camera/color/image_raw", "_keep_colors:=true",
+                                                    "_image_colors:=true", "_image_max_range:=3.0",
+                                                    "_surface_margin:=1.0"}));
+  ASSERT_TRUE(wait_for([&] { return color_pub_.getNumSubscribers() > 0 || !server_->running(); }, kStartLimit));
+  const fs::path log = dir_ / "umbra_server.log";
+  MapConfig config;
+  config.resolution = resolution;
+  config.color = true;
+  OccupancyMap expected(config);
+  OccupancyMap with_defaults(config);  // the default range and margin
+  InsertOptions options;
+  options.integrator = IntegratorKind::projective;
+  options.max_range = 3.0;
+  options.surface_margin = 1.0;
+  std::vector<Rgb> colors;
+
+  const CameraFrame wall = wall_frame();
+  const CameraPlacement along_x{{1.02, 2.03, 1.47}, 0.5, -0.5, 0.5, -0.5};
+  const ros::Time first(4100.0);
+  tf_pub_.publish(along_x.transform(first));
+  const sensor_msgs::Image wall_colors = color_image(wall.width, wall.height, false, first, colors);
+  ASSERT_TRUE(insert_image(wall.image(kOpticalFrame, first), wall.info(kOpticalFrame, first), &wall_colors))
+      << log_text(log);
+  expected.insert_depth_image(wall.view(), wall.camera, along_x.pose(), colors, options);
+  with_defaults.insert_depth_image(wall.view(), wall.camera, along_x.pose(), colors);
+  ASSERT_NO_FATAL_FAILURE(expect_published(expected));
+  EXPECT_TRUE(expected.color(Vec3d{3.02, 2.03, 1.47}).has_value());  // the wall took the colour image's colours
+
+  // The office in 16UC1 millimetres, its colours as bgr8.
+  const sim::SimulatedDepthImage simulated = simulated_office_image(5);
+  const CameraFrame office = office_frame(simulated, true);
+  const CameraPlacement placement = placement_of(simulated.pose);
+  const ros::Time second(4101.0);
+  tf_pub_.publish(placement.transform(second));
+  const sensor_msgs::Image office_colors = color_image(office.width, office.height, true, second, colors);
+  ASSERT_TRUE(insert_image(office.image(kOpticalFrame, second), office.info(kOpticalFrame, second), &office_colors))
+      << log_text(log);
+  expected.insert_depth_image(office.view(), office.camera, placement.pose(), colors, options);
+  with_defaults.insert_depth_image(office.view(), office.camera, placement.pose(), colors);
+  ASSERT_NO_FATAL_FAILURE(expect_published(expected));
+  EXPECT_NE(data_of(*full_.get()), tree_bytes(with_defaults, OctoMapFormat::ot));
+}
+
+// Malformed images: one error line naming the image and the count of refused images; images tf2 cannot place
+// or without a CameraInfo of their stamp: a warning naming the image and why; the node goes on mapping.
+TEST_F(Loopback, MalformedDepthImagesAreRefusedAndTheNodeGoesOn) {
+  // The images lie in frame map: a camera at the map's origin looking along z. A finite range, because the
+  // projective integrator takes minutes for a camera whose image plane lies on the boundary of the map's
+  // largest nodes when the range is unlimited (see docs/ros.md, "Depth images").
+  ASSERT_NO_FATAL_FAILURE(start_server(0.1, {"_image_max_range:=10.0"}));
+  const fs::path log = dir_ / "umbra_server.log";
+  const CameraFrame wall = wall_frame();
+  // The log line that starts with `start`, without roscpp's colour codes around it.
+  const auto line_of = [&](const std::string& start) {
+    const std::string text = log_text(log);
+    const std::size_t at = text.find(start);
+    return at == std::string::npos ? std::string("(no line '" + start + "' in:\n" + text + ")")
+                                   : text.substr(at, text.find_first_of("\n\x1B", at) - at);
+  };
+
+  // Frame map: no transform needed.
+  sensor_msgs::Image bad_encoding = wall.image("map", ros::Time(7000.0));
+  bad_encoding.encoding = "8UC1";
+  EXPECT_FALSE(insert_image(bad_encoding, wall.info("map", ros::Time(7000.0))));
+  EXPECT_EQ(line_of("umbra_server: cannot insert the depth image in frame 'map' at 7000.000000"),
+            "umbra_server: cannot insert the depth image in frame 'map' at 7000.000000: depth image has encoding "
+            "'8UC1'; umbra reads 16UC1 (millimetres) and 32FC1 (metres) (depth images refused so far: 1 of 1)");
+
+  sensor_msgs::CameraInfo other_size = wall.info("map", ros::Time(7001.0));
+  other_size.width = 640;
+  other_size.height = 480;
+  EXPECT_FALSE(insert_image(wall.image("map", ros::Time(7001.0)), other_size));
+  EXPECT_EQ(line_of("umbra_server: cannot insert the depth image in frame 'map' at 7001.000000"),
+            "umbra_server: cannot insert the depth image in frame 'map' at 7001.000000: depth image is 64 x 48 pixels, "
+            "but its CameraInfo describes 640 x 480 (depth images refused so far: 2 of 2)");
+
+  sensor_msgs::Image short_data = wall.image("map", ros::Time(7002.0));
+  short_data.data.resize(100);
+  EXPECT_FALSE(insert_image(short_data, wall.info("map", ros::Time(7002.0))));
+  EXPECT_EQ(line_of("umbra_server: cannot insert the depth image in frame 'map' at 7002.000000"),
+            "umbra_server: cannot insert the depth image in frame 'map' at 7002.000000: depth image (16UC1, 64 x 48) "
+            "holds 100 bytes of data, but 48 rows of step 128 need 6144 (depth images refused so far: 3 of 3)");
+
+  // A driver without calibration publishes a CameraInfo of zeros.
+  sensor_msgs::CameraInfo uncalibrated;
+  uncalibrated.header = wall.info("map", ros::Time(7003.0)).header;
+  uncalibrated.width = 64;
+  uncalibrated.height = 48;
+  EXPECT_FALSE(insert_image(wall.image("map", ros::Time(7003.0)), uncalibrated));
+  EXPECT_EQ(line_of("umbra_server: cannot insert the depth image in frame 'map' at 7003.000000"),
+            "umbra_server: cannot insert the depth image in frame 'map' at 7003.000000: its CameraInfo has no "
+            "calibration (fx 0.000000, fy 0.000000 from K; both must be > 0) (depth images refused so far: 4 of 4)");
+
+  // An image without its CameraInfo: dropped with a warning once a newer image is matched.
+  depth_pub_.publish(wall.image("map", ros::Time(7004.0)));
+  EXPECT_TRUE(insert_image(wall.image("map", ros::Time(7005.0)), wall.info("map", ros::Time(7005.0))))
+      << log_text(log);
+  EXPECT_TRUE(wait_for([&] { return log_text(log).find("at 7004.000000") != std::string::npos; }, kMessageLimit));
+  EXPECT_EQ(line_of("umbra_server: dropped the depth image in frame 'map' at 7004.000000"),
+            "umbra_server: dropped the depth image in frame 'map' at 7004.000000: no CameraInfo with its stamp came on "
+            "'/camera/depth/camera_info' (depth images refused so far: 5 of 6)");
+
+  // A frame TF never names: each image is held for its transform until 5 newer ones push it out, then a warning
+  // (one every 5 s; the count says how many). Published one by one: the subscriber's own queue is 5 deep too.
+  const std::string no_transform = "tf2 had no transform from its frame to the map frame at its stamp";
+  int published = 0;
+  EXPECT_TRUE(wait_for(
+      [&] {
+        if (log_text(log).find("dropped the depth image in frame 'nowhere'") != std::string::npos) return true;
+        if (published < 1000) depth_pub_.publish(wall.image("nowhere", ros::Time(7006.0 + 0.01 * published++)));
+        return false;
+      },
+      kMessageLimit))
+      << log_text(log);
+  const std::string dropped = line_of("umbra_server: dropped the depth image in frame 'nowhere' at ");
+  EXPECT_NE(dropped.find(": " + no_transform + " (depth images refused so far: 6 of "), std::string::npos) << dropped;
+  EXPECT_GE(published, 6);
+
+  // And the node still maps a good image.
+  ASSERT_TRUE(server_->running()) << log_text(log);
+  EXPECT_TRUE(insert_image(wall.image("map", ros::Time(7020.0)), wall.info("map", ros::Time(7020.0))))
+      << log_text(log);
 }
 
 const auto* const kRosMaster = ::testing::AddGlobalTestEnvironment(new RosMaster);
