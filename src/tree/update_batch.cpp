@@ -138,8 +138,11 @@ bool UpdateBatch::miss_node(std::uint64_t code, int depth, bool unless_hit) {
     add_miss(code);
     return true;
   }
+  // Inside the full node that covered the last code: missed already. A
+  // marked node may be full itself (its voxels missed one by one), and is
+  // still refused below.
   const int top = morton::highest_differing_depth(code, last_code_);
-  if (top < covered_depth_ && depth <= covered_depth_) return true;
+  if (top < covered_depth_ && (depth < covered_depth_ || (!unless_hit && depth == covered_depth_))) return true;
   const std::uint32_t group = descend(code, depth, Mark::miss);
   if (group == kNoGroup) return true;  // a full node above covers it
   const unsigned slot = morton::slot(code, depth);
@@ -147,7 +150,7 @@ bool UpdateBatch::miss_node(std::uint64_t code, int depth, bool unless_hit) {
     Brick& brick = bricks_[group];
     if (unless_hit && (brick.hit[slot] != 0 || (brick.keep >> slot & 1u) != 0)) return false;
     brick.miss[slot] = 0xFF;
-    if (is_full(brick)) collapse_upwards(code, 1);
+    if (is_full(brick) && brick.keep == 0) collapse_upwards(code, 1);
     return true;
   }
   Inner& node = inner_[depth][group];
@@ -162,7 +165,7 @@ bool UpdateBatch::miss_node(std::uint64_t code, int depth, bool unless_hit) {
     }
     node.full |= bit;
   }
-  if (node.full == 0xFF) {
+  if (node.full == 0xFF && node.keep == 0) {
     collapse_upwards(code, depth);
   } else {
     covered_depth_ = depth;
@@ -217,7 +220,7 @@ void UpdateBatch::collapse_upwards(std::uint64_t code, int depth) {
     parent.child[slot] = kNoGroup;
     parent.full |= static_cast<std::uint8_t>(1u << slot);
     ++d;
-    if (parent.full != 0xFF) break;
+    if (parent.full != 0xFF || parent.keep != 0) break;
   }
   last_code_ = code;
   covered_depth_ = d;

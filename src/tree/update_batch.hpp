@@ -118,7 +118,12 @@ class UpdateBatch {
   bool add_miss_node_unless_hit(std::uint64_t code, int depth);
   /// Marks the depth-`depth` node (>= 1) containing `code`, and its
   /// ancestors up to depth `up_to` (>= depth), so that add_miss_node_unless_hit
-  /// refuses them.
+  /// refuses them. The answer for a marked node must not depend on the misses
+  /// added before it (the fast integrator's workers each see only their own
+  /// rays' misses, yet must decide alike): a group holding a mark is never
+  /// collapsed into its parent, so the mark stays even when every voxel of
+  /// the node has been missed, and a full node never covers a marked one
+  /// below it (their ancestors up to the marked depth are marked too).
   void keep_fine(std::uint64_t code, int depth, int up_to);
   void keep_fine(std::uint64_t code, int depth) { keep_fine(code, depth, depth); }
   /// Merges another batch over the same depth levels into this one; its
@@ -155,14 +160,16 @@ class UpdateBatch {
     Brick& brick = *brick_;
     const std::uint64_t misses = std::bit_cast<std::uint64_t>(brick.miss) | voxels;
     brick.miss = std::bit_cast<std::array<std::uint8_t, 8>>(misses);
-    if (misses == ~std::uint64_t{0} && is_full(brick)) collapse_upwards(code, 1);
+    if (misses == ~std::uint64_t{0} && is_full(brick) && brick.keep == 0) collapse_upwards(code, 1);
   }
   /// Walks the cached path down to the group at `depth` (>= 1) on the path of
   /// `code` and returns it, or kNoGroup when a full node above already covers
   /// it (only for misses: a hit splits full nodes on its way down).
   std::uint32_t descend(std::uint64_t code, int depth, Mark mark);
-  /// The group at `depth` on the path of `code` is entirely full: release it
-  /// and set its parent's bit instead, repeating upwards.
+  /// The group at `depth` on the path of `code` is entirely full and holds no
+  /// keep mark: release it and set its parent's bit instead, repeating upwards
+  /// while the parent is full and unmarked too. A group with a keep mark stays
+  /// (see keep_fine: the mark must outlive its node being missed).
   void collapse_upwards(std::uint64_t code, int depth);
   /// Marks every voxel below group (depth, group) missed; true if all are now full.
   bool fill_with_misses(int depth, std::uint32_t group);

@@ -1,7 +1,10 @@
 // UpdateBatch against a std::map model: random hits, misses and whole-node
-// misses in any order; hit wins; full groups collapse; merge is a union.
+// misses in any order; hit wins; full groups collapse; merge is a union;
+// nodes marked with keep_fine are refused whatever was missed before.
 #include <map>
 #include <random>
+#include <set>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -165,6 +168,67 @@ TEST(UpdateBatch, MergeIsTheUnion) {
       a.merge(b);
       ASSERT_EQ(contents(a), model) << "depth levels " << depth_levels << " seed " << seed;
       expect_hit_bits(a, model);
+    }
+  }
+}
+
+TEST(UpdateBatch, KeptNodesAreRefusedWhateverWasMissedBefore) {
+  // The fast integrator's workers each add only their own rays' misses, and
+  // must still answer alike whether a node may be cleared whole (issue 22:
+  // a kept node whose children had all been cleared was cleared whole too,
+  // once its group collapsed or right after its last child was cleared).
+  // Marks as the integrator sets them: a node and its ancestors up to
+  // `up_to`, whole-node misses asked at depths up to `up_to` only.
+  for (const int depth_levels : {3, 4, 16}) {
+    for (std::uint32_t seed = 1; seed <= 30; ++seed) {
+      SCOPED_TRACE("depth levels " + std::to_string(depth_levels) + " seed " + std::to_string(seed));
+      std::mt19937 rng(seed);
+      const auto random_voxel = [&] {  // in the first 8^3 voxels
+        return morton::encode({static_cast<std::uint32_t>(rng() % 8), static_cast<std::uint32_t>(rng() % 8),
+                               static_cast<std::uint32_t>(rng() % 8)});
+      };
+      const int up_to = 3;
+      UpdateBatch batch(depth_levels);
+      Model model;
+      std::set<std::pair<std::uint64_t, int>> kept;  // (first voxel, depth)
+      for (int i = 0; i < 2; ++i) {
+        const std::uint64_t c = random_voxel();
+        batch.add_hit(c);
+        add_to_model(model, c, Mark::hit);
+      }
+      for (int i = 0; i < 3; ++i) {
+        const std::uint64_t c = random_voxel();
+        const int depth = 1 + static_cast<int>(rng() % up_to);
+        batch.keep_fine(c, depth, up_to);
+        for (int d = depth; d <= up_to; ++d) kept.insert({morton::node_begin(c, d), d});
+      }
+      for (int i = 0; i < 300; ++i) {
+        const std::uint64_t c = random_voxel();
+        if (rng() % 3 == 0) {
+          // Every voxel of a node of 2^3 or 4^3 voxels, one by one, as rays
+          // crossing it add them: fills kept nodes, and groups around them.
+          const int depth = 1 + static_cast<int>(rng() % 2);
+          const std::uint64_t first = morton::node_begin(c, depth);
+          for (std::uint64_t v = first; v < first + (std::uint64_t{1} << (3 * depth)); ++v) {
+            batch.add_miss(v);
+            add_to_model(model, v, Mark::miss);
+          }
+          continue;
+        }
+        const int depth = static_cast<int>(rng() % (up_to + 1));
+        const std::uint64_t first = morton::node_begin(c, depth);
+        const std::uint64_t voxels = std::uint64_t{1} << (3 * depth);
+        bool refused = kept.contains({first, depth});
+        for (auto it = model.lower_bound(first); it != model.end() && it->first < first + voxels; ++it) {
+          refused |= it->second == Mark::hit;
+        }
+        ASSERT_EQ(batch.add_miss_node_unless_hit(c, depth), !refused) << "depth " << depth << " node " << first;
+        if (!refused) {
+          for (std::uint64_t v = 0; v < voxels; ++v) add_to_model(model, first + v, Mark::miss);
+        }
+      }
+      ASSERT_EQ(contents(batch), model);
+      expect_hit_bits(batch, model);
     }
   }
 }
