@@ -31,7 +31,8 @@
 # input), the others go on; later runs skip it until that file is removed.
 # --background starts such a run detached, under nice -n 19, its output in
 # DIR/state/run.log, its process id in DIR/state/run.pid. --report prints
-# the counts as a Markdown table and exits.
+# the counts as a Markdown table and exits. One run at a time per build
+# folder (DIR/state/lock); a second is refused with exit code 2.
 set -euo pipefail
 
 source_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -60,7 +61,7 @@ while [[ $# -gt 0 ]]; do
     --parallel) parallel="$2"; arguments+=("$2"); shift 2 ;;
     --report) report=1; shift ;;
     --jobs) jobs="$2"; arguments+=("$2"); shift 2 ;;
-    -h|--help) sed -n '2,34p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,36p' "$0"; exit 0 ;;
     *) targets+=("$1"); named=1; shift ;;
   esac
 done
@@ -151,13 +152,15 @@ if ! "$cxx" -fsanitize=fuzzer,address "$probe_dir/probe.cpp" -o "$probe_dir/prob
 fi
 
 mkdir -p "$build_dir"
-if [[ -n "$total" ]]; then
-  # One long run per build folder: a second would rebuild the fuzzers under
-  # the first and count the same targets twice. The lock is inherited by
-  # the fuzzers, so it also covers one left running by a killed script.
-  mkdir -p "$state"
-  exec 9> "$state/lock"
-  flock -n 9 || { echo "!! another --total run holds $state/lock (its process id: $(cat "$state/run.pid" 2> /dev/null || echo '?'))"; exit 2; }
+# One run of this script per build folder: a second would rebuild the
+# fuzzers and rewrite the seeds under the first, and a second --total run
+# would count the same targets twice. The lock is inherited by the fuzzers,
+# so it also covers one left running by a killed script.
+mkdir -p "$state"
+exec 9> "$state/lock"
+if ! flock -n 9; then
+  echo "!! another run of this script uses $build_dir (a --total run's process id: $(cat "$state/run.pid" 2> /dev/null || echo '?'))"
+  exit 2
 fi
 echo "== building the fuzz targets with $cxx in $build_dir"
 cmake -S "$source_dir" -B "$build_dir" -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
