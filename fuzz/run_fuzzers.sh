@@ -24,9 +24,10 @@
 # of runs of this script on this build folder, the cheapest targets first,
 # in chunks of --chunk inputs (default 1000000), --parallel P targets at a
 # time (default 1). The state is DIR/state: TARGET.count (inputs so far),
-# TARGET.history (one line per chunk), TARGET.crash. Stopping the script
-# (or losing the machine) loses at most the uncounted part of one chunk: the
-# next run credits the interrupted chunk with the inputs its log shows. A
+# TARGET.history (one line per chunk), TARGET.log (the fuzzer's output of
+# the last chunk), TARGET.crash. Stopping the script credits the chunk under
+# way with what it ran; after a lost machine the next run credits it with
+# the count of the last line its log shows. A
 # target whose fuzzer finds a crash stops there (TARGET.crash names the
 # input), the others go on; later runs skip it until that file is removed.
 # --background starts such a run detached, under nice -n 19, its output in
@@ -91,7 +92,7 @@ print_report() {
     local count=0 history="$state/$target.history" crash="none" corpus="$build_dir/corpus/$target" files=0 kb=0
     [[ -f "$state/$target.count" ]] && count="$(cat "$state/$target.count")"
     if [[ -f "$state/$target.running" ]]; then
-      count="$((count + $(inputs_in_log "$build_dir/$target.log")))"
+      count="$((count + $(inputs_in_log "$state/$target.log")))"
       if flock -n "$state/lock" true; then
         count+=" (stopped in a chunk)"
       else
@@ -207,7 +208,7 @@ fuzz_once() {
 # (finished, interrupted, crash), to the count of target $1, with the
 # coverage and corpus size its log shows and the commit that ran it.
 credit() {
-  local target="$1" inputs="$2" secs="$3" how="$4" log="$build_dir/$1.log"
+  local target="$1" inputs="$2" secs="$3" how="$4" log="$state/$1.log"
   local count rate cov corp
   count="$(cat "$state/$target.count" 2> /dev/null || echo 0)"
   rate="?"
@@ -219,12 +220,27 @@ credit() {
   mv "$state/$target.count.tmp" "$state/$target.count"
 }
 
+# --total, on a signal: stops the fuzzer of the chunk under way, credits
+# what it ran (libFuzzer prints its count when stopped) and exits.
+# shellcheck disable=SC2317  # called by the trap in fuzz_to_total
+stop_chunk() {
+  if [[ -n "${fuzzer_pid:-}" ]]; then
+    kill "$fuzzer_pid" 2> /dev/null || true
+    wait "$fuzzer_pid" 2> /dev/null || true
+  fi
+  if [[ -f "$state/$target.running" ]]; then
+    credit "$target" "$(inputs_in_log "$log")" $(($(date +%s) - $(cat "$state/$target.running"))) interrupted
+    rm -f "$state/$target.running"
+  fi
+  exit 130
+}
+
 # --total: runs target $1 chunk by chunk until its count reaches $total.
 # TARGET.running holds the start time (seconds since 1970) of the chunk
 # under way; finding it at the start means that chunk was stopped.
 fuzz_to_total() {
-  local target="$1" log="$build_dir/$1.log"
-  trap 'kill ${fuzzer_pid:-} 2> /dev/null; exit 130' INT TERM
+  local target="$1" log="$state/$1.log"
+  trap stop_chunk INT TERM
   if [[ -f "$state/$target.crash" ]]; then
     echo "!! $target: skipped, its fuzzer found a crash earlier: $(cat "$state/$target.crash")"
     return 1
