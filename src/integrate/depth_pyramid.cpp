@@ -41,18 +41,27 @@ void DepthPyramid::build(const float* nearest, const float* farthest, int width,
                                    std::max(below.max_cells[row1 + x0], below.max_cells[row1 + x1]));
       }
     }
-    // Its 2 x 2 windows, from a = -1 and b = -1 on.
-    const int wide = level.width + 1;
-    level.window.resize(std::size_t(wide) * std::size_t(level.height + 1));
-    auto cell_max = [&level](int x, int y) {
-      return x < 0 || y < 0 || x >= level.width || y >= level.height ? 0.0f
-                                                                     : level.max_cells[std::size_t(y) * level.width + x];
-    };
-    for (int b = -1; b < level.height; ++b) {
-      for (int a = -1; a < level.width; ++a) {
-        level.window[std::size_t(b + 1) * wide + std::size_t(a + 1)] =
-            std::max(std::max(cell_max(a, b), cell_max(a + 1, b)), std::max(cell_max(a, b + 1), cell_max(a + 1, b + 1)));
-      }
+  }
+  // Level 0's windows are not read (a voxel smaller than two pixels reads its own).
+  for (std::size_t l = 1; l < count; ++l) build_windows(levels_[l]);
+}
+
+void DepthPyramid::build_windows(Level& level) {
+  // The 2 x 2 windows, from a = -1 and b = -1 on: each the maximum of a row
+  // pair's two column maxima, the padding cells reading 0.
+  const int wide = level.width + 1;
+  level.window.resize(std::size_t(wide) * std::size_t(level.height + 1));
+  std::vector<float>& pair_max = pair_max_;  // column maxima of rows b, b + 1; 0 at both ends
+  pair_max.assign(std::size_t(level.width) + 2, 0.0f);
+  for (int b = -1; b < level.height; ++b) {
+    const float* upper = b >= 0 ? level.max_cells + std::size_t(b) * level.width : nullptr;
+    const float* lower = b + 1 < level.height ? level.max_cells + std::size_t(b + 1) * level.width : nullptr;
+    for (int x = 0; x < level.width; ++x) {
+      pair_max[std::size_t(x) + 1] = std::max(upper ? upper[x] : 0.0f, lower ? lower[x] : 0.0f);
+    }
+    float* out = level.window.data() + std::size_t(b + 1) * wide;
+    for (int a = -1; a < level.width; ++a) {
+      out[a + 1] = std::max(pair_max[std::size_t(a) + 1], pair_max[std::size_t(a) + 2]);
     }
   }
 }

@@ -63,7 +63,10 @@ class DepthPyramid {
     const float* max_cells = nullptr;
     std::vector<float> window;  // level >= 1: see window_max()
   };
+  void build_windows(Level& level);
+
   std::vector<Level> levels_;
+  std::vector<float> pair_max_;  // build_windows' scratch, kept between images
 };
 
 }  // namespace umbra

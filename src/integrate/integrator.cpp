@@ -8,6 +8,7 @@
 #include "core/radix_sort.hpp"
 #include "core/voxel_codes.hpp"
 #include "integrate/scan_images.hpp"
+#include "integrate/color_samples.hpp"
 #include "integrate/end_voxels.hpp"
 #include "integrate/projective_tracer.hpp"
 #include "integrate/ray_order.hpp"
@@ -82,44 +83,6 @@ InsertStats& InsertStats::operator+=(const InsertStats& other) {
 }
 
 namespace {
-
-/// The colour samples of a scan: the points that give a hit, in scan order,
-/// then stably sorted by voxel (so each voxel blends its samples in order).
-/// Whether a point gives a hit is decided by the end point its ray goes to:
-/// the point itself (simple), the centre of its voxel (discrete) or the first
-/// point that fell in its voxel (fast).
-std::vector<OccupancyTree::ColorSample> color_samples(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
-                                                      std::span<const Rgb> colors, const InsertOptions& options,
-                                                      const std::optional<KeyBox>& box) {
-  struct Sample {
-    std::uint64_t code;
-    std::uint32_t point;
-  };
-  std::vector<Sample> samples;
-  samples.reserve(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!points[i].is_finite()) continue;
-    const std::optional<Key> key = grid.key_checked(points[i]);
-    if (!key || (box && !box->contains(*key))) continue;
-    samples.push_back({morton::encode(*key), static_cast<std::uint32_t>(i)});
-  }
-  radix_sort(samples, 3 * grid.depth_levels(), [](const Sample& s) { return s.code; });
-  const bool limited = options.max_range > 0.0;
-  std::vector<OccupancyTree::ColorSample> hits;
-  hits.reserve(samples.size());
-  bool voxel_hit = true;
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    const Sample& sample = samples[i];
-    const bool first_of_voxel = i == 0 || samples[i - 1].code != sample.code;
-    if (options.integrator == IntegratorKind::simple || first_of_voxel) {
-      const Vec3f end = options.integrator == IntegratorKind::discrete ? grid.center_f(morton::decode(sample.code))
-                                                                         : points[sample.point];
-      voxel_hit = !limited || octomap_norm(end - origin) <= options.max_range;
-    }
-    if (voxel_hit) hits.push_back({sample.code, colors[sample.point]});
-  }
-  return hits;
-}
 
 /// The voxels of the map that a box covers (the box is cut to the map).
 KeyBox key_box(const Grid& grid, const Aabb& box) {
@@ -428,7 +391,8 @@ InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f
     batch.merge(tracers_[w]->batch(), /*with_hits=*/!scan.fast);
     tracers_[w]->start(grid.depth_levels());  // give its memory back
   }
-  if (!colors.empty()) pending_colors_ = color_samples(grid, origin, points, colors, options, scan.box_keys);
+  ThreadPool* const pool = threads > 1 ? pool_.get() : nullptr;
+  if (!colors.empty()) pending_colors_ = color_samples(grid, origin, points, colors, options, scan.box_keys, pool);
   pending_threads_ = threads;
   return stats;
 }
@@ -488,7 +452,8 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   if (!point_colors.empty()) {
     InsertOptions discrete = options;
     discrete.integrator = IntegratorKind::discrete;
-    pending_colors_ = color_samples(grid, origin, points, point_colors, discrete, box_keys);
+    ThreadPool* const pool = threads > 1 ? pool_.get() : nullptr;
+    pending_colors_ = color_samples(grid, origin, points, point_colors, discrete, box_keys, pool);
   }
   pending_threads_ = threads;
   return stats;
@@ -515,7 +480,8 @@ InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const G
   if (!colors.empty()) {
     InsertOptions discrete = options;
     discrete.integrator = IntegratorKind::discrete;
-    pending_colors_ = color_samples(grid, origin, points, colors, discrete, box_keys);
+    ThreadPool* const pool = threads > 1 ? pool_.get() : nullptr;
+    pending_colors_ = color_samples(grid, origin, points, colors, discrete, box_keys, pool);
   }
   pending_threads_ = threads;
   return stats;
@@ -576,7 +542,7 @@ void Integrator::apply(OccupancyTree& tree, const SensorModel& sensor) {
   tree.apply(tracers_[0]->batch(), sensor.hit_log_odds(), sensor.miss_log_odds(),
              threads > 1 ? pool_.get() : nullptr);
   tracers_[0]->start(tree.depth_levels());
-  if (!pending_colors_.empty()) tree.add_colors(pending_colors_);
+  if (!pending_colors_.empty()) tree.add_colors(pending_colors_, threads > 1 ? pool_.get() : nullptr);
   std::vector<OccupancyTree::ColorSample>().swap(pending_colors_);
 }
 

@@ -65,7 +65,13 @@ __attribute__((target("avx2"))) std::uint64_t projective_cleared_avx2(const Proj
   const bool limited = rule.max_range_squared > 0.0f;
   const __m256 scale = _mm256_set1_ps(1.0f / static_cast<float>(1u << level));  // exact: a power of two
   const __m256 half = _mm256_set1_ps(0.5f);
+  const __m256 edge_reach = _mm256_set1_ps(rule.edge_reach);
+  const __m256 width = _mm256_set1_ps(rule.width);
+  const __m256 height = _mm256_set1_ps(rule.height);
+  const __m256 width_inside = _mm256_set1_ps(rule.width_inside);
+  const __m256 height_inside = _mm256_set1_ps(rule.height_inside);
   std::uint64_t result = 0;
+  std::uint64_t seen = 0;
   for (unsigned group = 0; group < 8; ++group) {
     const __m256 x = _mm256_add_ps(base_x, _mm256_loadu_ps(&rule.offset_table[0][8 * group]));
     const __m256 y = _mm256_add_ps(base_y, _mm256_loadu_ps(&rule.offset_table[1][8 * group]));
@@ -76,43 +82,51 @@ __attribute__((target("avx2"))) std::uint64_t projective_cleared_avx2(const Proj
       ok = _mm256_and_ps(ok, _mm256_cmp_ps(squared, range_squared, _CMP_LE_OQ));
     }
     const __m256 inverse = _mm256_div_ps(_mm256_set1_ps(1.0f), z);
-    const __m256 u = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(x, inverse), fx), cx);
-    const __m256 v = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(y, inverse), fy), cy);
-    ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(u, minus_limit, _CMP_GE_OQ),
-                                                       _mm256_cmp_ps(u, limit, _CMP_LE_OQ)),
-                                         _mm256_and_ps(_mm256_cmp_ps(v, minus_limit, _CMP_GE_OQ),
-                                                       _mm256_cmp_ps(v, limit, _CMP_LE_OQ))));
-    if (_mm256_movemask_ps(ok) == 0) continue;
+    const __m256 u_free = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(x, inverse), fx), cx);
+    const __m256 v_free = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(y, inverse), fy), cy);
+    ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(u_free, minus_limit, _CMP_GE_OQ),
+                                                       _mm256_cmp_ps(u_free, limit, _CMP_LE_OQ)),
+                                         _mm256_and_ps(_mm256_cmp_ps(v_free, minus_limit, _CMP_GE_OQ),
+                                                       _mm256_cmp_ps(v_free, limit, _CMP_LE_OQ))));
+    // Within the edge reach of the image, clamped into it (as cleared_plain).
+    const __m256 reach = _mm256_mul_ps(edge_reach, inverse);
+    const __m256 minus_reach = _mm256_sub_ps(zero, reach);
+    ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(u_free, minus_reach, _CMP_GE_OQ),
+                                                       _mm256_cmp_ps(u_free, _mm256_add_ps(width, reach), _CMP_LT_OQ)),
+                                         _mm256_and_ps(_mm256_cmp_ps(v_free, minus_reach, _CMP_GE_OQ),
+                                                       _mm256_cmp_ps(v_free, _mm256_add_ps(height, reach), _CMP_LT_OQ))));
+    // Lanes not ok may hold anything: clear them before clamping and converting.
+    const __m256 u = _mm256_min_ps(_mm256_max_ps(_mm256_and_ps(u_free, ok), zero), width_inside);
+    const __m256 v = _mm256_min_ps(_mm256_max_ps(_mm256_and_ps(v_free, ok), zero), height_inside);
+    if (_mm256_movemask_ps(ok) == 0) {
+      if (rule.whole_bricks_seen) return 0;  // a voxel not seen: the brick clears nothing
+      continue;
+    }
     __m256 d;
     if (level == 0) {
-      ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(u, zero, _CMP_GE_OQ),
-                                                         _mm256_cmp_ps(u, _mm256_set1_ps(rule.width), _CMP_LT_OQ)),
-                                           _mm256_and_ps(_mm256_cmp_ps(v, zero, _CMP_GE_OQ),
-                                                         _mm256_cmp_ps(v, _mm256_set1_ps(rule.height), _CMP_LT_OQ))));
-      // Lanes not ok may hold anything: clear them before converting.
-      const __m256i column = _mm256_cvttps_epi32(_mm256_and_ps(u, ok));
-      const __m256i row = _mm256_cvttps_epi32(_mm256_and_ps(v, ok));
+      const __m256i column = _mm256_cvttps_epi32(u);
+      const __m256i row = _mm256_cvttps_epi32(v);
       d = gather_cells(cells, column, row, 0, cells_wide, cells_high, cells_wide, _mm256_castps_si256(ok));
       if (halves != nullptr) {
         // Its half pixel's nearest reading, where it has one.
-        const __m256i half_column = _mm256_cvttps_epi32(_mm256_and_ps(_mm256_add_ps(u, u), ok));
-        const __m256i half_row = _mm256_cvttps_epi32(_mm256_and_ps(_mm256_add_ps(v, v), ok));
+        const __m256i half_column = _mm256_cvttps_epi32(_mm256_add_ps(u, u));
+        const __m256i half_row = _mm256_cvttps_epi32(_mm256_add_ps(v, v));
         const __m256 nearest_in_half = gather_cells(halves, half_column, half_row, 0, 2 * cells_wide,
                                                     2 * cells_high, 2 * cells_wide, _mm256_castps_si256(ok));
         d = _mm256_blendv_ps(d, nearest_in_half, _mm256_cmp_ps(nearest_in_half, zero, _CMP_GT_OQ));
       }
     } else {
-      const __m256 safe_u = _mm256_and_ps(u, ok);
-      const __m256 safe_v = _mm256_and_ps(v, ok);
-      const __m256i a = _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(safe_u, scale), half)));
-      const __m256i b = _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(safe_v, scale), half)));
+      const __m256i a = _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(u, scale), half)));
+      const __m256i b = _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_sub_ps(_mm256_mul_ps(v, scale), half)));
       // The window's first cell (a, b) in [-1, cells) on each axis: one read of window_max.
       d = gather_cells(cells, a, b, -1, cells_wide + 1, cells_high + 1, cells_wide + 1, _mm256_castps_si256(ok));
     }
     const __m256 cleared = _mm256_and_ps(ok, _mm256_cmp_ps(z, _mm256_sub_ps(d, margin), _CMP_LT_OQ));
     result |= static_cast<std::uint64_t>(static_cast<unsigned>(_mm256_movemask_ps(cleared))) << (8 * group);
+    const __m256 seen_lanes = _mm256_and_ps(ok, _mm256_cmp_ps(d, zero, _CMP_GT_OQ));
+    seen |= static_cast<std::uint64_t>(static_cast<unsigned>(_mm256_movemask_ps(seen_lanes))) << (8 * group);
   }
-  return result;
+  return rule.whole_bricks_seen && seen != ~std::uint64_t{0} ? 0 : result;
 }
 
 #else

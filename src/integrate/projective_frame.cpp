@@ -14,6 +14,9 @@ namespace {
 /// Projections beyond +-2^24 pixels are not seen (their cells would not be exact integers).
 constexpr float kProjectionLimit = 16777216.0f;
 
+/// Bricks this small or smaller are seen whole or not at all (see the header).
+constexpr double kFinestSeenBorder = 0.02;
+
 }  // namespace
 
 void ProjectiveFrame::set(const DepthImage& image, const PinholeCamera& camera, const Pose& pose) {
@@ -84,6 +87,10 @@ ProjectiveRule::ProjectiveRule(const Grid& grid_in, const ProjectiveFrame& frame
     for (std::size_t axis = 0; axis < 3; ++axis) offset_table[axis][i] = static_cast<float>(offset[axis]);
   }
   centre_dz = static_cast<float>(frame_in.rotate(Vec3d{1.5 * res, 1.5 * res, 1.5 * res}).z);
+  whole_bricks_seen = 4.0 * res <= kFinestSeenBorder;
+  edge_reach = half_voxel_pixels;
+  width_inside = width - 0.5f;
+  height_inside = height - 0.5f;
   if (max_range > 0.0) {
     const int ideal = static_cast<int>(std::lround(std::log2(max_range / 64.0 / res)));
     range_depth = ideal < 2 ? 0 : std::min(ideal, grid_in.depth_levels());
@@ -216,9 +223,9 @@ std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
   const int level = window_level(base);
   const float* cells = level == 0 ? frame->depth.data() : frame->pyramid.window_max(level);
   const int cells_wide = frame->pyramid.width(level);
-  const int cells_high = frame->pyramid.height(level);
   const float scale = std::ldexp(1.0f, -level);  // exact: a power of two
   std::uint64_t result = 0;
+  std::uint64_t seen = 0;
   for (unsigned i = 0; i < 64; ++i) {
     const float x = base.x + offset_table[0][i];
     const float y = base.y + offset_table[1][i];
@@ -226,12 +233,19 @@ std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
     if (!(z > 0.0f)) continue;
     if (max_range_squared > 0.0f && !((x * x + y * y) + z * z <= max_range_squared)) continue;
     const float inverse = 1.0f / z;
-    const float u = (x * inverse) * fx + cx_half;
-    const float v = (y * inverse) * fy + cy_half;
-    if (!(u >= -kProjectionLimit && u <= kProjectionLimit && v >= -kProjectionLimit && v <= kProjectionLimit)) continue;
+    const float u_free = (x * inverse) * fx + cx_half;
+    const float v_free = (y * inverse) * fy + cy_half;
+    if (!(u_free >= -kProjectionLimit && u_free <= kProjectionLimit && v_free >= -kProjectionLimit &&
+          v_free <= kProjectionLimit)) {
+      continue;
+    }
+    // Within the edge reach of the image: the nearest pixel's (or window's) reading.
+    const float reach = edge_reach * inverse;
+    if (!(u_free >= -reach && u_free < width + reach && v_free >= -reach && v_free < height + reach)) continue;
+    const float u = std::min(std::max(u_free, 0.0f), width_inside);
+    const float v = std::min(std::max(v_free, 0.0f), height_inside);
     float d = 0.0f;
     if (level == 0) {
-      if (!(u >= 0.0f && u < width && v >= 0.0f && v < height)) continue;
       d = cells[static_cast<std::size_t>(static_cast<int>(v)) * static_cast<std::size_t>(cells_wide) +
                 static_cast<std::size_t>(static_cast<int>(u))];
       if (!frame->depth_halves.empty()) {
@@ -245,13 +259,13 @@ std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
       // The window's first cell (a, b), and its maximum from window_max.
       const int a = static_cast<int>(std::floor(u * scale - 0.5f));
       const int b = static_cast<int>(std::floor(v * scale - 0.5f));
-      if (a < -1 || b < -1 || a >= cells_wide || b >= cells_high) continue;
       d = cells[static_cast<std::size_t>(b + 1) * static_cast<std::size_t>(cells_wide + 1) +
                 static_cast<std::size_t>(a + 1)];
     }
+    if (d > 0.0f) seen |= std::uint64_t{1} << i;
     if (z < d - margin) result |= std::uint64_t{1} << i;
   }
-  return result;
+  return whole_bricks_seen && seen != ~std::uint64_t{0} ? 0 : result;
 }
 
 std::uint64_t ProjectiveRule::cleared(std::uint64_t brick) const {

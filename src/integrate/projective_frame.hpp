@@ -8,8 +8,12 @@
 //    from: v's own pixel when v is smaller than a pixel there, else the
 //    2 x 2 cells of a pyramid level (cells of 2^l pixels) nearest to (u, v),
 //    with 2^l about the width v projects to (below);
-//  - v is *cleared* (gets a miss) when z > 0, v is within range (below),
-//    and some pixel of its window has a reading d with z < d - margin.
+//  - v is *seen* when z > 0, v is within range (below) and its window
+//    holds a reading;
+//  - v is *cleared* (gets a miss) when it is seen and some pixel of its
+//    window has a reading d with z < d - margin, and, at resolutions of 5 mm
+//    and finer, every voxel of its brick (the 4 x 4 x 4 voxels of its
+//    depth-2 node) is seen.
 // In words: some pixel whose ray passes through the voxel saw a surface
 // beyond it, which is when OctoMap's ray from that pixel would clear it.
 // Taking the voxel's own pixel only (the centre ray) left 5% of the simple
@@ -17,6 +21,22 @@
 // precision (stale obstacles a neighbouring ray would have cleared); the
 // window brings that to 1.2% and 0.4% (docs/benchmarks.md). Pixels without
 // a reading clear nothing: a voxel whose window holds none stays as it was.
+//
+// At the image's edges: a voxel whose centre projects outside the image by
+// less than its half width w (below) reads the nearest pixel or window
+// inside, as the rays of the edge pixels cross it (the simulated camera at
+// 2 cm: 1.9% of the simple integrator's free voxels left unknown without
+// this, 1.5% with it; occupied recall and precision unchanged).
+//
+// Whole bricks at fine resolutions. Free space ends where the image stops
+// seeing: at the image's edges and around pixels without readings, whose
+// cones run from the camera to the surface. Voxel by voxel those borders
+// cost the map a leaf group per few voxels of their area: at 4 mm the ten
+// TUM frames' map held 75 million nodes (794 MiB with colour), three times
+// the map with whole bricks. At 5 mm and finer a brick (2 cm and less) is
+// seen whole or not at all; at coarser resolutions the borders stay exact
+// (a brick of 8 cm at 2 cm would leave 7% of the simple integrator's free
+// voxels unknown).
 //
 // The window level is chosen per brick (the 4 x 4 x 4 voxels of a depth-2
 // node, the unit the rule is evaluated in): from the camera-frame depth
@@ -155,6 +175,10 @@ struct ProjectiveRule {
   int range_depth = 0;             ///< max_range applies to nodes of this depth, 0 or >= 2 (file comment)
   float max_range_squared = 0.0f;  ///< range_depth 0: the per-voxel test's bound
   float half_voxel_pixels = 0.0f;  ///< min(fx, fy) * resolution / 2: w = this / z
+  bool whole_bricks_seen = false;  ///< a brick clears only when all its voxels are seen (fine resolutions)
+  float edge_reach = 0.0f;         ///< pixel-metres: a centre projecting this / z pixels outside the image reads its edge
+  float width_inside = 0.0f;       ///< width - 1/2: the projection clamped into the image
+  float height_inside = 0.0f;      ///< height - 1/2
   float centre_dz = 0.0f;          ///< camera-frame z of the brick's centre minus its first voxel's
   int top_level = 0;               ///< the pyramid's top level
   /// Camera-frame offset of brick voxel i (Morton index, 0..63) from the brick's first voxel.

@@ -123,6 +123,14 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth)
                                   (std::abs(left_offset) + std::abs(right_offset) + std::abs(top_offset) +
                                    std::abs(bottom_offset)) * std::abs(c.z));
     }
+    // A centre within the edge reach, edge_reach / z pixels outside, counts
+    // as inside: u >= -edge_reach / z is fx x + (cx + 1/2) z + edge_reach >= 0.
+    const double edge = rule_.edge_reach * (1.0 + kRelativeError);
+    left += edge;
+    right += edge;
+    top += edge;
+    bottom += edge;
+    scale += edge;
     const double plane_pad = 1e-5 * scale + 1e-9;
     if (left < -plane_pad || right < -plane_pad || top < -plane_pad || bottom < -plane_pad) return Decision::none;
     return Decision::split;
@@ -159,7 +167,9 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth)
   const int level = w < 1.0 ? 0
                             : std::min(static_cast<int>(std::bit_width(static_cast<unsigned>(std::min(w, 1048576.0)))),
                                        rule_.top_level);
-  const double reach = level == 0 ? 0.0 : 1.5 * std::ldexp(1.0, level) + 1.0;
+  // Centres within the edge reach outside the image read its edge (clamped).
+  const double edge = rule_.edge_reach * (1.0 + kRelativeError) / near + 1.0;
+  const double reach = (level == 0 ? 0.0 : 1.5 * std::ldexp(1.0, level) + 1.0) + edge;
   if (u1 + reach < 0.0 || v1 + reach < 0.0 || u0 - reach >= width || v0 - reach >= height) return Decision::none;
   const DepthPyramid::Range wide = frame.pyramid.range(
       static_cast<int>(std::max(u0 - reach, 0.0)), static_cast<int>(std::max(v0 - reach, 0.0)),

@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
 
+#include "core/memory_budget.hpp"
 #include "integrate/ray_walker.hpp"
 
 namespace umbra::detail {
@@ -77,6 +81,12 @@ SegmentBox segment_meets(Vec3d a, Vec3d d, Vec3d inverse, const Aabb& box, doubl
 /// normalised float direction (relative error below 4e-7), from borders
 /// placed with float half voxels; centres are rounded to float (relative
 /// 6e-8). Four times that, to be sure.
+/// The voxels of a walk of any length that lie within `range` of the
+/// origin stray by no more either: the walk follows its float line, whose
+/// direction is off by under 4e-7 plus the end's rounding over the length
+/// (at most 6e-8 (|origin| + length) / length), so at distance t it lies
+/// within about 4e-7 t + 6e-8 (|origin| + t) of the exact segment (per
+/// coordinate; the factor four covers the rest).
 double margin_for(Vec3d origin, double range, double resolution) {
   const double coordinates = std::max({std::fabs(origin.x), std::fabs(origin.y), std::fabs(origin.z)}) + range;
   return 4.0 * (4e-7 * range + 6e-8 * coordinates + 3e-8 * resolution);
@@ -92,6 +102,26 @@ constexpr double kMaxSweepWidth = 16.0;
 // Child slots from the one nearest a point to the one farthest from it (to
 // be XORed with the nearest's slot): by the number of axes crossed.
 constexpr std::array<unsigned, 8> kNearToFar = {0, 1, 2, 4, 3, 5, 6, 7};
+// Steps (GainOptions::max_steps) are about as dear as a decision by the
+// image: a walked voxel costs an eighth of one, a block of centres counted
+// three.
+constexpr std::uint64_t kWalkedVoxelsPerStep = 8;
+constexpr std::uint64_t kStepsPerBlock = 3;
+
+/// The range at which a frustum of f's angles needs about `steps` steps to
+/// count unknown space along its boundary alone: its four side faces and
+/// its far cap have an area of R^2 (2 atan(tan(v/2) cos(h/2)) + 2 atan(tan(h/2)
+/// cos(v/2)) + 4 asin(sin(h/2) sin(v/2))), and counting costs about a step
+/// per 3 voxel faces of it (blocks of 4^3 centres and the nodes above them;
+/// measured on a map of one scan at 50 and 100 m).
+double boundary_range(const Frustum& f, double resolution, std::uint64_t steps) {
+  const double h = f.hfov / 2;
+  const double v = f.vfov / 2;
+  const double area_per_r2 = 2.0 * std::atan(std::tan(v) * std::cos(h)) + 2.0 * std::atan(std::tan(h) * std::cos(v)) +
+                             4.0 * std::asin(std::sin(h) * std::sin(v));
+  return resolution * std::sqrt(3.0 * double(steps) / area_per_r2);
+}
+
 // Regions of up to 2^k voxels per edge across the frustum's boundary are
 // counted as one block of centres (FrustumGeometry::count_grid_points).
 constexpr int kBlockCountDepth = 2;
@@ -133,6 +163,8 @@ GainResult GainCounter::count(const OccupancyTree& tree, const Frustum& frustum,
   fast_depth_ = options.fast_depth;
   voxels_ = 0;
   entropy_ = 0.0;
+  steps_ = 0;
+  max_steps_ = options.max_steps == 0 ? ~std::uint64_t{0} : options.max_steps;
   clear_shift_ = 64;
   path_depth_ = 64;
   setup_pose(frustum);
@@ -149,15 +181,37 @@ GainResult GainCounter::count(const OccupancyTree& tree, const Frustum& frustum,
 }
 
 void GainCounter::setup_pose(const Frustum& frustum) {
-  frustum_.emplace(frustum);
+  requested_range_ = frustum.max_range;
+  const double res = grid_.resolution();
+  // No centre of the map lies beyond its farthest corner: a longer range
+  // counts the same voxels (its far cap lies outside the map), but its
+  // geometry would decide nothing "inside" (its margins grow with the range).
+  const double half = grid_.half_extent();
+  const Aabb map_box{{-half, -half, -half}, {half, half, half}};
+  Frustum clipped = frustum;
+  const double map_reach = std::sqrt(farthest_distance_squared(frustum.origin, map_box)) * (1.0 + 1e-9) + res;
+  clipped.max_range = std::min(frustum.max_range, std::max(map_reach, frustum.min_range + res));
+  frustum_.emplace(clipped);
   origin_ = Vec3f(frustum.origin);
   const Vec3d apex = widen(origin_);
   origin_key_ = grid_.key(apex);  // throws std::out_of_range outside the map
-  const double res = grid_.resolution();
   const double apex_shift = (apex - frustum.origin).norm();
-  const double range = frustum.max_range + apex_shift;
-  margin_ = margin_for(apex, range, res);
+  // Rays end at centres in the map.
+  const double in_map = std::sqrt(farthest_distance_squared(apex, map_box));
+  const double range = std::min(frustum.max_range + apex_shift, in_map);
+  // The margins (see margin_for()). A walk strays from its segment by at
+  // most margin_for(its distance from the apex), so near obstacles it
+  // strays only by the margin of the farthest obstacle's distance: that one
+  // grows the obstacles and tests rays against them. Beyond the last
+  // obstacle nothing can block, however long the ray. The targets (rounded
+  // centres) and the sweeps, which follow walks to their ends, keep the
+  // margin of the whole range.
+  target_margin_ = margin_for(apex, range, res);
+  const double obstacles_within = obstacle_reach(apex, range + 2.0 * target_margin_);
+  margin_ = margin_for(apex, std::min(range, obstacles_within), res);
+  last_blocking_step_ = static_cast<std::uint64_t>(std::min(std::sqrt(3.0) * obstacles_within / res + 3.0, 1e18)) + 1;
   obstacles_.clear();
+  obstacle_keys_.clear();
   touching_ = false;
   // With margins not small against a voxel the image would decide little;
   // walk every ray then (and the walk's own reasoning needs them small).
@@ -172,7 +226,7 @@ void GainCounter::setup_pose(const Frustum& frustum) {
   setup.u = frustum_->u;
   const double tan_h = std::tan(frustum.hfov / 2);
   const double tan_v = std::tan(frustum.vfov / 2);
-  double pixel = res / (frustum.max_range * kPixelsPerFarVoxel);
+  double pixel = res / (clipped.max_range * kPixelsPerFarVoxel);
   const double area = 4.0 * (tan_h + 4 * pixel) * (tan_v + 4 * pixel);
   if (area / (pixel * pixel) > kMaxPixels) pixel = std::sqrt(area / kMaxPixels);
   // The border holds every centre of the frustum as seen from the apex
@@ -191,42 +245,105 @@ void GainCounter::setup_pose(const Frustum& frustum) {
 
   // Obstacles anywhere in the image's pyramid up to the range (also before
   // min_range: they block just the same).
-  Frustum view = frustum;
+  Frustum view = clipped;
   view.origin = apex;
   view.hfov = 2.0 * std::atan(setup.half_width);
   view.vfov = 2.0 * std::atan(setup.half_height);
   view.min_range = 0.0;
-  view.max_range = range + 2.0 * margin_;
-  // The occupied voxels of the same region, as bits (the box of the
-  // pyramid cut at the range, within the box of the range's ball).
+  view.max_range = range + 2.0 * target_margin_;
+  touching_distance_ = setup.near_plane * std::sqrt(1.0 + setup.half_width * setup.half_width +
+                                                    setup.half_height * setup.half_height);
+  draw_obstacles(FrustumGeometry(view), tree_->root(), Key{}, Overlap::partly);
+  image_.finish();
+  // Only the sweeps read the bits, and fast sweeps nothing.
+  if (sweeps_) fill_occupied_bitmap(view.max_range);
+  sweep_pose_ = {&occupied_, &grid_, apex, origin_key_, target_margin_};
+}
+
+double GainCounter::obstacle_reach(Vec3d apex, double range) const {
+  // Branch and bound over the nodes holding occupied voxels within `range`:
+  // the farthest first, skipping nodes that cannot beat the best so far.
+  // It stops as soon as the best is the range itself.
+  const double range2 = range * range;
+  double best2 = 0.0;
+  auto search = [&](auto& self, NodeRef ref, Key key) -> void {
+    if (best2 >= range2 || !thresholds_.is_occupied(tree_->log_odds(ref))) return;
+    const int depth = ref.depth;
+    const Aabb cube = cube_of(key, depth);
+    if (distance_squared(apex, cube) > range2) return;
+    const double farthest2 = farthest_distance_squared(apex, cube);
+    if (farthest2 <= best2) return;
+    if (!tree_->has_children(ref) || tree_->all_children_same(ref)) {
+      best2 = farthest2;
+      return;
+    }
+    const Vec3d middle = (cube.min + cube.max) * 0.5;
+    const unsigned near_slot = (apex.x >= middle.x ? 1u : 0u) | (apex.y >= middle.y ? 2u : 0u) | (apex.z >= middle.z ? 4u : 0u);
+    for (auto order = kNearToFar.rbegin(); order != kNearToFar.rend(); ++order) {
+      const unsigned slot = *order ^ near_slot;
+      self(self, tree_->child(ref, slot), child_key(key, depth, slot));
+    }
+  };
+  search(search, tree_->root(), Key{});
+  // A walk's voxel at distance t from the apex holds a point of its float
+  // line at parameter t (the float direction is a unit vector within 1e-6).
+  return std::sqrt(best2) * (1.0 + 1e-6);
+}
+
+void GainCounter::fill_occupied_bitmap(double reach) {
+  // The box of the drawn obstacles' voxels (within the box of the image's
+  // pyramid cut at the range): what the sweeps can read, sized by the
+  // obstacles in view, not by the range.
+  const Vec3d apex = image_.setup().apex;
+  const ViewImage::Setup& setup = image_.setup();
   Vec3d low = apex;
   Vec3d high = apex;
   for (const double side : {-setup.half_width, setup.half_width}) {
     for (const double up : {-setup.half_height, setup.half_height}) {
-      const Vec3d corner = apex + (setup.f + setup.l * side + setup.u * up) * view.max_range;
+      const Vec3d corner = apex + (setup.f + setup.l * side + setup.u * up) * reach;
       for (int a = 0; a < 3; ++a) {
         low[a] = std::min(low[a], corner[a]);
         high[a] = std::max(high[a], corner[a]);
       }
     }
   }
-  Key low_key;
-  Key high_key;
+  const double res = grid_.resolution();
   const auto last = std::int64_t{grid_.keys_per_axis()} - 1;
+  std::int64_t box_low[3];
+  std::int64_t box_high[3];
   for (int a = 0; a < 3; ++a) {
-    const double from = std::max(low[a], apex[a] - view.max_range) / res;
-    const double to = std::min(high[a], apex[a] + view.max_range) / res;
-    low_key[a] = std::uint32_t(std::clamp<std::int64_t>(std::int64_t(std::floor(from)) + grid_.key_offset() - 1, 0, last));
-    high_key[a] = std::uint32_t(std::clamp<std::int64_t>(std::int64_t(std::floor(to)) + grid_.key_offset() + 1, 0, last));
+    const double from = std::max(low[a], apex[a] - reach) / res;
+    const double to = std::min(high[a], apex[a] + reach) / res;
+    box_low[a] = std::clamp<std::int64_t>(std::int64_t(std::floor(from)) + grid_.key_offset() - 1, 0, last);
+    box_high[a] = std::clamp<std::int64_t>(std::int64_t(std::floor(to)) + grid_.key_offset() + 1, 0, last);
   }
-  // Only the sweeps read the bits, and fast sweeps nothing (at 2 cm the
-  // box is ~37 MB of bits to clear per pose).
-  if (sweeps_) occupied_.reset(low_key, high_key);
-  touching_distance_ = setup.near_plane * std::sqrt(1.0 + setup.half_width * setup.half_width +
-                                                    setup.half_height * setup.half_height);
-  draw_obstacles(FrustumGeometry(view), tree_->root(), Key{}, Overlap::partly);
-  image_.finish();
-  sweep_pose_ = {&occupied_, &grid_, apex, origin_key_, margin_};
+  std::int64_t used_low[3] = {last, last, last};
+  std::int64_t used_high[3] = {0, 0, 0};
+  for (const ObstacleKeys& o : obstacle_keys_) {
+    for (int a = 0; a < 3; ++a) {
+      used_low[a] = std::min<std::int64_t>(used_low[a], o.first[a]);
+      used_high[a] = std::max<std::int64_t>(used_high[a], std::int64_t{o.first[a]} + o.last);
+    }
+  }
+  Key low_key;
+  Key high_key{0, 0, 0};  // (an empty box when nothing was drawn: one voxel, clear)
+  for (int a = 0; a < 3; ++a) {
+    low_key[a] = std::uint32_t(std::max(box_low[a], used_low[a]));
+    high_key[a] = std::uint32_t(std::max(std::min(box_high[a], used_high[a]), std::int64_t{low_key[a]}));
+  }
+  const std::uint64_t bytes = OccupiedBitmap::bytes_for(low_key, high_key);
+  const auto what = [&] {
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "max_range %g m at resolution %g m: the bitmap of the occupied voxels in view (a box of %u x %u x %u voxels)",
+                  requested_range_, res, high_key.x - low_key.x + 1, high_key.y - low_key.y + 1, high_key.z - low_key.z + 1);
+    return std::string(text);
+  };
+  require_memory("information gain", what(), bytes);
+  naming_bad_alloc("information gain", what(), bytes, [&] { occupied_.reset(low_key, high_key); });
+  for (const ObstacleKeys& o : obstacle_keys_) {
+    occupied_.set_box(o.first, {o.first.x + o.last, o.first.y + o.last, o.first.z + o.last});
+  }
 }
 
 void GainCounter::draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key key, Overlap overlap) {
@@ -274,8 +391,7 @@ void GainCounter::draw_solid_obstacle(const FrustumGeometry& view, Key key, int 
   if (!image_.footprint(reach, rect, clipped)) return;
   image_.draw(rect, near, static_cast<std::uint32_t>(obstacles_.size()));
   obstacles_.push_back(cube);
-  const std::uint32_t last = (1u << depth) - 1;
-  if (sweeps_) occupied_.set_box(key, {key.x + last, key.y + last, key.z + last});
+  if (sweeps_) obstacle_keys_.push_back({key, (1u << depth) - 1});
 }
 
 // --- the walk over unknown space ------------------------------------------------------
@@ -321,6 +437,7 @@ void GainCounter::visit_region(Key key, int depth, float value, Overlap overlap)
 }
 
 GainCounter::Visibility GainCounter::decide(Key key, int depth, float value, Overlap overlap) {
+  spend(1);
   // Fast: the two opposite corner voxels decide a node without obstacles
   // inside when they agree (with an obstacle inside, the voxels in front of
   // it and behind it differ).
@@ -365,6 +482,7 @@ void GainCounter::count_node(NodeRef ref, Key key, Overlap overlap) {
 }
 
 void GainCounter::count_region(Key key, int depth, float value, Overlap overlap) {
+  spend(1);
   if (depth == 0) {
     if (in_frustum(key, overlap)) add(1, value);
     return;
@@ -380,6 +498,7 @@ void GainCounter::count_region(Key key, int depth, float value, Overlap overlap)
   if (depth <= kBlockCountDepth) {
     // A small region across the frustum's boundary: its centres tested as
     // one block, not a subtree of overlap tests and single points.
+    spend(kStepsPerBlock - 1);
     const int n = 1 << depth;
     std::array<double, 8> xs, ys, zs;
     for (int i = 0; i < n; ++i) {
@@ -392,6 +511,28 @@ void GainCounter::count_region(Key key, int depth, float value, Overlap overlap)
     return;
   }
   for (unsigned slot = 0; slot < 8; ++slot) count_region(child_key(key, depth, slot), depth - 1, value, overlap);
+}
+
+void GainCounter::refuse() const {
+  Frustum f = frustum_->frustum;
+  f.max_range = requested_range_;
+  const double res = grid_.resolution();
+  const double boundary = boundary_range(f, res, max_steps_);
+  char hint[200];
+  if (boundary < f.max_range) {
+    std::snprintf(hint, sizeof hint, "a frustum of these angles needs that many in unknown space alone from about %.3g m on",
+                  boundary);
+  } else {
+    std::snprintf(hint, sizeof hint, "here the shadows of obstacles take most of them");
+  }
+  char text[700];
+  std::snprintf(text, sizeof text,
+                "information gain: max_range %g m at resolution %g m needs more than %llu steps "
+                "(GainOptions::max_steps): the voxels along the edges of the frustum and of the shadows in it "
+                "are decided one by one, more of them the longer the range (%s). Use a shorter max_range or a "
+                "coarser map, or raise max_steps",
+                f.max_range, res, static_cast<unsigned long long>(max_steps_), hint);
+  throw std::invalid_argument(text);
 }
 
 void GainCounter::add(std::uint64_t voxels, float value) {
@@ -408,7 +549,7 @@ void GainCounter::add(std::uint64_t voxels, float value) {
 GainCounter::Visibility GainCounter::node_visibility(Key key, int depth, bool sweep) {
   if (!use_image_) return Visibility::undecided;
   // The centres the walks aim at (rounded to float: within the margin).
-  const Aabb targets = grown(centres_of(key, depth), margin_);
+  const Aabb targets = grown(centres_of(key, depth), target_margin_);
   const ViewImage::Setup& s = image_.setup();
   // Near the apex directions are not what the image assumes (and the
   // origin's own voxel has an empty walk): the image says nothing there.
@@ -420,6 +561,8 @@ GainCounter::Visibility GainCounter::node_visibility(Key key, int depth, bool sw
   }
   const double obstacle_free = double(image_.nearest(rect));  // no obstacle nearer in the cone
   if (obstacle_free > std::sqrt(farthest_distance_squared(s.apex, targets))) return Visibility::visible;
+  // (Fast decides the small nodes this mostly proves by their corners.)
+  if (sweeps_ && hidden_by_one_candidate(targets, rect)) return Visibility::blocked;
   // For eight voxels or fewer a sweep costs more than the rays it saves.
   if (!sweep || depth < 2) return Visibility::undecided;
   // Some rays reach the node's near side without passing an obstacle: a
@@ -432,7 +575,49 @@ GainCounter::Visibility GainCounter::node_visibility(Key key, int depth, bool sw
   return sweep_.hidden(sweep_pose_, targets, obstacle_free) ? Visibility::blocked : Visibility::undecided;
 }
 
+bool GainCounter::hidden_by_one_candidate(const Aabb& targets, const PixelRect& rect) const {
+  // An obstacle that hides every point of the targets hides all their
+  // directions, so it is drawn into every pixel of their footprint: the
+  // candidates of its middle pixel are enough to look at.
+  int count = 0;
+  bool overflow = false;
+  const ViewImage::Candidate* candidates = image_.candidates((rect.x0 + rect.x1) / 2, (rect.y0 + rect.y1) / 2, count, overflow);
+  const Vec3d o = image_.setup().apex;
+  const double nearest = std::sqrt(distance_squared(o, targets));
+  for (int i = 0; i < count && double(candidates[i].near) < nearest; ++i) {
+    const Aabb inside = grown(obstacles_[candidates[i].index], -margin_);
+    for (int a = 0; a < 3; ++a) {
+      // The obstacle's slab along a lies between the apex and the targets:
+      // every segment from the apex to a target crosses its middle plane,
+      // at a point in the convex hull of where the targets' corners' segments
+      // cross it. If those lie inside the obstacle (shrunk by the margin),
+      // every walk to the targets visits it, as in ray_visibility_from_image.
+      double side = 0.0;
+      if (o[a] < inside.min[a] && inside.max[a] < targets.min[a]) side = 1.0;
+      if (o[a] > inside.max[a] && inside.min[a] > targets.max[a]) side = -1.0;
+      if (side == 0.0) continue;
+      const double plane = 0.5 * (inside.min[a] + inside.max[a]);
+      const int b = (a + 1) % 3;
+      const int c = (a + 2) % 3;
+      // (A relative hair for the rounding of the crossings.)
+      const double hair = 1e-12 * (std::fabs(o[b]) + std::fabs(o[c]) + nearest + 1.0);
+      bool all = true;
+      for (unsigned corner = 0; corner < 8 && all; ++corner) {
+        const Vec3d p{(corner & 1u) ? targets.max.x : targets.min.x, (corner & 2u) ? targets.max.y : targets.min.y,
+                      (corner & 4u) ? targets.max.z : targets.min.z};
+        const double along = (plane - o[a]) / (p[a] - o[a]);
+        const double qb = o[b] + along * (p[b] - o[b]);
+        const double qc = o[c] + along * (p[c] - o[c]);
+        all = qb > inside.min[b] + hair && qb < inside.max[b] - hair && qc > inside.min[c] + hair && qc < inside.max[c] - hair;
+      }
+      if (all) return true;
+    }
+  }
+  return false;
+}
+
 bool GainCounter::voxel_visible(Key key) {
+  spend(1);
   if (key == origin_key_) return true;  // the walk to the origin's own voxel is empty
   switch (ray_visibility_from_image(key)) {
     case Visibility::visible: return true;
@@ -472,7 +657,13 @@ GainCounter::Visibility GainCounter::ray_visibility_from_image(Key key) const {
 
 bool GainCounter::walk_is_clear(Key key) {
   bool blocked = false;
+  // The walk steps one axis at a time, always the same way along each: its
+  // n-th voxel lies n keys (L1) from the origin's, at least n res / sqrt(3)
+  // from it, so at least n res / sqrt(3) - res sqrt(3) from the apex. From
+  // the voxel where that passes the farthest obstacle on, nothing can block.
+  std::uint64_t visited = 0;
   auto visit = [&](std::uint64_t code) {
+    if (++visited > last_blocking_step_) return false;  // (not blocked: beyond every obstacle)
     if (clear_shift_ < 64 && (code >> clear_shift_) == clear_prefix_) return true;
     // Resume from the deepest node of the last lookup that also holds this
     // voxel (consecutive voxels of a walk share most of their path; from
@@ -502,6 +693,7 @@ bool GainCounter::walk_is_clear(Key key) {
     }
   };
   walk_ray(grid_, origin_, origin_key_, grid_.center_f(key), key, visit);
+  spend(1 + visited / kWalkedVoxelsPerStep);
   return !blocked;
 }
 

@@ -62,11 +62,21 @@ class GainCounter {
   /// caller holds for reading. Throws std::out_of_range when the frustum's
   /// origin lies outside the map.
   GainResult count(const OccupancyTree& tree, const Frustum& frustum, const GainOptions& options);
+  /// The work the last count() took, in GainOptions::max_steps's steps.
+  [[nodiscard]] std::uint64_t steps() const { return steps_; }
 
  private:
   enum class Visibility : unsigned char { visible, blocked, undecided };
 
   void setup_pose(const Frustum& frustum);
+  /// The farthest distance from `apex` of a point of an occupied voxel that
+  /// lies within `range` of it (0 when there is none), or a bound at least
+  /// that: beyond it no walk meets an obstacle.
+  [[nodiscard]] double obstacle_reach(Vec3d apex, double range) const;
+  /// Sets the bits of the drawn obstacles in a bitmap covering them (within
+  /// `reach` of the apex). Throws MemoryLimitError naming the range when
+  /// the bitmap would need more than memory_limit().
+  void fill_occupied_bitmap(double reach);
   void draw_obstacles(const FrustumGeometry& view, NodeRef ref, Key key, Overlap overlap);
   void draw_solid_obstacle(const FrustumGeometry& view, Key key, int depth);
   // The walk over unknown space: a tree node, or a region of one value (a
@@ -77,9 +87,19 @@ class GainCounter {
   void count_node(NodeRef ref, Key key, Overlap overlap);
   void count_region(Key key, int depth, float value, Overlap overlap);
   void add(std::uint64_t voxels, float value);
+  /// Counts work (see GainOptions::max_steps); past the limit, refuse().
+  void spend(std::uint64_t steps) {
+    steps_ += steps;
+    if (steps_ > max_steps_) refuse();
+  }
+  /// Throws std::invalid_argument naming the range, the resolution and the limit.
+  [[noreturn]] void refuse() const;
   /// What the image (and, if `sweep`, an OcclusionSweep) proves of a node.
   [[nodiscard]] Visibility node_visibility(Key key, int depth, bool sweep);
   bool voxel_visible(Key key);
+  /// Whether one obstacle drawn into the middle pixel of `rect` (the
+  /// footprint of `targets`) surely hides every target.
+  [[nodiscard]] bool hidden_by_one_candidate(const Aabb& targets, const PixelRect& rect) const;
   /// What the image and the sweep prove of a node (whose value, the maximum
   /// of its voxels, is `value`); for the fast method also what its corner
   /// voxels suggest.
@@ -98,10 +118,12 @@ class GainCounter {
   LogOddsThresholds thresholds_;
 
   // The pose.
-  std::optional<FrustumGeometry> frustum_;
+  double requested_range_ = 0.0;           // max_range as asked (for messages)
+  std::optional<FrustumGeometry> frustum_;  // the frustum, its range clipped to the map
   Vec3f origin_;      // the rays' float origin (the image's apex)
   Key origin_key_;
-  double margin_ = 0.0;
+  double margin_ = 0.0;         // how far walks stray near obstacles (within the last obstacle's distance)
+  double target_margin_ = 0.0;  // how far rounded centres and whole walks stray (the whole range)
   bool use_image_ = false;
   bool touching_ = false;  // an obstacle touches the origin: the image proves no visibility
   double touching_distance_ = 0.0;  // obstacles this near the apex may reach before the near plane
@@ -114,6 +136,17 @@ class GainCounter {
   OcclusionSweep sweep_;
   OcclusionSweep::Pose sweep_pose_{};
   std::vector<Aabb> obstacles_;  // cubes of the drawn obstacles (not grown)
+  struct ObstacleKeys {
+    Key first;          // the obstacle's first voxel
+    std::uint32_t last;  // its edge in voxels, minus one
+  };
+  std::vector<ObstacleKeys> obstacle_keys_;  // the same obstacles' voxels (kept only when sweeping)
+
+  std::uint64_t last_blocking_step_ = 0;  // a walk's voxels after this many are beyond every obstacle
+
+  // The work so far (GainOptions::max_steps).
+  std::uint64_t steps_ = 0;
+  std::uint64_t max_steps_ = 0;
 
   // The result so far.
   std::uint64_t voxels_ = 0;

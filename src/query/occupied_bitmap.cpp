@@ -12,6 +12,12 @@ void OccupiedBitmap::reset(Key low, Key high) {
   words_.assign(rows * words_per_row_, 0);
 }
 
+std::uint64_t OccupiedBitmap::bytes_for(Key low, Key high) {
+  const std::uint64_t words_per_row = (std::uint64_t{high.x} - low.x) / 64 + 1;
+  const std::uint64_t rows = (std::uint64_t{high.y} - low.y + 1) * (std::uint64_t{high.z} - low.z + 1);
+  return words_per_row * rows * sizeof(std::uint64_t);
+}
+
 void OccupiedBitmap::set_box(Key low, Key high) {
   const std::int64_t x0 = std::max<std::int64_t>(low.x, low_[0]);
   const std::int64_t x1 = std::min<std::int64_t>(high.x, high_[0]);

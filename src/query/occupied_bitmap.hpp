@@ -22,6 +22,8 @@ class OccupiedBitmap {
  public:
   /// Covers keys low..high (inclusive) on every axis; all bits clear.
   void reset(Key low, Key high);
+  /// The bytes reset(low, high) allocates.
+  [[nodiscard]] static std::uint64_t bytes_for(Key low, Key high);
   /// Sets the bits of the keys low..high, clipped to the box.
   void set_box(Key low, Key high);
 

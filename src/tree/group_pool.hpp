@@ -8,8 +8,17 @@
 // so a pool for the few groups near the root costs a few hundred bytes, not
 // a whole block. Released groups go to a free list and are handed out again.
 //
+// Attached records (optional, chosen at construction: a node group's
+// colours): a pool built with_attached keeps an `Attached` record per group
+// in blocks parallel to the groups' blocks, grown and copied with them, so
+// attached(i) belongs to group i by construction. There is no second
+// allocation order or free list that could drift from the groups' (the
+// OccupancyTree's colours were once a pool of their own, allocated in
+// lockstep, which a parallel phase cannot keep). A pool without them holds
+// an empty block table for them and nothing else.
+//
 // memory_bytes() is what the pool really allocated (block capacity, free
-// list capacity, block table), never an estimate from a count of groups.
+// list capacity, block tables), never an estimate from a count of groups.
 //
 // Concurrent allocation, for a parallel phase (OccupancyTree::apply with a
 // thread pool): begin_concurrent() grows the last block just enough for the
@@ -37,7 +46,10 @@ namespace umbra {
 
 inline constexpr std::uint32_t kNoGroup = 0xFFFFFFFFu;
 
-template <typename Group>
+/// The Attached type of a pool whose groups carry nothing else.
+struct NoAttachment {};
+
+template <typename Group, typename Attached = NoAttachment>
 class GroupPool {
  public:
   static constexpr std::uint32_t kBlockBits = 10;
@@ -47,19 +59,17 @@ class GroupPool {
   static constexpr std::uint32_t kFirstBlockGroups = 8;
 
   GroupPool() = default;
+  /// with_attached: keep an Attached record per group (see the file comment).
+  explicit GroupPool(bool with_attached) : with_attached_(with_attached) {}
   GroupPool(GroupPool&&) noexcept = default;
   GroupPool& operator=(GroupPool&&) noexcept = default;
   GroupPool(const GroupPool& other) { *this = other; }
   GroupPool& operator=(const GroupPool& other) {
     if (this == &other) return *this;
     UMBRA_ASSERT(other.slabs_.empty());
-    blocks_.clear();
-    blocks_.reserve(other.blocks_.size());
-    for (std::size_t b = 0; b < other.blocks_.size(); ++b) {
-      const std::uint32_t capacity = other.block_capacity(b);
-      blocks_.emplace_back(new Group[capacity]);
-      std::copy(other.blocks_[b].get(), other.blocks_[b].get() + capacity, blocks_.back().get());
-    }
+    with_attached_ = other.with_attached_;
+    copy_blocks(other.blocks_, other, blocks_);
+    copy_blocks(other.attached_blocks_, other, attached_blocks_);
     last_capacity_ = other.last_capacity_;
     high_water_ = other.high_water_;
     free_ = other.free_;
@@ -76,6 +86,16 @@ class GroupPool {
     UMBRA_ASSERT(!slabs_.empty() || index < high_water_);
     return blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
   }
+  /// The record attached to group `index` (only for a pool with_attached).
+  Attached& attached(std::uint32_t index) {
+    UMBRA_ASSERT(with_attached_ && (!slabs_.empty() || index < high_water_));
+    return attached_blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
+  }
+  const Attached& attached(std::uint32_t index) const {
+    UMBRA_ASSERT(with_attached_ && (!slabs_.empty() || index < high_water_));
+    return attached_blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
+  }
+  [[nodiscard]] bool has_attached() const { return with_attached_; }
 
   /// Index of a group whose contents are unspecified; the caller fills it.
   std::uint32_t allocate() {
@@ -107,8 +127,10 @@ class GroupPool {
       if (high_water_ == capacity()) extend();
       while (last_capacity_ < kBlockGroups && capacity() < wanted) grow_last_block();
     }
-    blocks_.reserve(blocks_.size() + max_new_groups / kBlockGroups + workers + 1);
-    table_limit_ = blocks_.capacity();
+    const std::size_t table = blocks_.size() + max_new_groups / kBlockGroups + workers + 1;
+    blocks_.reserve(table);
+    if (with_attached_) attached_blocks_.reserve(table);
+    table_limit_ = with_attached_ ? std::min(blocks_.capacity(), attached_blocks_.capacity()) : blocks_.capacity();
     slabs_.resize(workers);
     tail_ = high_water_;
     for (std::size_t i = 0; i < free_.size(); ++i) slabs_[i % workers].released.push_back(free_[i]);
@@ -149,6 +171,7 @@ class GroupPool {
   /// Releases every group and all memory.
   void clear() {
     std::vector<std::unique_ptr<Group[]>>().swap(blocks_);
+    std::vector<std::unique_ptr<Attached[]>>().swap(attached_blocks_);
     std::vector<std::uint32_t>().swap(free_);
     last_capacity_ = 0;
     high_water_ = 0;
@@ -160,8 +183,9 @@ class GroupPool {
   [[nodiscard]] std::size_t memory_bytes() const {
     std::size_t groups = 0;
     for (std::size_t b = 0; b < blocks_.size(); ++b) groups += block_capacity(b);
-    return groups * sizeof(Group) + blocks_.capacity() * sizeof(blocks_[0]) +
-           free_.capacity() * sizeof(std::uint32_t);
+    const std::size_t per_group = sizeof(Group) + (with_attached_ ? sizeof(Attached) : 0);
+    return groups * per_group + blocks_.capacity() * sizeof(blocks_[0]) +
+           attached_blocks_.capacity() * sizeof(attached_blocks_[0]) + free_.capacity() * sizeof(std::uint32_t);
   }
 
  private:
@@ -177,8 +201,7 @@ class GroupPool {
   /// Room for one more group: a new small block after a full one, else a doubled last block.
   void extend() {
     if (blocks_.empty() || last_capacity_ == kBlockGroups) {
-      blocks_.emplace_back(new Group[kFirstBlockGroups]);
-      last_capacity_ = kFirstBlockGroups;
+      add_block(kFirstBlockGroups);
     } else {
       grow_last_block();
     }
@@ -193,17 +216,52 @@ class GroupPool {
     if (blocks_.size() == table_limit_) throw std::length_error("umbra: more new groups than reserved for a parallel update");
     const std::uint64_t first = std::uint64_t{blocks_.size()} * kBlockGroups;
     if (first + kBlockGroups > kNoGroup) throw std::length_error("umbra: more than 2^32 - 1 node groups at one depth");
-    blocks_.emplace_back(new Group[kBlockGroups]);
-    last_capacity_ = kBlockGroups;
+    add_block(kBlockGroups);
     tail_ = static_cast<std::uint32_t>(first);
+  }
+
+  // Both blocks are allocated before either table changes, so running out
+  // of memory leaves the groups and their attached records in step.
+  void add_block(std::uint32_t capacity) {
+    std::unique_ptr<Group[]> groups(new Group[capacity]);
+    std::unique_ptr<Attached[]> attached(with_attached_ ? new Attached[capacity] : nullptr);
+    if (with_attached_) attached_blocks_.push_back(std::move(attached));
+    try {
+      blocks_.push_back(std::move(groups));
+    } catch (...) {
+      if (with_attached_) attached_blocks_.pop_back();
+      throw;
+    }
+    last_capacity_ = capacity;
   }
 
   void grow_last_block() {
     const std::uint32_t grown = last_capacity_ * 2;
-    std::unique_ptr<Group[]> block(new Group[grown]);
-    std::copy(blocks_.back().get(), blocks_.back().get() + last_capacity_, block.get());
-    blocks_.back() = std::move(block);
+    std::unique_ptr<Group[]> groups = grown_copy(blocks_.back(), last_capacity_, grown);
+    if (with_attached_) attached_blocks_.back() = grown_copy(attached_blocks_.back(), last_capacity_, grown);
+    blocks_.back() = std::move(groups);
     last_capacity_ = grown;
+  }
+
+  template <typename T>
+  static std::unique_ptr<T[]> grown_copy(const std::unique_ptr<T[]>& block, std::uint32_t capacity,
+                                         std::uint32_t grown) {
+    std::unique_ptr<T[]> bigger(new T[grown]);
+    std::copy(block.get(), block.get() + capacity, bigger.get());
+    return bigger;
+  }
+
+  /// Copies `from` (blocks of `other`, shaped as its group blocks) into `to`.
+  template <typename T>
+  static void copy_blocks(const std::vector<std::unique_ptr<T[]>>& from, const GroupPool& other,
+                          std::vector<std::unique_ptr<T[]>>& to) {
+    to.clear();
+    to.reserve(from.size());
+    for (std::size_t b = 0; b < from.size(); ++b) {
+      const std::uint32_t capacity = other.block_capacity(b);
+      to.emplace_back(new T[capacity]);
+      std::copy(from[b].get(), from[b].get() + capacity, to.back().get());
+    }
   }
 
   /// One worker's share of a concurrent phase: the chunk it hands out from.
@@ -215,7 +273,9 @@ class GroupPool {
     std::vector<std::uint32_t> released;
   };
 
+  bool with_attached_ = false;
   std::vector<std::unique_ptr<Group[]>> blocks_;
+  std::vector<std::unique_ptr<Attached[]>> attached_blocks_;  // parallel to blocks_ (with_attached_), else empty
   std::uint32_t last_capacity_ = 0;  // groups in the last block
   std::uint32_t high_water_ = 0;     // groups ever handed out
   std::vector<std::uint32_t> free_;  // released groups, reused first

@@ -47,24 +47,26 @@ bool same_colors(const OccupancyTree::ColorGroup& colors) {
 }  // namespace
 
 OccupancyTree::OccupancyTree(int depth_levels, LogOddsRange range, LogOddsThresholds thresholds, bool with_color)
-    : depth_levels_(depth_levels), range_(range), thresholds_(thresholds) {
+    : depth_levels_(depth_levels),
+      range_(range),
+      thresholds_(thresholds),
+      with_color_(with_color),
+      leaves_(with_color) {
   if (depth_levels < 1 || depth_levels > kMaxDepthLevels) {
     throw std::invalid_argument("depth_levels must be in [1, 21], got " + std::to_string(depth_levels));
   }
-  if (with_color) colors_.resize(static_cast<std::size_t>(depth_levels) + 1);
   clear();
 }
 
 void OccupancyTree::clear() {
   leaves_.clear();
   inner_.clear();
-  inner_.resize(static_cast<std::size_t>(depth_levels_) + 1);
-  for (auto& pool : colors_) pool.clear();
+  for (int d = 0; d <= depth_levels_; ++d) inner_.emplace_back(with_color_);
   [[maybe_unused]] const std::uint32_t root_group = new_inner_group(depth_levels_, 0.0f);
   UMBRA_ASSERT(root_group == 0);
   if (has_color()) {
-    [[maybe_unused]] const std::uint32_t root_colors = new_color_group(depth_levels_, Rgb{}, 0);
-    UMBRA_ASSERT(root_colors == 0);
+    colors(depth_levels_, 0).rgb.fill(Rgb{});
+    colors(depth_levels_, 0).weight.fill(0);
   }
 }
 
@@ -87,18 +89,9 @@ std::uint32_t OccupancyTree::new_inner_group(int depth, float value) {
   return index;
 }
 
-std::uint32_t OccupancyTree::new_color_group(int depth, Rgb rgb, std::uint8_t weight) {
-  // Colour pools allocate and release in lockstep with the node pools, so
-  // their free lists and high-water marks, hence their indices, agree.
-  const std::uint32_t index = colors_[depth].allocate();
-  colors_[depth][index].rgb.fill(rgb);
-  colors_[depth][index].weight.fill(weight);
-  return index;
-}
-
 void OccupancyTree::release_group(int depth, std::uint32_t group) {
+  // A group's colours are attached to it: they go with it.
   if (concurrent_) {
-    UMBRA_ASSERT(!has_color());
     if (depth == 0) {
       leaves_.release(t_worker, group);
     } else {
@@ -111,7 +104,6 @@ void OccupancyTree::release_group(int depth, std::uint32_t group) {
   } else {
     inner_[depth].release(group);
   }
-  if (has_color()) colors_[depth].release(group);
 }
 
 void OccupancyTree::set_childless(InnerGroup& group, unsigned slot, float value) const {
@@ -131,9 +123,10 @@ void OccupancyTree::expand(int depth, std::uint32_t group, unsigned slot) {
   node.child[slot] = child;
   assign_bit(node.all_same, slot, true);
   if (has_color()) {
-    const ColorGroup& parent = colors_[depth][group];
-    [[maybe_unused]] const std::uint32_t colors = new_color_group(depth - 1, parent.rgb[slot], parent.weight[slot]);
-    UMBRA_ASSERT(colors == child);
+    const ColorGroup& parent = colors(depth, group);
+    ColorGroup& children = colors(depth - 1, child);
+    children.rgb.fill(parent.rgb[slot]);
+    children.weight.fill(parent.weight[slot]);
   }
 }
 
@@ -166,14 +159,14 @@ void OccupancyTree::refresh_from(int depth, std::uint32_t group, unsigned slot, 
   const bool any_unknown = summary.any_unknown;
   bool same = summary.same;
   if (has_color()) {
-    const ColorGroup& child_colors = colors_[depth - 1][child];
-    ColorGroup& colors = colors_[depth][group];
+    const ColorGroup& child_colors = colors(depth - 1, child);
+    ColorGroup& own = colors(depth, group);
     same &= same_colors(child_colors);
     if (same && allow_prune) {
-      colors.rgb[slot] = child_colors.rgb[0];
-      colors.weight[slot] = child_colors.weight[0];
+      own.rgb[slot] = child_colors.rgb[0];
+      own.weight[slot] = child_colors.weight[0];
     } else {
-      std::tie(colors.rgb[slot], colors.weight[slot]) = average_color(child_colors);
+      std::tie(own.rgb[slot], own.weight[slot]) = average_color(child_colors);
     }
   }
   if (same && allow_prune) {
@@ -239,9 +232,9 @@ float OccupancyTree::Cursor::max_log_odds(std::uint64_t code, int depth) {
 
 std::optional<Rgb> OccupancyTree::color(NodeRef node) const {
   if (!has_color()) return std::nullopt;
-  const ColorGroup& colors = colors_[node.depth][node.group];
-  if (colors.weight[node.slot] == 0) return std::nullopt;
-  return colors.rgb[node.slot];
+  const ColorGroup& group = colors(node.depth, node.group);
+  if (group.weight[node.slot] == 0) return std::nullopt;
+  return group.rgb[node.slot];
 }
 
 bool OccupancyTree::contains_free(NodeRef node) const {
@@ -308,41 +301,104 @@ void OccupancyTree::set_color(std::uint64_t code, Rgb rgb, std::uint8_t weight) 
   if (!has_color()) throw std::logic_error("set_color: the tree has no colour");
   if (weight == 0) throw std::invalid_argument("set_color: weight must be at least 1");
   Path path;
-  const std::uint32_t group = descend_splitting(code, path);
-  ColorGroup& colors = colors_[0][group];
-  colors.rgb[morton::slot(code, 0)] = rgb;
-  colors.weight[morton::slot(code, 0)] = weight;
+  ColorGroup& leaf_colors = colors(0, descend_splitting(code, path));
+  leaf_colors.rgb[morton::slot(code, 0)] = rgb;
+  leaf_colors.weight[morton::slot(code, 0)] = weight;
   refresh_path(code, path);
 }
 
-void OccupancyTree::add_colors(std::span<const ColorSample> samples) {
+void OccupancyTree::add_colors(std::span<const ColorSample> samples, ThreadPool* pool) {
   if (!has_color()) throw std::logic_error("add_colors: the tree has no colour");
   if (samples.empty()) return;
   UMBRA_ASSERT(std::is_sorted(samples.begin(), samples.end(),
                               [](const ColorSample& a, const ColorSample& b) { return a.code < b.code; }));
-  add_colors_below(depth_levels_, 0, 0, samples);
+  if (pool == nullptr || pool->size() < 2 || depth_levels_ < 3) {
+    add_colors_below(depth_levels_, 0, 0, samples);
+    return;
+  }
+  add_colors_in_parallel(samples, *pool);
 }
 
 void OccupancyTree::add_colors_below(int depth, std::uint32_t group, unsigned slot,
                                      std::span<const ColorSample> samples) {
-  // Every sample lies in node (depth, group, slot); they are sorted, so each
-  // child's samples are one contiguous run.
+  // Every sample lies in node (depth, group, slot).
   if (inner_[depth][group].child[slot] == kNoGroup) expand(depth, group, slot);
-  const std::uint32_t child = inner_[depth][group].child[slot];
+  add_colors_to_group(depth - 1, inner_[depth][group].child[slot], samples);
+  refresh(depth, group, slot, auto_prune_);
+}
+
+void OccupancyTree::add_colors_to_group(int depth, std::uint32_t group, std::span<const ColorSample> samples) {
+  // The samples are sorted, so each node's samples are one contiguous run.
   std::size_t begin = 0;
   while (begin < samples.size()) {
-    const unsigned child_slot = morton::slot(samples[begin].code, depth - 1);
+    const unsigned slot = morton::slot(samples[begin].code, depth);
     std::size_t end = begin + 1;
-    while (end < samples.size() && morton::slot(samples[end].code, depth - 1) == child_slot) ++end;
-    if (depth == 1) {
-      ColorGroup& colors = colors_[0][child];
-      for (std::size_t i = begin; i < end; ++i) blend(colors.rgb[child_slot], colors.weight[child_slot], samples[i].rgb);
+    while (end < samples.size() && morton::slot(samples[end].code, depth) == slot) ++end;
+    if (depth == 0) {
+      ColorGroup& leaf_colors = colors(0, group);
+      for (std::size_t i = begin; i < end; ++i) blend(leaf_colors.rgb[slot], leaf_colors.weight[slot], samples[i].rgb);
     } else {
-      add_colors_below(depth - 1, child, child_slot, samples.subspan(begin, end - begin));
+      add_colors_below(depth, group, slot, samples.subspan(begin, end - begin));
     }
     begin = end;
   }
-  refresh(depth, group, slot, auto_prune_);
+}
+
+void OccupancyTree::add_colors_in_parallel(std::span<const ColorSample> samples, ThreadPool& pool) {
+  // 1. Walk down from the root, splitting the sorted samples by node, until
+  //    there are enough groups with samples (tasks); a task owns its group.
+  struct Task {
+    int depth;
+    std::uint32_t group;
+    std::span<const ColorSample> samples;  // all in `group`
+  };
+  std::vector<SplitNode> parents{{depth_levels_, 0, 0}};
+  if (inner_[depth_levels_][0].child[0] == kNoGroup) expand(depth_levels_, 0, 0);
+  std::vector<Task> tasks{{depth_levels_ - 1, inner_[depth_levels_][0].child[0], samples}};
+  const std::size_t wanted = std::size_t{pool.size()} * 16;
+  while (tasks.size() < wanted) {
+    std::vector<Task> next;
+    bool deeper = false;
+    for (const Task& task : tasks) {
+      if (task.depth <= 2) {
+        next.push_back(task);
+        continue;
+      }
+      deeper = true;
+      std::size_t begin = 0;
+      while (begin < task.samples.size()) {
+        const unsigned slot = morton::slot(task.samples[begin].code, task.depth);
+        std::size_t end = begin + 1;
+        while (end < task.samples.size() && morton::slot(task.samples[end].code, task.depth) == slot) ++end;
+        if (inner_[task.depth][task.group].child[slot] == kNoGroup) expand(task.depth, task.group, slot);
+        parents.push_back({task.depth, task.group, slot});
+        const std::uint32_t child = inner_[task.depth][task.group].child[slot];
+        next.push_back({task.depth - 1, child, task.samples.subspan(begin, end - begin)});
+        begin = end;
+      }
+    }
+    tasks.swap(next);
+    if (!deeper) break;
+  }
+
+  // 2. The tasks in parallel. A node is expanded only where samples lie, so
+  //    the new groups at depth d are at most the distinct nodes of depth
+  //    d + 1 that hold samples: 1 + the samples whose path parts from the
+  //    previous sample's at depth d + 1 or above.
+  std::vector<std::size_t> parting(static_cast<std::size_t>(depth_levels_) + 1, 0);
+  for (std::size_t i = 1; i < samples.size(); ++i) {
+    const int depth = morton::highest_differing_depth(samples[i].code, samples[i - 1].code);
+    if (depth >= 0) ++parting[static_cast<std::size_t>(std::min(depth, depth_levels_))];
+  }
+  std::vector<std::size_t> new_groups(static_cast<std::size_t>(depth_levels_) + 1, 0);
+  std::size_t parting_at_or_above = 0;
+  for (int d = depth_levels_ - 1; d >= 0; --d) {
+    parting_at_or_above += parting[static_cast<std::size_t>(d) + 1];
+    new_groups[static_cast<std::size_t>(d)] = 1 + parting_at_or_above;
+  }
+  run_concurrently(pool, new_groups, tasks.size(),
+                   [&](std::size_t i) { add_colors_to_group(tasks[i].depth, tasks[i].group, tasks[i].samples); },
+                   parents);
 }
 
 // --- applying a scan ------------------------------------------------------------
@@ -352,9 +408,8 @@ void OccupancyTree::apply(const UpdateBatch& batch, float hit, float miss, Threa
     throw std::invalid_argument("update batch has " + std::to_string(batch.depth_levels()) +
                                 " depth levels, the tree " + std::to_string(depth_levels_));
   }
-  // Colour pools allocate in lockstep with the node pools, which a parallel
-  // phase cannot keep: coloured maps, small trees and one thread go serially.
-  if (pool == nullptr || pool->size() < 2 || has_color() || depth_levels_ < 3) {
+  // Small trees and one thread go serially.
+  if (pool == nullptr || pool->size() < 2 || depth_levels_ < 3) {
     apply_group(depth_levels_, 0, batch, 0, hit, miss);
     return;
   }
@@ -372,13 +427,8 @@ void OccupancyTree::apply_in_parallel(const UpdateBatch& batch, float hit, float
     std::uint32_t batch_group;  // group task: the batch group at `depth`
     std::uint8_t full_slots;    // everywhere task: slots of `group` wholly missed
   };
-  struct Parent {
-    int depth;
-    std::uint32_t group;
-    unsigned slot;
-  };
   std::vector<Task> tasks{{depth_levels_, 0, 0, 0}};
-  std::vector<Parent> parents;  // nodes above the tasks, top down: refreshed at the end
+  std::vector<SplitNode> parents;  // nodes above the tasks, top down: refreshed at the end
   const std::size_t wanted = std::size_t{pool.size()} * 16;
   while (tasks.size() < wanted) {
     std::vector<Task> next;
@@ -402,38 +452,52 @@ void OccupancyTree::apply_in_parallel(const UpdateBatch& batch, float hit, float
     if (!deeper) break;
   }
 
-  // 2. The tasks in parallel, each worker allocating from its own blocks.
-  // A map node gains children only where the batch has a group below it:
-  // that bounds the new groups per depth (a brick can split its 8 nodes).
-  leaves_.begin_concurrent(pool.size(), 8 * batch.group_count(1));
+  // 2. The tasks in parallel. A map node gains children only where the
+  // batch has a group below it: that bounds the new groups per depth (a
+  // brick can split its 8 nodes).
+  std::vector<std::size_t> new_groups(static_cast<std::size_t>(depth_levels_) + 1, 0);
+  new_groups[0] = 8 * batch.group_count(1);
+  for (int d = 1; d < depth_levels_; ++d) new_groups[static_cast<std::size_t>(d)] = batch.group_count(d);
+  run_concurrently(pool, new_groups, tasks.size(),
+                   [&](std::size_t i) {
+                     const Task& task = tasks[i];
+                     if (task.full_slots != 0) {
+                       for (unsigned slot = 0; slot < 8; ++slot) {
+                         if ((task.full_slots & bit(slot)) != 0) apply_everywhere(task.depth, task.group, slot, miss);
+                       }
+                     } else {
+                       apply_group(task.depth, task.group, batch, task.batch_group, hit, miss);
+                     }
+                   },
+                   parents);
+}
+
+void OccupancyTree::run_concurrently(ThreadPool& pool, const std::vector<std::size_t>& new_groups, std::size_t tasks,
+                                     const std::function<void(std::size_t)>& task,
+                                     const std::vector<SplitNode>& parents) {
+  // Each worker allocates from its own chunks (GroupPool's concurrent phase).
+  leaves_.begin_concurrent(pool.size(), new_groups[0]);
   for (int d = 1; d <= depth_levels_; ++d) {
-    inner_[d].begin_concurrent(pool.size(), d < depth_levels_ ? batch.group_count(d) : 0);
+    inner_[d].begin_concurrent(pool.size(), new_groups[static_cast<std::size_t>(d)]);
   }
   concurrent_ = true;
-  try {
-    pool.run(tasks.size(), [&](std::size_t i, unsigned worker) {
-      t_worker = worker;
-      const Task& task = tasks[i];
-      if (task.full_slots != 0) {
-        for (unsigned slot = 0; slot < 8; ++slot) {
-          if ((task.full_slots & bit(slot)) != 0) apply_everywhere(task.depth, task.group, slot, miss);
-        }
-      } else {
-        apply_group(task.depth, task.group, batch, task.batch_group, hit, miss);
-      }
-      t_worker = 0;
-    });
-  } catch (...) {
+  const auto end_concurrent = [&] {
     concurrent_ = false;
     leaves_.end_concurrent();
     for (int d = 1; d <= depth_levels_; ++d) inner_[d].end_concurrent();
+  };
+  try {
+    pool.run(tasks, [&](std::size_t i, unsigned worker) {
+      t_worker = worker;
+      task(i);
+      t_worker = 0;
+    });
+  } catch (...) {
+    end_concurrent();
     throw;
   }
-  concurrent_ = false;
-  leaves_.end_concurrent();
-  for (int d = 1; d <= depth_levels_; ++d) inner_[d].end_concurrent();
-
-  // 3. The nodes above the tasks, bottom up.
+  end_concurrent();
+  // The nodes above the tasks, bottom up.
   for (auto it = parents.rbegin(); it != parents.rend(); ++it) refresh(it->depth, it->group, it->slot, auto_prune_);
 }
 
@@ -572,9 +636,9 @@ void OccupancyTree::set_childless_value(NodeRef node, float log_odds) {
 void OccupancyTree::set_childless_color(NodeRef node, Rgb rgb, std::uint8_t weight) {
   if (!has_color()) throw std::logic_error("set_childless_color: the tree has no colour");
   if (has_children(node)) throw std::logic_error("set_childless_color: node has children");
-  ColorGroup& colors = colors_[node.depth][node.group];
-  colors.rgb[node.slot] = weight == 0 ? Rgb{} : rgb;
-  colors.weight[node.slot] = weight;
+  ColorGroup& group = colors(node.depth, node.group);
+  group.rgb[node.slot] = weight == 0 ? Rgb{} : rgb;
+  group.weight[node.slot] = weight;
 }
 
 // --- statistics, checks -----------------------------------------------------------
@@ -594,10 +658,9 @@ NodeCounts OccupancyTree::count_nodes() const {
 }
 
 std::size_t OccupancyTree::memory_bytes() const {
-  std::size_t bytes = sizeof(*this) + leaves_.memory_bytes() + inner_.capacity() * sizeof(inner_[0]) +
-                      colors_.capacity() * sizeof(GroupPool<ColorGroup>);
+  // The pools count their attached colours.
+  std::size_t bytes = sizeof(*this) + leaves_.memory_bytes() + inner_.capacity() * sizeof(inner_[0]);
   for (const auto& pool : inner_) bytes += pool.memory_bytes();
-  for (const auto& pool : colors_) bytes += pool.memory_bytes();
   return bytes;
 }
 
@@ -611,9 +674,6 @@ std::string OccupancyTree::check_invariants() const {
     if (used != in_pool) {
       return "depth " + std::to_string(d) + ": " + std::to_string(in_pool) + " groups in use, " +
              std::to_string(used) + " reachable";
-    }
-    if (has_color() && colors_[d].size() != in_pool) {
-      return "depth " + std::to_string(d) + ": colour pool out of step with the node pool";
     }
   }
   return {};
@@ -661,11 +721,11 @@ std::string OccupancyTree::check_node(int depth, std::uint32_t group_index, unsi
   const bool any_unknown = summary.any_unknown;
   bool same = summary.same;
   if (has_color()) {
-    const ColorGroup& child_colors = colors_[depth - 1][child];
+    const ColorGroup& child_colors = colors(depth - 1, child);
     same &= same_colors(child_colors);
     const auto [rgb, weight] = average_color(child_colors);
-    const ColorGroup& colors = colors_[depth][group_index];
-    if (colors.weight[slot] != weight || (weight != 0 && colors.rgb[slot] != rgb)) {
+    const ColorGroup& own = colors(depth, group_index);
+    if (own.weight[slot] != weight || (weight != 0 && own.rgb[slot] != rgb)) {
       return where() + "colour is not the average of the coloured children";
     }
   }

@@ -21,9 +21,10 @@
 // childless node F and U describe its own value and S is 0. Leaves carry no
 // bits: their state is their value. "Contains occupied" is max > threshold.
 //
-// Colour (optional, chosen at construction): a ColorGroup pool parallel to
-// every node pool, allocated and released in lockstep so that a node's colour
-// sits at the same (depth, group, slot). A voxel's colour is the running
+// Colour (optional, chosen at construction): every node group carries a
+// ColorGroup attached to it in its pool (GroupPool's attached records), so a
+// node's colour sits at the same (depth, group, slot) with no allocation of
+// its own. A voxel's colour is the running
 // average of the samples it received (`weight` counts them, saturating at
 // 255, after which each new sample weighs 1/256); a node with children has
 // the rounded average of its coloured children. Equal children merge only if
@@ -37,7 +38,9 @@
 // Costs: a single-voxel update descends from the root and refreshes the
 // depth_levels ancestors on the way back; apply(UpdateBatch) updates a whole
 // scan in one depth-first walk that visits each touched node once and
-// never expands an inner leaf whose whole region gets the same update.
+// never expands an inner leaf whose whole region gets the same update;
+// add_colors() likewise walks a scan's sorted colour samples once. With a
+// thread pool both split the walk into disjoint subtrees, one worker each.
 //
 // Thread safety: const member functions may run concurrently with each
 // other; nothing may run concurrently with a non-const one.
@@ -46,6 +49,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -121,7 +125,7 @@ class OccupancyTree {
   [[nodiscard]] NodeRef root() const { return {0, 0, static_cast<std::int8_t>(depth_levels_)}; }
   [[nodiscard]] const LogOddsRange& range() const { return range_; }
   [[nodiscard]] const LogOddsThresholds& thresholds() const { return thresholds_; }
-  [[nodiscard]] bool has_color() const { return !colors_.empty(); }
+  [[nodiscard]] bool has_color() const { return with_color_; }
 
   // --- reading -----------------------------------------------------------
   /// The node at `depth` on the path to finest voxel `code` (or the inner
@@ -144,7 +148,7 @@ class OccupancyTree {
   [[nodiscard]] std::optional<Rgb> color(NodeRef node) const;
   /// Samples behind a voxel's colour (0: none); 1 for a coloured inner node.
   [[nodiscard]] std::uint8_t color_weight(NodeRef node) const {
-    return has_color() ? colors_[node.depth][node.group].weight[node.slot] : 0;
+    return has_color() ? colors(node.depth, node.group).weight[node.slot] : 0;
   }
   [[nodiscard]] bool contains_free(NodeRef node) const;
   // Inline: a segment check asks it at every level of every descent, the
@@ -192,13 +196,15 @@ class OccupancyTree {
   void set(std::uint64_t code, float log_odds);
   /// Applies one scan's updates: `hit` to the batch's hit voxels, `miss` to
   /// its misses. With a thread pool, independent subtrees are updated in
-  /// parallel (maps without colour); the result is the same.
+  /// parallel; the result is the same, bit for bit.
   void apply(const UpdateBatch& batch, float hit, float miss, ThreadPool* pool = nullptr);
   /// Adds one colour sample to finest voxel `code` (the tree must have colour).
   void add_color(std::uint64_t code, Rgb rgb);
   /// Adds colour samples in one walk; sorted by code, each voxel's samples
-  /// in the order they were observed (a stable sort keeps it).
-  void add_colors(std::span<const ColorSample> samples);
+  /// in the order they were observed (a stable sort keeps it). With a
+  /// thread pool, independent subtrees get their samples in parallel; the
+  /// result is the same, bit for bit.
+  void add_colors(std::span<const ColorSample> samples, ThreadPool* pool = nullptr);
   /// Sets the colour of finest voxel `code` with `weight` samples behind it (>= 1).
   void set_color(std::uint64_t code, Rgb rgb, std::uint8_t weight = 1);
   /// Empties the tree (everything unknown).
@@ -258,7 +264,12 @@ class OccupancyTree {
   // are taken only where nothing allocates in that pool meanwhile.
   std::uint32_t new_leaf_group(float value);
   std::uint32_t new_inner_group(int depth, float value);
-  std::uint32_t new_color_group(int depth, Rgb rgb, std::uint8_t weight);
+  ColorGroup& colors(int depth, std::uint32_t group) {
+    return depth == 0 ? leaves_.attached(group) : inner_[depth].attached(group);
+  }
+  [[nodiscard]] const ColorGroup& colors(int depth, std::uint32_t group) const {
+    return depth == 0 ? leaves_.attached(group) : inner_[depth].attached(group);
+  }
   void release_group(int depth, std::uint32_t group);
   /// Value and indicator bits of a childless slot (its colour is kept).
   void set_childless(InnerGroup& group, unsigned slot, float value) const;
@@ -279,6 +290,17 @@ class OccupancyTree {
   void apply_group(int depth, std::uint32_t group, const UpdateBatch& batch, std::uint32_t batch_group,
                    float hit, float miss);
   void apply_in_parallel(const UpdateBatch& batch, float hit, float miss, ThreadPool& pool);
+  /// A node above the subtrees of a parallel phase, refreshed after it.
+  struct SplitNode {
+    int depth;
+    std::uint32_t group;
+    unsigned slot;
+  };
+  /// Runs task(i) for i in [0, tasks) on the pool, the pools allocating per
+  /// worker; new_groups[d] bounds the groups the tasks add at depth d. Then
+  /// refreshes `parents` (listed top down) bottom up.
+  void run_concurrently(ThreadPool& pool, const std::vector<std::size_t>& new_groups, std::size_t tasks,
+                        const std::function<void(std::size_t)>& task, const std::vector<SplitNode>& parents);
   void apply_brick(std::uint32_t group, const UpdateBatch::Brick& todo, float hit, float miss);
   void apply_everywhere(int depth, std::uint32_t group, unsigned slot, float delta);
   void prune_below(int depth, std::uint32_t group, unsigned slot);
@@ -291,6 +313,9 @@ class OccupancyTree {
   /// Refreshes (and prunes) every ancestor of `code` along `path`, bottom up.
   void refresh_path(std::uint64_t code, const Path& path);
   void add_colors_below(int depth, std::uint32_t group, unsigned slot, std::span<const ColorSample> samples);
+  /// The samples of group `group` at `depth` (all in it), slot by slot.
+  void add_colors_to_group(int depth, std::uint32_t group, std::span<const ColorSample> samples);
+  void add_colors_in_parallel(std::span<const ColorSample> samples, ThreadPool& pool);
   /// Running average of a voxel's colour with one more sample.
   static void blend(Rgb& rgb, std::uint8_t& weight, Rgb sample);
   std::string check_node(int depth, std::uint32_t group, unsigned slot, std::vector<std::vector<bool>>& seen) const;
@@ -299,10 +324,11 @@ class OccupancyTree {
   LogOddsRange range_;
   LogOddsThresholds thresholds_;
   bool auto_prune_ = true;
-  bool concurrent_ = false;  // inside apply_in_parallel: pools allocate per worker
-  GroupPool<LeafGroup> leaves_;
-  std::vector<GroupPool<InnerGroup>> inner_;  // index = depth; [0] is unused
-  std::vector<GroupPool<ColorGroup>> colors_;  // index = depth; empty without colour
+  bool with_color_;
+  bool concurrent_ = false;  // inside run_concurrently: pools allocate per worker
+  // With colour every group has its ColorGroup attached (colors()).
+  GroupPool<LeafGroup, ColorGroup> leaves_;
+  std::vector<GroupPool<InnerGroup, ColorGroup>> inner_;  // index = depth; [0] is unused
 };
 
 }  // namespace umbra

@@ -127,6 +127,11 @@ TEST(ProjectiveIntegrator, TreeWalkClearsExactlyTheRulesVoxels) {
       rule.range_depth = 2 + trial % 8 / 4;
       rule.max_range_squared = 0.0f;
     }
+    // Bricks seen whole or not at all, as at millimetre resolutions.
+    if (trial % 3 == 2) {
+      ASSERT_FALSE(rule.whole_bricks_seen);
+      rule.whole_bricks_seen = true;
+    }
     const ProjectiveTracer tracer(rule);
 
     UpdateBatch walked(kDepthLevels);
@@ -152,7 +157,8 @@ TEST(ProjectiveIntegrator, AvxEqualsPlain) {
     ProjectiveFrame frame;
     frame.set(DepthImage::metres(depths, 64, 48), PinholeCamera{30.0 + 20 * trial, 45.0, 31.5, 23.5},
               random_pose(rng, 0.3));
-    const ProjectiveRule rule(grid, frame, trial % 2 == 0 ? 0.9 : -1.0, 0.01 * (trial % 3), std::nullopt);
+    ProjectiveRule rule(grid, frame, trial % 2 == 0 ? 0.9 : -1.0, 0.01 * (trial % 3), std::nullopt);
+    rule.whole_bricks_seen = trial % 4 == 1;
     for (std::uint64_t brick = 0; brick < (std::uint64_t{1} << (3 * kDepthLevels)); brick += 64) {
       const std::uint64_t plain = rule.cleared_plain(brick);
       ASSERT_EQ(rule.cleared(brick), plain) << "trial " << trial << " brick " << brick;
@@ -262,14 +268,29 @@ TEST(ProjectiveIntegrator, SameMapForAnyThreadCount) {
   for (std::size_t i = 1; i < results.size(); ++i) EXPECT_EQ(results[i], results[0]) << "run " << i;
 }
 
-/// The simple integrator's map and the projective one's of the same frames.
+/// The simple integrator's map and the projective one's of the same frames,
+/// within a cube of `box_half` metres around a surface point of the first
+/// frame (the middle one of its points) when
+/// box_half > 0 (compared away from its faces, where the integrators' box
+/// rules differ: the discrete hit rule takes a voxel whose centre ray the box
+/// clips, the simple one any end voxel in the box).
 test::MapAgreement agreement(const std::vector<sim::SimulatedDepthImage>& frames, std::size_t count, double res,
-                             double max_range) {
+                             double max_range, double box_half = 0.0) {
   OccupancyMap simple(res);
   OccupancyMap projective(res);
+  std::optional<std::pair<Key, Key>> inside;
+  std::vector<Vec3f> points;
+  if (box_half > 0.0) {
+    back_project(frames[0].view(), frames[0].camera, frames[0].pose, points);
+    const Vec3d centre(points[points.size() / 2]);
+    const Vec3d half{box_half, box_half, box_half};
+    const Vec3d edge{2.0 * res, 2.0 * res, 2.0 * res};
+    simple.set_bounding_box(Aabb{centre - half, centre + half});
+    projective.set_bounding_box(Aabb{centre - half, centre + half});
+    inside = std::pair{simple.grid().key(centre - half + edge), simple.grid().key(centre + half - edge)};
+  }
   InsertOptions options;
   options.max_range = max_range;
-  std::vector<Vec3f> points;
   for (std::size_t i = 0; i < count; ++i) {
     const sim::SimulatedDepthImage& f = frames[i];
     back_project(f.view(), f.camera, f.pose, points);
@@ -278,17 +299,37 @@ test::MapAgreement agreement(const std::vector<sim::SimulatedDepthImage>& frames
     options.integrator = IntegratorKind::projective;
     projective.insert_depth_image(f.view(), f.camera, f.pose, {}, options);
   }
-  return test::compare_maps(simple, projective);
+  return test::compare_maps(simple, projective, inside);
+}
+
+/// The issue's thresholds: occupied recall >= 99.5% and precision >= 99%
+/// against the simple integrator, at most 5% of its free voxels left unknown.
+void expect_faithful(const test::MapAgreement& a, const char* what, double min_recall = 0.995,
+                     double min_precision = 0.99) {
+  std::printf("simulated camera, %s: recall %.4f precision %.4f free left unknown %.4f (%llu occupied, %llu free)\n",
+              what, a.recall(), a.precision(), a.free_left_unknown(),
+              static_cast<unsigned long long>(a.reference_count(OccupancyState::occupied)),
+              static_cast<unsigned long long>(a.reference_count(OccupancyState::free)));
+  EXPECT_GT(a.reference_count(OccupancyState::occupied), 1000u) << what;
+  EXPECT_GE(a.recall(), min_recall) << what;
+  EXPECT_GE(a.precision(), min_precision) << what;
+  EXPECT_LE(a.free_left_unknown(), 0.05) << what;
 }
 
 TEST(ProjectiveIntegrator, AgreesWithSimpleOnTheSimulatedCamera) {
   const std::vector<sim::SimulatedDepthImage> frames = sim::demo_depth_images(1);
-  const test::MapAgreement a = agreement(frames, 8, 0.04, 6.5);
-  std::printf("simulated camera, 8 frames, 4 cm: recall %.4f precision %.4f free left unknown %.4f\n", a.recall(),
-              a.precision(), a.free_left_unknown());
-  EXPECT_GE(a.recall(), 0.995);
-  EXPECT_GE(a.precision(), 0.99);
-  EXPECT_LE(a.free_left_unknown(), 0.05);
+  expect_faithful(agreement(frames, 8, 0.04, 6.5), "8 frames, 4 cm");
+  // 2 cm misses the issue's target (recall 98.9%, precision 98.7%, issue
+  // 22): this camera's pixels are wide (fx 204), so a voxel up to two pixels
+  // wide reads its own pixel only, where one to four rays cross it; each
+  // reading is noisy, and a surface voxel's misses differ by one from the
+  // simple integrator's about 1% of the time. A window of the 2 x 2 nearest
+  // pixels there gave recall 98.3% and precision 99.6%. Held here so that
+  // it does not get worse.
+  expect_faithful(agreement(frames, 4, 0.02, 6.5), "4 frames, 2 cm", 0.985, 0.983);
+  // 4 mm: whole bricks are seen or not (projective_frame.hpp); in a box,
+  // as the simple integrator's map of whole frames is too large for a test.
+  expect_faithful(agreement(frames, 4, 0.004, 6.5, 0.4), "4 frames, 4 mm, 0.8 m box");
 }
 
 }  // namespace

@@ -3,8 +3,9 @@
 # tsan, in the default suite): the TSan tree is built by scripts/sanitize.sh
 # thread, the one way to build it, but only the executables with threads
 # (the reader/writer contract, insertion with several threads and the
-# parallel apply, the node pools' concurrent phase, the thread pool), and only
-# their threaded tests run. Any report fails the run (halt_on_error).
+# parallel apply and colour walk, the node pools' concurrent phase, the
+# thread pool, the parallel colour samples and radix sort), and only their
+# threaded tests run. Any report fails the run (halt_on_error).
 #
 #   tests/map/run_tsan_stress.sh SOURCE_DIR BUILD_DIR
 #
@@ -16,4 +17,4 @@ source_dir="$1"
 build_dir="$2"
 exec "$source_dir/scripts/sanitize.sh" thread --build "$build_dir" \
   --targets "umbra_concurrency_tests umbra_integrate_tests umbra_tree_tests umbra_core_tests" \
-  -R '^(Concurrency|Threads|GroupPool|ThreadPool)\.' --no-tests=error
+  -R '^(Concurrency|Threads|GroupPool|ThreadPool|ColorSamples|RadixSort)\.' --no-tests=error

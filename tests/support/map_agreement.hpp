@@ -14,9 +14,13 @@
 // O(leaves) time and memory.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <bit>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "umbra/map/occupancy_map.hpp"
@@ -74,11 +78,29 @@ inline std::vector<LeafSpan> leaf_spans(const OccupancyMap& map) {
   return spans;
 }
 
+/// Voxels of the node [first, first + count) (count a power of 8) inside the
+/// keys [lo, hi] on every axis.
+inline std::uint64_t voxels_inside(std::uint64_t first, std::uint64_t count, Key lo, Key hi) {
+  const Key corner = morton::decode(first);
+  const std::uint32_t side = std::uint32_t{1} << (std::countr_zero(count) / 3);
+  std::uint64_t inside = 1;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::int64_t begin = std::max<std::int64_t>(corner[axis], lo[axis]);
+    const std::int64_t end = std::min<std::int64_t>(std::int64_t{corner[axis]} + side, std::int64_t{hi[axis]} + 1);
+    if (end <= begin) return 0;
+    inside *= static_cast<std::uint64_t>(end - begin);
+  }
+  return inside;
+}
+
 }  // namespace agreement_detail
 
 /// Compares `other` with `reference`; both must have the same resolution and
-/// depth levels (std::invalid_argument otherwise).
-inline MapAgreement compare_maps(const OccupancyMap& reference, const OccupancyMap& other) {
+/// depth levels (std::invalid_argument otherwise). With `keys` = {lo, hi},
+/// only the voxels with lo <= key <= hi on every axis count (a bounding box's
+/// inside, away from its faces, where the integrators' box rules differ).
+inline MapAgreement compare_maps(const OccupancyMap& reference, const OccupancyMap& other,
+                                 const std::optional<std::pair<Key, Key>>& keys = std::nullopt) {
   if (reference.resolution() != other.resolution() || reference.depth_levels() != other.depth_levels()) {
     throw std::invalid_argument("compare_maps: the maps have different grids");
   }
@@ -94,7 +116,10 @@ inline MapAgreement compare_maps(const OccupancyMap& reference, const OccupancyM
     const std::uint64_t end_a = a[i].first + a[i].count;
     const std::uint64_t end_b = b[j].first + b[j].count;
     const std::uint64_t end = end_a < end_b ? end_a : end_b;
-    agreement.voxels[static_cast<int>(a[i].state)][static_cast<int>(b[j].state)] += end - position;
+    // Both lists tile the codes with whole nodes, so [position, end) is one
+    // node too: the smaller of the two.
+    agreement.voxels[static_cast<int>(a[i].state)][static_cast<int>(b[j].state)] +=
+        keys ? agreement_detail::voxels_inside(position, end - position, keys->first, keys->second) : end - position;
     position = end;
     i += end_a == end;
     j += end_b == end;

@@ -1,6 +1,7 @@
 // GroupPool: indices stay unique and addressable across sequential and
-// concurrent phases, memory_bytes() follows what is in use, and a parallel
-// update of a small pool does not cost whole blocks per worker.
+// concurrent phases, memory_bytes() follows what is in use, a parallel
+// update of a small pool does not cost whole blocks per worker, and
+// attached records stay with their groups through growth, phases and copies.
 #include <algorithm>
 #include <set>
 #include <stdexcept>
@@ -123,6 +124,63 @@ TEST(GroupPool, ExceedingTheBoundOfAParallelPhaseIsReported) {
       },
       std::logic_error);
   pool.end_concurrent();
+}
+
+TEST(GroupPool, AttachedRecordsStayWithTheirGroups) {
+  struct Tag {
+    std::uint64_t index;
+    std::uint64_t check;
+  };
+  using TaggedPool = GroupPool<Group, Tag>;
+  TaggedPool pool(true);
+  Pool plain;
+  ASSERT_TRUE(pool.has_attached());
+  ASSERT_FALSE(plain.has_attached());
+  std::vector<std::uint32_t> live;
+  const auto mark = [&](std::uint32_t index, std::uint32_t owner) {
+    pool[index] = {owner, index};
+    pool.attached(index) = {index, ~std::uint64_t{index}};
+    live.push_back(index);
+  };
+  // Across the doubling of the last block and into a second block.
+  for (std::uint32_t i = 0; i < 1500; ++i) {
+    mark(pool.allocate(), 0);
+    plain.allocate();
+  }
+  // The same blocks as a plain pool, each with its records: a full block
+  // and a last block doubled from 8 to 512 groups for the other 476.
+  EXPECT_EQ(pool.memory_bytes() - plain.memory_bytes(),
+            (TaggedPool::kBlockGroups + 512) * sizeof(Tag) + 2 * sizeof(std::unique_ptr<Tag[]>))
+      << "two blocks of records and their two table entries";
+  for (std::size_t i = 0; i < 300; ++i) pool.release(live[i]);
+  live.erase(live.begin(), live.begin() + 300);
+  pool.begin_concurrent(2, 3000);
+  std::vector<std::vector<std::uint32_t>> taken(2);
+  auto work = [&](unsigned worker) {
+    for (std::uint32_t i = 0; i < 1500; ++i) {
+      const std::uint32_t index = pool.allocate(worker);
+      pool[index] = {worker + 1, index};
+      pool.attached(index) = {index, ~std::uint64_t{index}};
+      taken[worker].push_back(index);
+    }
+  };
+  std::thread first(work, 0u);
+  std::thread second(work, 1u);
+  first.join();
+  second.join();
+  pool.end_concurrent();
+  for (const auto& t : taken) live.insert(live.end(), t.begin(), t.end());
+  const auto expect_tags = [&](const TaggedPool& p) {
+    for (const std::uint32_t index : live) {
+      ASSERT_EQ(p[index].index, index);
+      ASSERT_EQ(p.attached(index).index, index);
+      ASSERT_EQ(p.attached(index).check, ~std::uint64_t{index});
+    }
+  };
+  expect_tags(pool);
+  const TaggedPool copy = pool;
+  expect_tags(copy);
+  EXPECT_TRUE(copy.has_attached());
 }
 
 }  // namespace

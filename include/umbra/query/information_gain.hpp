@@ -28,6 +28,20 @@
 //          exact on the benchmark poses: docs/benchmarks.md ("Information
 //          gain").
 //
+// Long ranges: voxels beyond the map are not counted, so a range longer
+// than the distance to the map's farthest corner counts what that distance
+// does. The work grows with the range's square or faster (the centres along
+// the frustum's boundary, and along the edges of the shadows of obstacles
+// in it, are decided one by one: about 10^10 of them at 900 m on a 2 cm
+// map), so one pose may take at most GainOptions::max_steps steps (2^28 by
+// default, 10 to 30 s of one core); beyond that it throws
+// std::invalid_argument naming max_range, the resolution and the limit
+// rather than running for hours. The exact method keeps a bitmap of the
+// occupied voxels in view (their bounding box, one bit a voxel); above
+// umbra::memory_limit() it throws umbra::MemoryLimitError naming max_range
+// and the box. Nothing else grows with the range: the image is at most
+// 400,000 pixels.
+//
 // Cost: one query takes the map for reading for one pose; a batch takes it
 // pose by pose, so a writer never waits for a whole batch. Queries are const
 // and share nothing: each call (each thread of a batch) has its own scratch
@@ -43,6 +57,9 @@ enum class GainMethod : unsigned char {
   fast,   ///< an approximation: small undecided nodes decided by their corner voxels
 };
 
+/// GainOptions::max_steps's default: 10 to 30 seconds of one core.
+inline constexpr std::uint64_t kDefaultMaxGainSteps = std::uint64_t{1} << 28;
+
 struct GainOptions {
   GainMethod method = GainMethod::exact;
   /// fast only: nodes of up to 2^fast_depth voxels per edge are decided by
@@ -51,6 +68,12 @@ struct GainOptions {
   /// Batch form only: poses answered in parallel by this many threads,
   /// including the caller; 0 means all hardware threads.
   unsigned threads = 1;
+  /// The most work one pose may take, in steps (a node or a voxel decided,
+  /// a block of up to 64 centres counted, a ray walked plus one per 8 of
+  /// its voxels; about 10 to 20 million a second). A pose that needs more
+  /// throws std::invalid_argument naming its max_range (see the file
+  /// comment, "Long ranges"). 0: no limit.
+  std::uint64_t max_steps = kDefaultMaxGainSteps;
 };
 
 struct GainResult {
