@@ -682,28 +682,32 @@ std::string OccupancyTree::check_invariants() const {
 std::string OccupancyTree::check_node(int depth, std::uint32_t group_index, unsigned slot,
                                       std::vector<std::vector<bool>>& seen) const {
   const InnerGroup& group = inner_[depth][group_index];
-  const std::string where = "node depth " + std::to_string(depth) + " group " +
-                            std::to_string(group_index) + " slot " + std::to_string(slot) + ": ";
+  // Only spelt out for a problem: check_invariants visits every node, and
+  // building this text for each was most of its time.
+  const auto where = [&] {
+    return "node depth " + std::to_string(depth) + " group " + std::to_string(group_index) + " slot " +
+           std::to_string(slot) + ": ";
+  };
   const float value = group.log_odds[slot];
   const std::uint32_t child = group.child[slot];
   const bool free_bit = (group.contains_free & bit(slot)) != 0;
   const bool unknown_bit = (group.contains_unknown & bit(slot)) != 0;
   const bool same_bit = (group.all_same & bit(slot)) != 0;
   if (child == kNoGroup) {
-    if (value < range_.min || value > range_.max) return where + "value outside the clamping range";
-    if (free_bit != thresholds_.is_free(value)) return where + "contains_free wrong (childless)";
-    if (unknown_bit != thresholds_.is_unknown(value)) return where + "contains_unknown wrong (childless)";
-    if (same_bit) return where + "all_same set on a childless node";
+    if (value < range_.min || value > range_.max) return where() + "value outside the clamping range";
+    if (free_bit != thresholds_.is_free(value)) return where() + "contains_free wrong (childless)";
+    if (unknown_bit != thresholds_.is_unknown(value)) return where() + "contains_unknown wrong (childless)";
+    if (same_bit) return where() + "all_same set on a childless node";
     return {};
   }
   auto& seen_here = seen[depth - 1];
   if (seen_here.size() <= child) seen_here.resize(child + 1, false);
-  if (seen_here[child]) return where + "child group referenced twice";
+  if (seen_here[child]) return where() + "child group referenced twice";
   seen_here[child] = true;
 
   if (depth == 1) {
     for (const float v : leaves_[child].log_odds) {
-      if (v < range_.min || v > range_.max) return where + "leaf value outside the clamping range";
+      if (v < range_.min || v > range_.max) return where() + "leaf value outside the clamping range";
     }
   } else {
     for (unsigned i = 0; i < 8; ++i) {
@@ -722,14 +726,14 @@ std::string OccupancyTree::check_node(int depth, std::uint32_t group_index, unsi
     const auto [rgb, weight] = average_color(child_colors);
     const ColorGroup& own = colors(depth, group_index);
     if (own.weight[slot] != weight || (weight != 0 && own.rgb[slot] != rgb)) {
-      return where + "colour is not the average of the coloured children";
+      return where() + "colour is not the average of the coloured children";
     }
   }
-  if (value != max) return where + "value is not the maximum of the children";
-  if (free_bit != any_free) return where + "contains_free differs from the children";
-  if (unknown_bit != any_unknown) return where + "contains_unknown differs from the children";
-  if (same_bit != same) return where + "all_same differs from the children";
-  if (same && auto_prune_) return where + "eight equal childless children left unpruned";
+  if (value != max) return where() + "value is not the maximum of the children";
+  if (free_bit != any_free) return where() + "contains_free differs from the children";
+  if (unknown_bit != any_unknown) return where() + "contains_unknown differs from the children";
+  if (same_bit != same) return where() + "all_same differs from the children";
+  if (same && auto_prune_) return where() + "eight equal childless children left unpruned";
   return {};
 }
 

@@ -47,6 +47,8 @@ class DenseGrid {
 
   [[nodiscard]] std::uint32_t size() const { return size_; }
   [[nodiscard]] float at(Key key) const { return values_[index(key)]; }
+  /// Every voxel's log-odds, x fastest, then y, then z.
+  [[nodiscard]] std::span<const float> values() const { return values_; }
   void add(Key key, float delta);
   void set(Key key, float value);
 
