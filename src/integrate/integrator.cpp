@@ -449,14 +449,19 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   // A depth image's rays are as dense as its pixels: the rule alone decides
   // its misses, known obstacles included (projective_frame.hpp).
   trace_projective_misses(nullptr, grid, options, box_keys, std::span<const ProjectiveFrame>(&frame_, 1), threads);
-  if (!point_colors.empty()) {
-    InsertOptions discrete = options;
-    discrete.integrator = IntegratorKind::discrete;
-    ThreadPool* const pool = threads > 1 ? pool_.get() : nullptr;
-    pending_colors_ = color_samples(grid, origin, points, point_colors, discrete, box_keys, pool);
-  }
+  if (!point_colors.empty()) queue_end_voxel_colors(grid, origin, points, point_colors, options, box_keys, threads);
   pending_threads_ = threads;
   return stats;
+}
+
+void Integrator::queue_end_voxel_colors(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
+                                        std::span<const Rgb> colors, const InsertOptions& options,
+                                        const std::optional<KeyBox>& box_keys, unsigned threads) {
+  // The projective integrator's hits are the discrete integrator's: so are its colours.
+  InsertOptions discrete = options;
+  discrete.integrator = IntegratorKind::discrete;
+  ThreadPool* const pool = threads > 1 ? pool_.get() : nullptr;
+  pending_colors_ = color_samples(grid, origin, points, colors, discrete, box_keys, pool);
 }
 
 InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
@@ -477,12 +482,7 @@ InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const G
     scan_images_.build(origin, points, resolution);
     trace_projective_misses(&tree, grid, options, box_keys, scan_images_.faces(), threads);
   }
-  if (!colors.empty()) {
-    InsertOptions discrete = options;
-    discrete.integrator = IntegratorKind::discrete;
-    ThreadPool* const pool = threads > 1 ? pool_.get() : nullptr;
-    pending_colors_ = color_samples(grid, origin, points, colors, discrete, box_keys, pool);
-  }
+  if (!colors.empty()) queue_end_voxel_colors(grid, origin, points, colors, options, box_keys, threads);
   pending_threads_ = threads;
   return stats;
 }

@@ -102,6 +102,9 @@ class Integrator {
   void ensure_workers(unsigned threads);
   /// trace() with the projective integrator: the scan as the six faces of
   /// images around its origin (scan_images.hpp).
+  /// Colour samples of the end voxels, as the discrete integrator takes them, for the next apply.
+  void queue_end_voxel_colors(const Grid& grid, Vec3f origin, std::span<const Vec3f> points, std::span<const Rgb> colors,
+                              const InsertOptions& options, const std::optional<KeyBox>& box_keys, unsigned threads);
   InsertStats trace_scan_projective(const OccupancyTree& tree, const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
                                     std::span<const Rgb> colors, const InsertOptions& options,
                                     const std::optional<Aabb>& box);
