@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/demo_maps.hpp"
 #include "support/map_agreement.hpp"
 #include "support/map_internals.hpp"
 #include "support/test_support.hpp"
@@ -412,23 +413,6 @@ void check_fast_integrator(const std::string& name, const std::vector<Scan>& sca
   }
 }
 
-std::vector<Scan> lidar_building_scans() {
-  const sim::Scene scene = sim::make_demo_scene();
-  sim::LidarModel lidar;
-  lidar.rings = 16;
-  lidar.azimuth_steps = 360;
-  lidar.range_noise_stddev = 0.01;
-  std::vector<Scan> scans;
-  const auto path = sim::demo_path();
-  for (std::size_t i = 0; i < path.size(); i += 2) {
-    Scan scan;
-    scan.origin = static_cast<Vec3f>(path[i].position);
-    scan.points = sim::simulate_scan(scene, path[i], lidar);
-    scans.push_back(std::move(scan));
-  }
-  return scans;
-}
-
 /// The first `count` frames of the simulated depth camera's sequence (the
 /// tests keep a few: consecutive frames overlap, so later frames still look
 /// through the surfaces of earlier ones).
@@ -446,7 +430,7 @@ std::vector<Scan> depth_camera_building_frames(std::size_t count) {
 }
 
 TEST(FastIntegrator, AgreesWithTheSimpleIntegratorOnALidarInTheProceduralBuilding) {
-  check_fast_integrator("procedural building, LiDAR", lidar_building_scans(), 0.05, 30.0, 5);
+  check_fast_integrator("procedural building, LiDAR", test::lidar_building_scans(), 0.05, 30.0, 5);
 }
 
 TEST(FastIntegrator, AgreesWithTheSimpleIntegratorOnADepthCameraInTheProceduralBuildingAt2cm) {

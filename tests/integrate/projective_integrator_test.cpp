@@ -16,6 +16,7 @@
 
 #include "integrate/projective_tracer.hpp"
 #include "integrate/scan_images.hpp"
+#include "support/demo_maps.hpp"
 #include "support/map_agreement.hpp"
 #include "support/map_internals.hpp"
 #include "support/test_support.hpp"
@@ -529,20 +530,7 @@ TEST(ProjectiveIntegrator, SparseLidarLosesSomeRecall) {
   // in that cone before any ray reaches it (docs/design.md). Measured 95%
   // of the simple integrator's occupied voxels; the bound below guards
   // against it getting worse.
-  const sim::Scene scene = sim::make_demo_scene();
-  sim::LidarModel lidar;
-  lidar.rings = 16;
-  lidar.azimuth_steps = 360;
-  lidar.range_noise_stddev = 0.01;
-  std::vector<Scan> scans;
-  const auto path = sim::demo_path();
-  for (std::size_t i = 0; i < path.size(); i += 2) {
-    Scan scan;
-    scan.origin = static_cast<Vec3f>(path[i].position);
-    scan.points = sim::simulate_scan(scene, path[i], lidar);
-    scans.push_back(std::move(scan));
-  }
-  expect_fidelity("procedural building, 16-ring LiDAR", scans, 0.05, 30.0, 0.94);
+  expect_fidelity("procedural building, 16-ring LiDAR", test::lidar_building_scans(), 0.05, 30.0, 0.94);
 }
 
 }  // namespace

@@ -32,4 +32,21 @@ OccupancyMap demo_lidar_map(const MapConfig& config, const PointColour& colour) 
   return map;
 }
 
+std::vector<Scan> lidar_building_scans() {
+  const sim::Scene scene = sim::make_demo_scene();
+  sim::LidarModel lidar;
+  lidar.rings = 16;
+  lidar.azimuth_steps = 360;
+  lidar.range_noise_stddev = 0.01;
+  std::vector<Scan> scans;
+  const auto path = sim::demo_path();
+  for (std::size_t i = 0; i < path.size(); i += 2) {
+    Scan scan;
+    scan.origin = static_cast<Vec3f>(path[i].position);
+    scan.points = sim::simulate_scan(scene, path[i], lidar);
+    scans.push_back(std::move(scan));
+  }
+  return scans;
+}
+
 }  // namespace umbra::test

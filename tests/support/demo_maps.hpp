@@ -4,9 +4,11 @@
 
 #include <cstddef>
 #include <functional>
+#include <vector>
 
 #include "umbra/core/color.hpp"
 #include "umbra/core/vec3.hpp"
+#include "umbra/io/scan_source.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra::test {
@@ -18,5 +20,9 @@ using PointColour = std::function<Rgb(std::size_t index, Vec3f point)>;
 /// with 360 azimuth steps, each scan inserted with the LiDAR's max range.
 /// With config.color, `colour` colours every point.
 OccupancyMap demo_lidar_map(const MapConfig& config, const PointColour& colour = {});
+
+/// Every other pose of the demo path through the procedural building, each a
+/// scan of a 16-ring LiDAR (360 steps, 1 cm range noise): sparse rings.
+std::vector<Scan> lidar_building_scans();
 
 }  // namespace umbra::test
