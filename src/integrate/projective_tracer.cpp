@@ -230,7 +230,7 @@ std::optional<ProjectiveTracer::Decision> ProjectiveTracer::bounded_decision(Key
 void ProjectiveTracer::trace_node(std::uint64_t code, Key first, int depth, UpdateBatch& batch) const {
   // Small nodes (a few pixels wide) first by the float bounds: exact, so
   // they decide nodes the double test's margins and the pyramid's coarse
-  // rectangles leave split (TUM at 2 mm: XXX).
+  // rectangles leave split.
   std::optional<Decision> decision;
   if (depth <= kBoundedDepth) decision = bounded_decision(first, depth);
   if (!decision) decision = classify_node(first, depth);
