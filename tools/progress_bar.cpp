@@ -16,7 +16,9 @@ std::string time_left_text(double fraction, double elapsed_seconds) {
   const double left = elapsed_seconds * (1.0 - fraction) / fraction;
   const long seconds = std::lround(left);
   char text[64];
-  if (seconds < 60) {
+  if (seconds < 1) {
+    std::snprintf(text, sizeof text, "under 1 s left");
+  } else if (seconds < 60) {
     std::snprintf(text, sizeof text, "about %ld s left", seconds);
   } else if (seconds < 3600) {
     std::snprintf(text, sizeof text, "about %ld min %02ld s left", seconds / 60, seconds % 60);

@@ -89,6 +89,7 @@ TEST(ProgressText, SaysTheTimeLeftOnceThereIsARate) {
   EXPECT_EQ(time_left_text(0.25, 10.0), "about 30 s left");
   EXPECT_EQ(time_left_text(0.1, 100.0), "about 15 min 00 s left");
   EXPECT_EQ(time_left_text(0.01, 100.0), "about 2 h 45 min left");
+  EXPECT_EQ(time_left_text(0.99, 10.0), "under 1 s left");
   EXPECT_EQ(time_left_text(0.5, 0.5), "") << "under a second the rate says too little";
   EXPECT_EQ(time_left_text(0.0, 10.0), "");
   EXPECT_EQ(time_left_text(1.0, 10.0), "");
