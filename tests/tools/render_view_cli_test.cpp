@@ -13,6 +13,8 @@
 #include <filesystem>
 #include <map>
 #include <regex>
+#include <sstream>
+#include <cmath>
 #include <set>
 #include <string>
 #include <tuple>
@@ -27,6 +29,8 @@
 #include "umbra/sim/lidar.hpp"
 #include "umbra/sim/scene.hpp"
 #include "support/demo_maps.hpp"
+#include "support/room_map.hpp"
+#include "umbra/io/topdown_image.hpp"
 
 namespace umbra {
 namespace {
@@ -55,25 +59,137 @@ TEST(RenderCli, WritesThePictureTheLibraryDraws) {
   const OccupancyMap map = load_map(map_path);
 
   const CommandResult iso = test::run_command(cli() + " render " + quoted(map_path) + " -o " + quoted(dir / "iso.png") +
-                                              " --width 300 --color rgb --depth 1");
+                                              " --width 300 --color rgb --depth 1 --max-z none");
   ASSERT_EQ(iso.exit_code, 0) << iso.output;
   EXPECT_NE(iso.output.find("300 x"), std::string::npos) << iso.output;
   RenderOptions options;
   options.width = 300;
   options.color = RenderColor::rgb;
   options.depth = 1;
+  options.annotate = true;
   EXPECT_EQ(read_png(dir / "iso.png").rgb, render_map(map, options).image.rgb);
+
+  // --bare: the drawing alone.
+  const CommandResult bare = test::run_command(cli() + " render " + quoted(map_path) + " -o " +
+                                               quoted(dir / "bare.png") + " --width 120 --max-z none --bare");
+  ASSERT_EQ(bare.exit_code, 0) << bare.output;
+  RenderOptions bare_options;
+  bare_options.width = 120;
+  EXPECT_EQ(read_png(dir / "bare.png").rgb, render_map(map, bare_options).image.rgb);
 
   // A slice is seen along its axis and coloured by state unless told otherwise.
   const CommandResult slice = test::run_command(cli() + " render " + quoted(map_path) + " -o " +
-                                                quoted(dir / "slice.png") + " --slice y=6.1 --width 200");
+                                                quoted(dir / "slice.png") + " --slice y=6.1 --width 300");
   ASSERT_EQ(slice.exit_code, 0) << slice.output;
   RenderOptions slice_options;
-  slice_options.width = 200;
+  slice_options.width = 300;
   slice_options.slice = RenderSlice{1, 6.1};
   slice_options.view = RenderView::front;
   slice_options.color = RenderColor::state;
+  slice_options.annotate = true;
   EXPECT_EQ(read_png(dir / "slice.png").rgb, render_map(map, slice_options).image.rgb);
+}
+
+TEST(RenderCli, DefaultsCutTheCeilingFromAboveAndTheNearHalfFromTheFront) {
+  const auto dir = test::scratch_dir();
+  const OccupancyMap room = test::closed_room_map();
+  save_map(room, dir / "room.umb");
+  const std::string render = cli() + " render " + quoted(dir / "room.umb") + " --width 300 ";
+
+  // A top view cuts the ceiling: the floor shows (its height colour at the room's middle).
+  const CommandResult top = test::run_command(render + "-o " + quoted(dir / "top.png") + " --view top");
+  ASSERT_EQ(top.exit_code, 0) << top.output;
+  EXPECT_NE(top.output.find("ceiling found at 2.400 m"), std::string::npos) << top.output;
+  RenderOptions options;
+  options.view = RenderView::top;
+  options.width = 300;
+  options.annotate = true;
+  options.max_z = 2.35;
+  const MapPicture expected = render_map(room, options);
+  const Image written = read_png(dir / "top.png");
+  EXPECT_EQ(written.rgb, expected.image.rgb);
+  const auto [x, y] = expected.camera.pixel(test::room_voxel(30, 20, 0));
+  const double top_shade = 0.5 + 0.5 / std::sqrt(1.8);  // map_render.hpp's light on a top face
+  const Rgb floor = height_ramp(0.0);
+  const Rgb shaded_floor{static_cast<std::uint8_t>(std::lround(floor.r * top_shade)),
+                         static_cast<std::uint8_t>(std::lround(floor.g * top_shade)),
+                         static_cast<std::uint8_t>(std::lround(floor.b * top_shade))};
+  EXPECT_EQ(written.at(int(x), int(y)), shaded_floor) << "the room's floor, not its ceiling";
+
+  // --max-z none keeps the ceiling: the same pixel is the ceiling's.
+  const CommandResult uncut =
+      test::run_command(render + "-o " + quoted(dir / "uncut.png") + " --view top --max-z none");
+  ASSERT_EQ(uncut.exit_code, 0) << uncut.output;
+  EXPECT_NE(read_png(dir / "uncut.png").at(int(x), int(y)), shaded_floor);
+
+  // A front view: cut through the middle (y >= 1.45), coloured by distance.
+  const CommandResult front = test::run_command(render + "-o " + quoted(dir / "front.png") + " --view front");
+  ASSERT_EQ(front.exit_code, 0) << front.output;
+  EXPECT_NE(front.output.find("y >= 1.450 m"), std::string::npos) << front.output;
+  RenderOptions front_options;
+  front_options.view = RenderView::front;
+  front_options.color = RenderColor::depth;
+  front_options.section = 1.45;
+  front_options.width = 300;
+  front_options.annotate = true;
+  EXPECT_EQ(read_png(dir / "front.png").rgb, render_map(room, front_options).image.rgb);
+}
+
+TEST(RenderCli, StateViewShowsFreeAndUnknownSpaceNotJustRed) {
+  const auto dir = test::scratch_dir();
+  const auto map_path = building_map(dir);
+  const CommandResult top = test::run_command(cli() + " render " + quoted(map_path) + " -o " +
+                                              quoted(dir / "state.png") + " --view top --color state --bare");
+  ASSERT_EQ(top.exit_code, 0) << top.output;
+  EXPECT_NE(top.output.find("floor found"), std::string::npos) << top.output;
+  const Image picture = read_png(dir / "state.png");
+  const RenderOptions colours;
+  std::size_t free = 0;
+  std::size_t unknown = 0;
+  std::size_t red = 0;
+  for (int row = 0; row < picture.height; ++row) {
+    for (int column = 0; column < picture.width; ++column) {
+      const Rgb c = picture.at(column, row);
+      free += c == colours.free_colour ? 1 : 0;
+      unknown += c == colours.unknown_colour ? 1 : 0;
+      red += c.r > 2 * c.g && c.r > 2 * c.b ? 1 : 0;
+    }
+  }
+  const double pixels = double(picture.width) * picture.height;
+  EXPECT_GT(free, 0.2 * pixels) << "free floor space between the walls";
+  EXPECT_GT(unknown, 0.02 * pixels) << "unknown space around the building";
+  EXPECT_GT(red, 0.02 * pixels) << "walls";
+}
+
+TEST(RenderCli, SliceOutsideTheMapFailsNamingTheValueAndTheExtent) {
+  const auto dir = test::scratch_dir();
+  const auto map_path = building_map(dir);
+  const OccupancyMap map = load_map(map_path);
+  const MapStatistics stats = compute_statistics(map);
+  for (const std::string value : {"100", "-7", "250.5"}) {
+    const CommandResult result = test::run_command(cli() + " render " + quoted(map_path) + " -o " +
+                                                   quoted(dir / "slice.png") + " --slice z=" + value);
+    EXPECT_EQ(result.exit_code, 1) << result.output;
+    std::ostringstream extent;
+    extent << "spans z from " << stats.known_min.z << " to " << stats.known_max.z << " m";
+    EXPECT_NE(result.output.find("z = " + value + " m"), std::string::npos) << result.output;
+    EXPECT_NE(result.output.find(extent.str()), std::string::npos) << extent.str() << ": " << result.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "slice.png"));
+  }
+}
+
+TEST(RenderCli, WritesPngOnlyAndSaysSo) {
+  const auto dir = test::scratch_dir();
+  const auto map_path = building_map(dir);
+  for (const std::string name : {"out.jpg", "out.jpeg", "out", "out.png.gif"}) {
+    const CommandResult result = test::run_command(cli() + " render " + quoted(map_path) + " -o " + quoted(dir / name));
+    EXPECT_EQ(result.exit_code, 2) << name << ": " << result.output;
+    EXPECT_NE(result.output.find(".png"), std::string::npos) << result.output;
+    EXPECT_NE(result.output.find("PNG pictures only"), std::string::npos) << result.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / name));
+  }
+  const CommandResult upper = test::run_command(cli() + " render " + quoted(map_path) + " -o " + quoted(dir / "a.PNG"));
+  EXPECT_EQ(upper.exit_code, 0) << upper.output;
 }
 
 TEST(RenderCli, BadOptionsAreUsageErrorsThatNameTheProblem) {
@@ -90,9 +206,15 @@ TEST(RenderCli, BadOptionsAreUsageErrorsThatNameTheProblem) {
       {"--slice z=abc", "AXIS=METRES"},
       {"--slice z=", "AXIS=METRES"},
       {"--width 5", "--width"},
+      {"--width 100", "--bare"},
       {"--depth 40", "--depth"},
       {"--slice z=1 --view iso", "view"},
-      {"--slice z=1e9", "outside the map"},
+      {"--slice z=1 --max-z 2", "for views"},
+      {"--slice z=1 --color depth", "flat"},
+      {"--max-z high", "--max-z"},
+      {"--min-z low", "--min-z"},
+      {"--section 1 --view top", "--section"},
+      {"--section somewhere --view front", "--section"},
       {"--depth 17", "depth levels"},
   };
   for (const auto& [options, words] : cases) {
