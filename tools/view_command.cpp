@@ -42,8 +42,11 @@ void print_summary(const OccupancyMap& map, const ViewerData& data) {
   std::printf("depths %d to %d (nodes of %g to %g m); %zu occupied nodes at depth %d", data.finest_depth, last,
               map.grid().node_size(data.finest_depth), map.grid().node_size(last), data.layers.front().count,
               data.finest_depth);
-  if (data.finest_depth > 0) {
+  if (data.finest_depth > 0 && data.finest_depth_zero_count > data.budget) {
     std::printf(" (depth 0 has %zu, more than the budget of %zu)", data.finest_depth_zero_count, data.budget);
+  } else if (data.finest_depth > 0) {
+    std::printf(" (a map of %d depth levels starts at depth %d: the page's codes hold %d levels)", map.depth_levels(),
+                data.finest_depth, kViewerCodeBitsPerAxis);
   }
   std::printf("\n");
   if (data.ceiling_cut) {

@@ -423,6 +423,23 @@ TEST(ViewCli, PageIsSelfContainedAndItsLayersAreTheLibrarysNodes) {
   EXPECT_LE(double(layer_text) / double(layer_nodes), 1.0) << layer_text << " bytes for " << layer_nodes << " nodes";
 }
 
+TEST(ViewCli, DeepMapsStartAtTheDepthTheirCodesFit) {
+  // 21 depth levels: keys of 21 bits, more than the page's 17 per axis.
+  const auto dir = test::scratch_dir();
+  OccupancyMap deep(0.1, 21);
+  deep.set_log_odds(Vec3d{0.05, 0.05, 0.05}, 2.0f);
+  deep.set_log_odds(Vec3d{3.05, 1.05, 0.05}, -2.0f);
+  save_map(deep, dir / "deep.umb");
+  const CommandResult view = test::run_command(cli() + " view " + quoted(dir / "deep.umb") + " -o " + quoted(dir / "deep.html"));
+  if (view.exit_code == 1 && view.output.find("built without the browser viewer") != std::string::npos) {
+    GTEST_SKIP() << view.output;
+  }
+  ASSERT_EQ(view.exit_code, 0) << view.output;
+  EXPECT_NE(view.output.find("a map of 21 depth levels starts at depth 4"), std::string::npos) << view.output;
+  const std::vector<std::uint8_t> bytes = test::read_bytes(dir / "deep.html");
+  EXPECT_NE(std::string(bytes.begin(), bytes.end()).find("\"finestDepth\": 4,"), std::string::npos);
+}
+
 TEST(ViewCli, UsageErrors) {
   const auto dir = test::scratch_dir();
   const auto map_path = building_map(dir);

@@ -435,8 +435,10 @@ function describe(depth) {
   if (data.finestDepth > 0) {
     const note = document.createElement('div');
     note.className = 'note';
-    note.textContent = `depth 0 holds ${data.depthZeroOccupied.toLocaleString('en')} occupied nodes, more than the budget of ` +
-      `${data.budget.toLocaleString('en')} (umbra view --budget): the finest depth drawn is ${data.finestDepth}`;
+    note.textContent = data.depthZeroOccupied > data.budget
+      ? `depth 0 holds ${data.depthZeroOccupied.toLocaleString('en')} occupied nodes, more than the budget of ` +
+        `${data.budget.toLocaleString('en')} (umbra view --budget): the finest depth drawn is ${data.finestDepth}`
+      : `a map of ${data.stats.depth_levels} depth levels starts at depth ${data.finestDepth} (the page's codes hold 17 levels)`;
     status.appendChild(note);
   }
   for (const message of stats.errors) {
