@@ -180,7 +180,7 @@ const stateNames = ['occupied', 'free', 'unknown'];
   // The page starts cut half a voxel below the ceiling that `umbra render` finds.
   const ceiling = /ceiling found at ([-\d.]+) m/.exec(umbra('render', map, '-o', join(args.work, 'top.png'), '--view', 'top'));
   check(ceiling !== null, 'umbra render finds the demo building\'s ceiling');
-  const ceilingCut = Number(ceiling[1]) - 0.1;  // --res 0.2: half a voxel
+  const ceilingCut = ceiling ? Number(ceiling[1]) - 0.1 : NaN;  // --res 0.2: half a voxel
   check(close(first.cut, ceilingCut), `the page starts cut at z ${first.cut}, below the ceiling at ${ceiling[1]}`);
   const depth0cut = expected(map, 0, first.cut);
   check(first.depth === 0 && first.finestDepth === 0, `the page starts at depth 0 (got ${first.depth})`);
