@@ -199,14 +199,21 @@ int run_render(const RenderCommandOptions& command) {
   RenderOptions options;
   try {
     options = render_options(command);
+    if (options.annotate) {
+      RenderOptions widest = options;
+      widest.width = kMaxRenderPixels;
+      widest.validate();  // every field but the width: the width's own message below names the option
+      try {
+        options.validate();
+      } catch (const std::invalid_argument&) {
+        throw std::invalid_argument("--width " + std::to_string(command.width) +
+                                    " is too narrow for the title, axes, legend and scale bar (at least " +
+                                    std::to_string(kMinAnnotatedRenderWidth) + "); --bare draws the map alone");
+      }
+    }
     options.validate();
   } catch (const std::invalid_argument& error) {
-    std::string hint;
-    if (options.annotate && std::string(error.what()).find("with annotations") != std::string::npos) {
-      hint = " (--bare draws the map alone, at any width from 17)";
-    }
-    std::fprintf(stderr, "umbra render: error: %s%s\n", error.what(), hint.c_str());
-    return 2;
+    return usage_error(error);
   }
   const OccupancyMap map = load_any_map(command.map_path);
   try {
@@ -239,8 +246,7 @@ Command add_render_command(CLI::App& app) {
       "occupied (red), free (light grey) and unknown (dark) space; with a title, axes in metres, a legend and a "
       "scale bar");
   command->add_option("map", options->map_path, "map file (.umb, or OctoMap's .bt / .ot)")
-      ->required()
-      ->check(CLI::ExistingFile);
+      ->required();  // a missing file is an input failure (exit code 1), named when it is loaded, as in `view`
   command->add_option("-o,--output", options->output, "PNG file to write (replaced atomically; .png only)")
       ->required()
       ->check(png_path());

@@ -100,8 +100,7 @@ Command add_view_command(CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "view", "Write one HTML file that shows a map in 3D in a browser (offline: three.js is inside the file)");
   command->add_option("map", options->map_path, "map file (.umb, or OctoMap's .bt / .ot)")
-      ->required()
-      ->check(CLI::ExistingFile);
+      ->required();  // a missing file is an input failure (exit code 1), named when it is loaded
   command->add_option("-o,--output", options->output, "HTML file to write (replaced atomically)");
   command
       ->add_option("--budget", options->budget,

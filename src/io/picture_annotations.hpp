@@ -28,8 +28,8 @@
 
 namespace umbra::detail {
 
-/// Narrowest annotated picture, in pixels (the legend needs the room).
-inline constexpr int kMinAnnotatedWidth = 200;
+/// Narrowest annotated picture, in pixels (map_render.hpp).
+inline constexpr int kMinAnnotatedWidth = kMinAnnotatedRenderWidth;
 
 struct AnnotationLayout {
   int scale = 1;  ///< text scale

@@ -4,9 +4,9 @@
 // uint32 index (half the size of a pointer), stored in blocks of
 // kBlockGroups so that growing never moves a group (no reallocation copy, no
 // peak of twice the size as with std::vector) and the unused tail is at most
-// one block. The last block starts small and doubles until it is full sized,
-// so a pool for the few groups near the root costs a few hundred bytes, not
-// a whole block. Released groups go to a free list and are handed out again.
+// one block. The first block starts small and doubles until it is full
+// sized, so a pool for the few groups near the root costs a few hundred
+// bytes, not a whole block; later blocks are full sized from the start. Released groups go to a free list and are handed out again.
 //
 // Attached records (optional, chosen at construction: a node group's
 // colours): a pool built with_attached keeps an `Attached` record per group
@@ -168,6 +168,15 @@ class GroupPool {
     high_water_ = tail_;  // the tail never leaves the last block
   }
 
+  /// Releases every group but keeps the memory, for a pool refilled over and
+  /// over (an update batch per scan: freeing and touching its blocks anew
+  /// each time cost a page fault per 4 KiB, 10% of a TUM frame at 2 mm).
+  void recycle() {
+    UMBRA_ASSERT(slabs_.empty());
+    free_.clear();
+    high_water_ = 0;
+  }
+
   /// Releases every group and all memory.
   void clear() {
     std::vector<std::unique_ptr<Group[]>>().swap(blocks_);
@@ -198,10 +207,14 @@ class GroupPool {
     return blocks_.empty() ? 0 : (blocks_.size() - 1) * std::uint64_t{kBlockGroups} + last_capacity_;
   }
 
-  /// Room for one more group: a new small block after a full one, else a doubled last block.
+  /// Room for one more group: a small first block, doubled until full
+  /// sized, then full-sized blocks. (Starting every block small copied each
+  /// group once more while it grew: 7% of inserting TUM frames at 2 mm.)
   void extend() {
-    if (blocks_.empty() || last_capacity_ == kBlockGroups) {
+    if (blocks_.empty()) {
       add_block(kFirstBlockGroups);
+    } else if (last_capacity_ == kBlockGroups) {
+      add_block(kBlockGroups);
     } else {
       grow_last_block();
     }

@@ -50,7 +50,7 @@ TEST(GroupPool, SequentialAllocationReusesReleasedGroupsAndGrowsInBlocks) {
   EXPECT_EQ(pool.memory_bytes(), 0u);
   std::vector<std::vector<std::uint32_t>> live{take(pool, 3000, 0)};
   expect_marks(pool, live);
-  // Three blocks: two full, the last grown by doubling to hold 952 groups.
+  // Three full blocks: the first grown by doubling, the others full sized from the start.
   EXPECT_GE(pool.memory_bytes(), 3000 * sizeof(Group));
   EXPECT_LE(pool.memory_bytes(), (2 * Pool::kBlockGroups + Pool::kBlockGroups) * sizeof(Group) + 256);
 
@@ -142,15 +142,16 @@ TEST(GroupPool, AttachedRecordsStayWithTheirGroups) {
     pool.attached(index) = {index, ~std::uint64_t{index}};
     live.push_back(index);
   };
-  // Across the doubling of the last block and into a second block.
+  // Across the doubling of the first block and into a second block.
   for (std::uint32_t i = 0; i < 1500; ++i) {
     mark(pool.allocate(), 0);
     plain.allocate();
   }
-  // The same blocks as a plain pool, each with its records: a full block
-  // and a last block doubled from 8 to 512 groups for the other 476.
+  // The same blocks as a plain pool, each with its records: the first block
+  // doubled from 8 groups to full size, and a second block full sized from
+  // the start for the other 476.
   EXPECT_EQ(pool.memory_bytes() - plain.memory_bytes(),
-            (TaggedPool::kBlockGroups + 512) * sizeof(Tag) + 2 * sizeof(std::unique_ptr<Tag[]>))
+            2 * TaggedPool::kBlockGroups * sizeof(Tag) + 2 * sizeof(std::unique_ptr<Tag[]>))
       << "two blocks of records and their two table entries";
   for (std::size_t i = 0; i < 300; ++i) pool.release(live[i]);
   live.erase(live.begin(), live.begin() + 300);

@@ -86,6 +86,8 @@ const char* to_string(RenderColor color);
 
 /// Largest picture side render_map makes, in pixels.
 inline constexpr int kMaxRenderPixels = 16384;
+/// Narrowest picture with annotations, in pixels (the legend needs the room).
+inline constexpr int kMinAnnotatedRenderWidth = 200;
 
 /// A slice: the layer of nodes that contains `position` on `axis`.
 struct RenderSlice {
