@@ -190,10 +190,8 @@ std::string apply_cuts(const OccupancyMap& map, const RenderCommandOptions& comm
   return said;
 }
 
-int usage_error(const std::exception& error) {
-  std::fprintf(stderr, "umbra render: error: %s\n", error.what());
-  return 2;
-}
+/// A wrong option: main() prints it with the pointer to --help and exits with kBadUsage.
+[[noreturn]] void usage_error(const std::exception& error) { throw UsageError(error.what()); }
 
 int run_render(const RenderCommandOptions& command) {
   RenderOptions options;
@@ -213,13 +211,13 @@ int run_render(const RenderCommandOptions& command) {
     }
     options.validate();
   } catch (const std::invalid_argument& error) {
-    return usage_error(error);
+    usage_error(error);
   }
   const OccupancyMap map = load_any_map(command.map_path);
   try {
     check_render_options(map, options);
   } catch (const std::invalid_argument& error) {
-    return usage_error(error);
+    usage_error(error);
   }
   const std::string cuts = apply_cuts(map, command, options);
   const MapPicture picture = render_map(map, options);
