@@ -284,7 +284,7 @@ std::uint64_t ProjectiveRule::cleared_in_range(std::uint64_t brick, Key first) c
   const int level = window_level(base);
   // Most bricks a walk reaches are cleared whole or not at all (TUM at 4 mm:
   // 36% and 54%): bounds decide those for a tenth of a voxel-by-voxel pass.
-  if (const std::optional<std::uint64_t> whole = whole_bricks({base, base})) return *whole;
+  if (const std::optional<std::uint64_t> whole = whole_brick(base, level)) return *whole;
   if (!avx2) return cleared_plain(brick);
   return detail::projective_cleared_avx2(*this, base, level);
 }
@@ -300,41 +300,15 @@ std::uint64_t ProjectiveRule::cleared_in_range(std::uint64_t brick, Key first) c
 // lies between the rectangle's least and largest. (The build forbids
 // contracting a * b + c into one rounding, which would break the equality
 // with cleared_plain as well.)
-ProjectiveRule::OriginBounds ProjectiveRule::brick_origins(Key first, int depth) const {
-  if (depth == 2) {
-    const Vec3f origin = brick_origin(first);
-    return {origin, origin};
-  }
-  // Camera coordinates are linear in the position, so the bricks' origins
-  // are extreme at the corner bricks; their double evaluation errs by far
-  // less than the pad, and rounding the padded bounds to float keeps them
-  // bounds of every brick's float origin (rounding is monotonic).
-  const double span = ((1u << depth) - 4) * grid->resolution();  // first voxel of the last brick
-  const Vec3d lo{grid->axis_center(first.x), grid->axis_center(first.y), grid->axis_center(first.z)};
-  Vec3d low = frame->to_camera(lo);
-  Vec3d high = low;
-  for (unsigned corner = 1; corner < 8; ++corner) {
-    const Vec3d c = frame->to_camera(
-        Vec3d{lo.x + (corner & 1u ? span : 0.0), lo.y + (corner & 2u ? span : 0.0), lo.z + (corner & 4u ? span : 0.0)});
-    low = Vec3d{std::min(low.x, c.x), std::min(low.y, c.y), std::min(low.z, c.z)};
-    high = Vec3d{std::max(high.x, c.x), std::max(high.y, c.y), std::max(high.z, c.z)};
-  }
-  const auto pad = [](double value) { return 1e-12 * (1.0 + std::abs(value)); };
-  return {Vec3f(Vec3d{low.x - pad(low.x), low.y - pad(low.y), low.z - pad(low.z)}),
-          Vec3f(Vec3d{high.x + pad(high.x), high.y + pad(high.y), high.z + pad(high.z)})};
-}
-
-std::optional<std::uint64_t> ProjectiveRule::whole_bricks(const OriginBounds& origins) const {
+std::optional<std::uint64_t> ProjectiveRule::whole_brick(Vec3f origin, int level) const {
   constexpr std::optional<std::uint64_t> undecided;
-  // window_level falls with the depth: one level for all when both ends agree.
-  const int level = window_level(origins.lo);
-  if (window_level(origins.hi) != level) return undecided;
-  const float x_lo = origins.lo.x + offset_min[0];
-  const float x_hi = origins.hi.x + offset_max[0];
-  const float y_lo = origins.lo.y + offset_min[1];
-  const float y_hi = origins.hi.y + offset_max[1];
-  const float z_lo = origins.lo.z + offset_min[2];
-  const float z_hi = origins.hi.z + offset_max[2];
+  const float x_lo = origin.x + offset_min[0];
+  const float x_hi = origin.x + offset_max[0];
+  const float y_lo = origin.y + offset_min[1];
+  const float y_hi = origin.y + offset_max[1];
+  const float z_lo = origin.z + offset_min[2];
+  const float z_hi = origin.z + offset_max[2];
+  if (!(z_hi > 0.0f)) return 0;  // behind the camera: no voxel is seen
   // Near the camera plane the reciprocals grow without bound: left to the voxels.
   if (!(z_lo > 1e-6f)) return undecided;
   bool all_in_range = true;
@@ -368,6 +342,10 @@ std::optional<std::uint64_t> ProjectiveRule::whole_bricks(const OriginBounds& or
   };
   const Interval u = projection(x_lo, x_hi, fx, cx_half);
   const Interval v = projection(y_lo, y_hi, fy, cy_half);
+  // Beyond the edge reach on one side (the largest reach is the nearest
+  // voxel's): no voxel is seen.
+  const float reach = edge_reach * inverse_hi;
+  if (u.hi < -reach || v.hi < -reach || u.lo >= width + reach || v.lo >= height + reach) return 0;
   // The cells the voxels can read (cleared_plain: clamped into the image first).
   const auto clamp_u = [&](float value) { return std::min(std::max(value, 0.0f), width_inside); };
   const auto clamp_v = [&](float value) { return std::min(std::max(value, 0.0f), height_inside); };
@@ -393,8 +371,10 @@ std::optional<std::uint64_t> ProjectiveRule::whole_bricks(const OriginBounds& or
     v0 = static_cast<int>(std::floor(clamp_v(v.lo) * scale - 0.5f)) + 1;
     v1 = static_cast<int>(std::floor(clamp_v(v.hi) * scale - 0.5f)) + 1;
   }
-  // Wide footprints (near the camera, wide bricks) are left to the voxels.
-  if ((u1 - u0 + 1) * (v1 - v0 + 1) > 64) return undecided;
+  // Wide footprints (near the camera) are left to the voxels. A brick whose
+  // voxels read their own pixels spans at most about 9 x 9 of them, and one
+  // whose voxels read windows about as many windows.
+  if ((u1 - u0 + 1) * (v1 - v0 + 1) > 100) return undecided;
   float least = std::numeric_limits<float>::infinity();
   float largest = 0.0f;
   for (int row = v0; row <= v1; ++row) {
