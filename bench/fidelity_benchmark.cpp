@@ -5,7 +5,8 @@
 // For every dataset and resolution each method builds a map from all scans
 // (one thread: the map is the same for every thread count), then the
 // finished map is compared with the simple integrator's
-// (tests/support/map_agreement.hpp, the comparison the tests use): occupied
+// (umbra::compare_maps, include/umbra/map/map_agreement.hpp: the comparison
+// the tests and `umbra compare` use): occupied
 // and free voxels, recall and precision of the occupied voxels, the share of
 // the simple map's free voxels left unknown, and the simple map's occupied
 // voxels made free, and the voxels it frees where the simple map has none known
@@ -24,7 +25,7 @@
 
 #include "bench_data.hpp"
 #include "common/argument_cursor.hpp"
-#include "map_agreement.hpp"
+#include "umbra/map/map_agreement.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace {
@@ -141,7 +142,7 @@ int main(int argc, char** argv) {
       const double resolution = std::stod(res_text);
       double seconds = 0.0;
       const OccupancyMap simple = build(data, resolution, kMethods[0], clear_depth, seconds);
-      const test::MapAgreement self = test::compare_maps(simple, simple);
+      const umbra::MapAgreement self = umbra::compare_maps(simple, simple);
       char row[512];
       std::snprintf(row, sizeof row, "| %s | %.3g | simple | %s | - | - | %s | - | - | - | %.2f |\n", name.c_str(),
                     resolution, thousands(self.reference_count(OccupancyState::occupied)).c_str(),
@@ -150,7 +151,7 @@ int main(int argc, char** argv) {
       std::fputs(row, stderr);
       for (const Method& method : methods) {
         const OccupancyMap map = build(data, resolution, method, clear_depth, seconds);
-        const test::MapAgreement a = test::compare_maps(simple, map);
+        const umbra::MapAgreement a = umbra::compare_maps(simple, map);
         std::snprintf(row, sizeof row, "| %s | %.3g | %s | %s | %s | %s | %s | %s | %s | %s | %.2f |\n", name.c_str(),
                       resolution, method.name.c_str(), thousands(a.other_count(OccupancyState::occupied)).c_str(),
                       percent(a.recall()).c_str(), percent(a.precision()).c_str(),

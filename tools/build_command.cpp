@@ -1,4 +1,5 @@
-// `umbra build INPUT... -o MAP.umb`: integrate point clouds into a map.
+// `umbra build INPUT... -o MAP`: integrate point clouds into a map, saved as
+// .umb, or as OctoMap's .bt / .ot (map_output.hpp).
 //
 // In three steps, so that a problem costs as little work as possible: the
 // options are checked (any problem is a usage error, exit code 2); the
@@ -8,6 +9,7 @@
 // inserted and the map saved. A failure names the input and the scan. With
 // --keep-going a bad input, or scan, is skipped with a warning, the rest is
 // saved, and the exit code is 3.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -22,6 +24,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "map_output.hpp"
 #include "options.hpp"
 #include "progress_bar.hpp"
 #include "report.hpp"
@@ -56,6 +59,7 @@ struct BuildOptions {
   bool keep_going = false;
   std::vector<std::string> topics;
   std::string frame = "map";
+  bool resolution_given = false;  ///< --res was on the command line
 };
 
 struct ScanRow {
@@ -64,32 +68,6 @@ struct ScanRow {
   double read_seconds = 0.0;
   double insert_seconds = 0.0;
 };
-
-/// `count` finite numbers separated by commas, or std::invalid_argument naming `option`.
-std::vector<double> parse_numbers(const std::string& text, std::size_t count, const std::string& option) {
-  std::vector<double> values;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    std::size_t used = 0;
-    double value = 0.0;
-    try {
-      value = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size() || !std::isfinite(value)) {
-      throw std::invalid_argument(option + " expects " + std::to_string(count) +
-                                  " finite numbers separated by commas, got '" + text + "'");
-    }
-    values.push_back(value);
-  }
-  if (values.size() != count) {
-    throw std::invalid_argument(option + " expects " + std::to_string(count) + " numbers separated by commas, got '" +
-                                text + "'");
-  }
-  return values;
-}
 
 /// The reader of one input; .bag files go to the ROS reader (ROS builds only: open_scan_source refuses them).
 std::unique_ptr<ScanSource> open_input(const std::string& input, const BuildOptions& options,
@@ -131,9 +109,7 @@ struct BuildPlan {
 BuildPlan plan_build(const BuildOptions& options) {
   return as_usage([&] {
     const std::filesystem::path output = options.output;
-    if (output.extension() != ".umb") {
-      throw std::invalid_argument("output " + output.string() + ": unknown map format (expected a .umb file)");
-    }
+    (void)check_map_output(options.output, options.depth_levels, "-o");
     const std::filesystem::path folder = output.parent_path().empty() ? "." : output.parent_path();
     if (!std::filesystem::is_directory(folder)) {
       throw std::invalid_argument("output folder " + folder.string() + " does not exist");
@@ -154,7 +130,12 @@ BuildPlan plan_build(const BuildOptions& options) {
       }
       plan.sources.depth_camera = {c[0], c[1], c[2], c[3], c[4]};
     }
-    for (const std::string& input : options.inputs) (void)scan_format_for(input, options.format);
+    // The format of every input that exists; a missing one is an input
+    // failure (exit code 1), named by the pre-flight.
+    for (const std::string& input : options.inputs) {
+      std::error_code ignored;
+      if (std::filesystem::exists(input, ignored)) (void)scan_format_for(input, options.format);
+    }
     plan.config.resolution = options.resolution;
     plan.config.depth_levels = options.depth_levels;
     plan.config.color = options.color;
@@ -185,6 +166,16 @@ std::string point_text(Vec3f p) {
   char text[96];
   std::snprintf(text, sizeof text, "(%g, %g, %g)", p.x, p.y, p.z);
   return text;
+}
+
+/// Throws std::runtime_error ("cannot read PATH: No such file or directory")
+/// when the input is not there (or a folder above it cannot be searched).
+void check_input_exists(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::exists(path, error)) {
+    throw std::runtime_error("cannot read " + path.string() + ": " +
+                             (error ? error.message() : std::string("No such file or directory")));
+  }
 }
 
 /// What the pre-flight found out about one input.
@@ -239,6 +230,7 @@ std::vector<CheckedInput> preflight(const BuildOptions& options, const BuildPlan
     CheckedInput& entry = checked[input];
     std::vector<Vec3f> origins;
     try {
+      check_input_exists(options.inputs[input]);
       const std::unique_ptr<ScanSource> source = open_input(options.inputs[input], options, plan.sources);
       for (const std::string& warning : source->warnings()) std::fprintf(stderr, "umbra: warning: %s\n", warning.c_str());
       entry.scans = source->scan_count();
@@ -263,10 +255,32 @@ std::vector<CheckedInput> preflight(const BuildOptions& options, const BuildPlan
   std::size_t usable = 0;
   for (const CheckedInput& entry : checked) usable += entry.skipped ? 0 : 1;
   if (usable == 0) throw std::runtime_error("every input was skipped: nothing to build");
-  std::printf("checked %zu of %zu inputs (%zu scans); every sensor origin they state lies inside the map; the output "
+  std::printf("checked %zu of %zu %s (%zu %s); every sensor origin they state lies inside the map; the output "
               "folder is writable\n",
-              usable, options.inputs.size(), scans);
+              usable, options.inputs.size(), options.inputs.size() == 1 ? "input" : "inputs", scans,
+              scans == 1 ? "scan" : "scans");
   return checked;
+}
+
+/// "3 of 120 scans inserted (input 1 of 2)", for the progress bar.
+std::string progress_detail(std::size_t inserted, std::size_t total_scans, const BuildOptions& options,
+                            std::size_t input) {
+  std::string text = std::to_string(inserted);
+  text += total_scans > 0 ? " of " + std::to_string(total_scans) + (total_scans == 1 ? " scan" : " scans")
+                          : (inserted == 1 ? " scan" : " scans");
+  text += " inserted";
+  if (options.inputs.size() > 1) {
+    text += " (input " + std::to_string(input + 1) + " of " + std::to_string(options.inputs.size()) + ")";
+  }
+  return text;
+}
+
+/// The width of the table's first column: its longest scan name (TUM's
+/// frame names run past 48 characters), at least that of its heading.
+int name_column_width(const std::vector<ScanRow>& rows) {
+  std::size_t width = 4;  // "scan"
+  for (const ScanRow& row : rows) width = std::max(width, row.name.size());
+  return static_cast<int>(width);
 }
 
 int run_build(const BuildOptions& options) {
@@ -275,11 +289,24 @@ int run_build(const BuildOptions& options) {
   if (plan.box) map.set_bounding_box(plan.box);
   const InsertOptions& insert = plan.insert;
   Problems problems(options.keep_going);
+  // The resolution decides everything about the map: say it, and say when it is the default.
+  std::printf("%g m voxels%s, %d depth levels (the map spans +-%g m), integrator %s\n", map.resolution(),
+              options.resolution_given ? "" : " (the default; set it with --res)", map.depth_levels(),
+              map.grid().half_extent(), to_string(insert.integrator));
   const std::vector<CheckedInput> checked = preflight(options, plan, map.grid(), problems);
 
   std::vector<ScanRow> rows;
   InsertStats total;
   std::size_t uncoloured = 0;
+  std::size_t total_scans = 0;  // 0: some input does not say how many it holds
+  for (const CheckedInput& entry : checked) {
+    if (entry.skipped) continue;
+    if (entry.scans == 0) {
+      total_scans = 0;
+      break;
+    }
+    total_scans += entry.scans;
+  }
   ProgressBar bar("building");
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t file = 0; file < options.inputs.size(); ++file) {
@@ -333,18 +360,20 @@ int run_build(const BuildOptions& options) {
       total += row.stats;
       rows.push_back(row);
       const double fraction = (static_cast<double>(file) + source->progress()) / static_cast<double>(options.inputs.size());
-      bar.update(fraction, std::to_string(rows.size()) + " scans");
+      bar.update(fraction, progress_detail(rows.size(), total_scans, options, file));
     }
     report_skipped(*source);
   }
-  bar.finish();
+  bar.complete(progress_detail(rows.size(), total_scans, options, options.inputs.size() - 1));
   const double build_seconds = seconds_since(start);
 
   double insert_seconds = 0.0;
   double read_seconds = 0.0;
-  std::printf("%-48s %10s %10s %9s %9s %12s\n", "scan", "points", "rays", "read ms", "insert ms", "M points/s");
+  const int name_width = name_column_width(rows);
+  std::printf("%-*s %10s %10s %9s %9s %12s\n", name_width, "scan", "points", "rays", "read ms", "insert ms",
+              "M points/s");
   for (const ScanRow& row : rows) {
-    std::printf("%-48s %10zu %10zu %9.1f %9.1f %12.2f\n", row.name.c_str(), row.stats.points, row.stats.rays,
+    std::printf("%-*s %10zu %10zu %9.1f %9.1f %12.2f\n", name_width, row.name.c_str(), row.stats.points, row.stats.rays,
                 row.read_seconds * 1e3, row.insert_seconds * 1e3,
                 row.insert_seconds > 0 ? static_cast<double>(row.stats.points) / row.insert_seconds / 1e6 : 0.0);
     insert_seconds += row.insert_seconds;
@@ -361,7 +390,8 @@ int run_build(const BuildOptions& options) {
                 map.grid().node_size(insert.resolved_clear_depth(map.grid())), insert.fine_steps);
   }
   const unsigned asked = insert.threads == 0 ? hardware_threads() : insert.threads;
-  std::printf(", %u threads\n", total.threads != 0 ? total.threads : asked);
+  const unsigned used = total.threads != 0 ? total.threads : asked;
+  std::printf(", %u %s\n", used, used == 1 ? "thread" : "threads");
   if (total.threads != 0 && total.threads < asked) {
     std::fprintf(stderr,
                  "umbra: warning: only %u of the %u threads asked for could be started (the system refused more: a "
@@ -379,7 +409,8 @@ int run_build(const BuildOptions& options) {
   if (uncoloured > 0) std::printf("warning: --color, but %zu scans carry no colours\n", uncoloured);
 
   const auto save_start = std::chrono::steady_clock::now();
-  save_map(map, options.output, MapSaveOptions{options.threads});
+  print_format_notes(map, std::nullopt, map_file_format_for(options.output));
+  save_map_as(map, options.output, options.threads);
   std::printf("wrote %s in %.3f s\n", options.output.c_str(), seconds_since(save_start));
   print_statistics(stdout, compute_statistics(map));
   if (problems.count() > 0) {
@@ -399,13 +430,16 @@ Command add_build_command(CLI::App& app) {
       "Build a map from point clouds: OctoMap ScanGraph (.graph), ASCII x y z [r g b] (.xyz .dat .txt, also .bz2), "
       "PLY, PCD, KITTI velodyne (.bin or a folder, with --poses), TUM RGB-D (a sequence folder), ROS bags (.bag, "
       "PointCloud2 with TF; ROS builds only)");
+  // No CLI11 existence check: a missing input is an input failure (exit code 1), named by the pre-flight.
   command->add_option("inputs", options->inputs, "point-cloud files or sequence folders, inserted in order")
-      ->required()
-      ->check(CLI::ExistingPath);
-  command->add_option("-o,--output", options->output, "map file to write (.umb)")->required();
-  command->add_option("--res", options->resolution, "voxel edge in metres (0.0001 to 1000)")
-      ->capture_default_str()
-      ->check(number_in(kMinResolution, kMaxResolution, "the voxel edge in metres"));
+      ->required();
+  command->add_option("-o,--output", options->output,
+                      "map file to write: .umb (umbra), or OctoMap's .bt / .ot (16 depth levels); replaced atomically")
+      ->required();
+  CLI::Option* res = command->add_option("--res", options->resolution,
+                                         "voxel edge in metres, 0.0001 to 1000 (default 0.1, as OctoMap's tools; "
+                                         "the build's first line says which was used)")
+                         ->check(number_in(kMinResolution, kMaxResolution, "the voxel edge in metres"));
   command->add_option("--depth-levels", options->depth_levels, "tree depth levels (1-21; 16 like OctoMap)")
       ->capture_default_str()
       ->check(CLI::Range(1, 21));
@@ -448,7 +482,10 @@ Command add_build_command(CLI::App& app) {
   command->add_option("--topic", options->topics, "rosbag: a PointCloud2 topic to read (repeatable; default: all)");
   command->add_option("--frame", options->frame, "rosbag: the map frame, clouds are moved into it with the bag's TF")
       ->capture_default_str();
-  return [options] { return run_build(*options); };
+  return [options, res] {
+    options->resolution_given = res->count() > 0;
+    return run_build(*options);
+  };
 }
 
 }  // namespace umbra::cli

@@ -14,7 +14,8 @@ using Command = std::function<int()>;
 /// Exit codes (README, "Errors and limits").
 enum ExitCode : int {
   kSuccess = 0,
-  kFailure = 1,        ///< bad input, I/O error, memory limit: the message says what and where; nothing saved
+  kFailure = 1,        ///< a missing, unreadable or bad input, I/O error, memory limit: the message names the
+                       ///< file; nothing saved
   kBadUsage = 2,       ///< an option or argument is wrong: nothing read
   kSavedWithSkips = 3  ///< build --keep-going skipped an input or scan, and saved the rest
 };
@@ -28,6 +29,9 @@ Command add_demo_command(CLI::App& app);
 Command add_build_command(CLI::App& app);
 Command add_info_command(CLI::App& app);
 Command add_convert_command(CLI::App& app);
+Command add_crop_command(CLI::App& app);
+Command add_compare_command(CLI::App& app);
+Command add_export_command(CLI::App& app);
 Command add_query_command(CLI::App& app);
 Command add_render_command(CLI::App& app);
 Command add_view_command(CLI::App& app);

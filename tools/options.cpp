@@ -7,8 +7,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <sstream>
+#include <stdexcept>
 
 #include "umbra/core/memory_limit.hpp"
+#include "umbra/io/map_formats.hpp"
 
 namespace umbra::cli {
 namespace {
@@ -27,6 +30,9 @@ std::string bound_text(double value) {
   std::snprintf(text, sizeof text, "%g", value);
   return text;
 }
+
+/// "--bbox " before a message, or nothing where CLI11 names the option itself.
+std::string named(const std::string& option) { return option.empty() ? std::string() : option + " "; }
 
 }  // namespace
 
@@ -74,6 +80,61 @@ std::uint64_t parse_size(const std::string& text) {
   const double bytes = number * scale;
   if (!(bytes >= 1.0 && bytes < 1.8e19)) throw bad();
   return static_cast<std::uint64_t>(bytes);
+}
+
+std::vector<double> parse_numbers(const std::string& text, std::size_t count, const std::string& option) {
+  std::vector<double> values;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    double value = 0.0;
+    if (!parse_double(item, value) || !std::isfinite(value)) {
+      throw std::invalid_argument(named(option) + "expects " + std::to_string(count) +
+                                  " finite numbers separated by commas, got '" + text + "'");
+    }
+    values.push_back(value);
+  }
+  if (values.size() != count) {
+    throw std::invalid_argument(named(option) + "expects " + std::to_string(count) +
+                                " numbers separated by commas, got '" + text + "'");
+  }
+  return values;
+}
+
+Aabb parse_box(const std::string& text, const std::string& option) {
+  const std::vector<double> b = parse_numbers(text, 6, option);
+  const Aabb box{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}};
+  if (!(box.min.x <= box.max.x && box.min.y <= box.max.y && box.min.z <= box.max.z)) {
+    throw std::invalid_argument(named(option) + "expects minx,miny,minz,maxx,maxy,maxz with each min <= its max, got '" +
+                                text + "'");
+  }
+  return box;
+}
+
+CLI::Validator box_check() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        try {
+          (void)parse_box(text, "");  // CLI11 puts the option's name before the message
+          return "";
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+      },
+      "minx,miny,minz,maxx,maxy,maxz");
+}
+
+CLI::Validator map_extension() {
+  return CLI::Validator(
+      [](std::string& name) -> std::string {
+        try {
+          (void)map_file_format_for(name);
+          return "";
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+      },
+      "MAP(.umb|.bt|.ot)");
 }
 
 void add_memory_option(CLI::App& command) {

@@ -1,5 +1,6 @@
-// `umbra query MAP KIND --input FILE|-`: answers queries about a map, one
-// per input line, one answer per output line, in order.
+// `umbra query MAP KIND [--input FILE|-]`: answers queries about a map, one
+// per input line, one answer per output line, in order. Without --input the
+// lines come from standard input when it is not a terminal.
 //
 //   sphere    x y z r                      -> 1 if the ball collides, else 0
 //   box       minx miny minz maxx maxy maxz -> 1 / 0
@@ -197,16 +198,23 @@ void answer_and_print(const OccupancyMap& map, LineQuery kind, const LineQuerySe
 }
 
 int run_query(const QueryOptions& options) {
+  // No --input: standard input, unless it is a terminal (a user who forgot
+  // --input would otherwise sit before a program waiting for them). Checked
+  // before the map is loaded: a usage error reads nothing.
+  const bool line_kind = options.kind != "nodes";
+  const bool from_stdin = options.input == "-" || (options.input.empty() && ::isatty(STDIN_FILENO) != 1);
+  if (line_kind && options.input.empty() && !from_stdin) {
+    throw UsageError("query " + options.kind + " reads one query per line (" +
+                     layout_of(*line_query_named(options.kind)) +
+                     ") from --input FILE, or from standard input when it is a pipe or a file; standard input is a "
+                     "terminal here (use --input - to type the lines)");
+  }
   const OccupancyMap map = load_any_map(options.map_path);
   if (options.depth < 0 || options.depth > map.depth_levels()) {
     std::fprintf(stderr, "umbra: --depth %d is outside [0, %d] for this map\n", options.depth, map.depth_levels());
     return 2;
   }
-  if (options.kind == "nodes") return run_nodes(map, options);
-  if (options.input.empty()) {
-    std::fprintf(stderr, "umbra: query %s needs --input FILE (or - for standard input)\n", options.kind.c_str());
-    return 2;
-  }
+  if (!line_kind) return run_nodes(map, options);
   if (options.kind == "gain") {
     try {  // the field of view and ranges, checked once rather than on every line
       Frustum::from_degrees({}, 0.0, 0.0, options.hfov, options.vfov, options.min_range, options.max_range).validate();
@@ -217,7 +225,7 @@ int run_query(const QueryOptions& options) {
   }
   const std::optional<LineQuery> kind = line_query_named(options.kind);
   if (!kind) throw std::logic_error("unknown query kind " + options.kind);  // CLI11 checked the name
-  const std::string name = options.input == "-" ? "standard input" : options.input;
+  const std::string name = from_stdin ? "standard input" : options.input;
   LineQuerySettings settings;
   settings.collision = {options.unknown == "free", options.depth};
   settings.radius = options.radius;
@@ -229,7 +237,7 @@ int run_query(const QueryOptions& options) {
 
   std::unique_ptr<DescriptorInput> input;
   try {
-    input = options.input == "-" ? std::make_unique<DescriptorInput>(STDIN_FILENO)
+    input = from_stdin ? std::make_unique<DescriptorInput>(STDIN_FILENO)
                                  : std::make_unique<DescriptorInput>(options.input);
   } catch (const std::runtime_error& e) {
     throw std::runtime_error(name + ": " + e.what());
@@ -257,6 +265,26 @@ int run_query(const QueryOptions& options) {
   return totals.bad > 0 ? 1 : 0;
 }
 
+/// Each kind with its input line and its answer line, for --help.
+std::string query_help_footer() {
+  std::string text = "Kinds: the numbers of each input line -> the answer line printed for it\n";
+  char row[512];
+  for (const LineQuery kind : kLineQueries) {
+    std::snprintf(row, sizeof row, "  %-8s %-30s -> %s\n", to_string(kind), layout_of(kind), answer_of(kind));
+    text += row;
+  }
+  std::snprintf(row, sizeof row, "  %-8s %-30s -> %s\n", "nodes", "(no input)",
+                "'x y z size state' per node (--state, --box, --sphere, --depth), or their count (--count)");
+  text += row;
+  text +=
+      "gain's sensor: --hfov, --vfov (degrees), --min-range, --max-range (m), --method exact|fast.\n"
+      "Lines come from --input FILE, from standard input with --input -, or from standard input when --input is not "
+      "given and standard input is a pipe or a file. Numbers are separated by spaces, tabs or commas; blank lines and "
+      "lines starting with # are skipped; a bad line is reported on stderr with its number, gets no answer, and makes "
+      "the exit code 1. The time spent answering is one JSON object on stderr's last line.";
+  return text;
+}
+
 }  // namespace
 
 Command add_query_command(CLI::App& app) {
@@ -264,12 +292,12 @@ Command add_query_command(CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "query", "Answer collision, line, ray-cast, information-gain and node queries about a map, one per input line");
   command->add_option("map", options->map_path, "map file (.umb, or OctoMap's .bt / .ot)")
-      ->required()
-      ->check(CLI::ExistingFile);
+      ->required();  // a missing file is an input failure (exit code 1), named when it is loaded
   command->add_option("kind", options->kind, "sphere | box | line | raycast | gain | nodes")
       ->required()
       ->check(CLI::IsMember({"sphere", "box", "line", "raycast", "gain", "nodes"}));
-  command->add_option("--input", options->input, "file of queries, one per line; - for standard input");
+  command->add_option("--input", options->input,
+                      "file of queries, one per line; - for standard input (the default when it is a pipe or a file)");
   command->add_option("--unknown", options->unknown, "unknown space blocks (default) or counts as free")
       ->check(CLI::IsMember({"blocks", "free"}));
   command->add_option("--depth", options->depth, "answer at this depth (0: finest voxels; coarser is conservative)")
@@ -294,6 +322,7 @@ Command add_query_command(CLI::App& app) {
       ->expected(4);
   command->add_flag("--count", options->count, "nodes: print only how many there are");
   add_memory_option(*command);
+  command->footer(query_help_footer());
   return [options] { return run_query(*options); };
 }
 

@@ -57,6 +57,17 @@ const char* layout_of(LineQuery kind) {
   return "?";
 }
 
+const char* answer_of(LineQuery kind) {
+  switch (kind) {
+    case LineQuery::sphere: return "1 if a voxel in the ball blocks (occupied, or unknown unless --unknown free), else 0";
+    case LineQuery::box: return "1 if a voxel in the box blocks, else 0";
+    case LineQuery::line: return "1 if a voxel along the segment blocks (--radius R: in the capsule around it), else 0";
+    case LineQuery::raycast: return "'1 cx cy cz', the centre of the first occupied voxel within max_range, or 0";
+    case LineQuery::gain: return "'unknown_voxels volume_m3': the unknown space a sensor at that pose would see";
+  }
+  return "?";
+}
+
 namespace {
 
 bool is_separator(char c) { return c == ' ' || c == '\t' || c == '\r' || c == ','; }

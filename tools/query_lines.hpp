@@ -30,6 +30,11 @@ const char* to_string(LineQuery kind);
 /// How many numbers a line of this kind holds, and their names ("x y z r").
 std::size_t numbers_of(LineQuery kind);
 const char* layout_of(LineQuery kind);
+/// What the answer line to one input line holds, in words (`umbra query --help`).
+const char* answer_of(LineQuery kind);
+/// Every kind that reads lines, in the order the help lists them.
+inline constexpr LineQuery kLineQueries[] = {LineQuery::sphere, LineQuery::box, LineQuery::line, LineQuery::raycast,
+                                             LineQuery::gain};
 
 /// The numbers of one line (blank and '#' lines are not passed here):
 /// separated by spaces, tabs or commas, each finite, exactly numbers_of(kind)

@@ -1,5 +1,6 @@
 #include "report.hpp"
 
+#include <array>
 #include <cinttypes>
 #include <cmath>
 #include <ostream>
@@ -49,7 +50,30 @@ struct JsonNumber {
 
 }  // namespace
 
-std::string statistics_json(const MapStatistics& s) {
+std::size_t octomap_node_count(const OccupancyMap& map) {
+  // In Morton order the ancestors of successive childless nodes share a
+  // prefix: each known node adds itself and those ancestors not counted yet,
+  // found by comparing with the last ancestor counted at each depth.
+  const int levels = map.depth_levels();
+  std::array<std::uint64_t, kMaxDepthLevels + 1> last{};
+  std::array<bool, kMaxDepthLevels + 1> counted{};
+  std::size_t count = 0;
+  map.for_each_leaf([&](const Node& node) {
+    if (node.log_odds == 0.0f) return;  // never observed: OctoMap has no node there
+    ++count;
+    const std::uint64_t code = node.code();
+    for (int depth = node.depth + 1; depth <= levels; ++depth) {
+      const std::uint64_t ancestor = code >> (3 * depth);  // 3 * 21 = 63 bits at most
+      if (counted[depth] && last[depth] == ancestor) break;  // it, and so every node above it, is counted
+      counted[depth] = true;
+      last[depth] = ancestor;
+      ++count;
+    }
+  });
+  return count;
+}
+
+std::string statistics_json(const MapStatistics& s, const std::string& extra) {
   std::ostringstream json;
   json.precision(17);
   json << "{\"resolution\": " << JsonNumber{s.resolution} << ", \"depth_levels\": " << s.depth_levels
@@ -65,7 +89,7 @@ std::string statistics_json(const MapStatistics& s) {
   } else {
     json << ", \"known_min\": null, \"known_max\": null";
   }
-  json << "}";
+  json << extra << "}";
   return json.str();
 }
 

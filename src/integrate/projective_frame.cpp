@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "umbra/core/morton.hpp"
@@ -85,6 +86,10 @@ ProjectiveRule::ProjectiveRule(const Grid& grid_in, const ProjectiveFrame& frame
     const Key k = morton::decode(i);
     const Vec3d offset = frame_in.rotate(Vec3d{k.x * res, k.y * res, k.z * res});
     for (std::size_t axis = 0; axis < 3; ++axis) offset_table[axis][i] = static_cast<float>(offset[axis]);
+  }
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    offset_min[axis] = *std::min_element(offset_table[axis].begin(), offset_table[axis].end());
+    offset_max[axis] = *std::max_element(offset_table[axis].begin(), offset_table[axis].end());
   }
   centre_dz = static_cast<float>(frame_in.rotate(Vec3d{1.5 * res, 1.5 * res, 1.5 * res}).z);
   whole_bricks_seen = 4.0 * res <= kFinestSeenBorder;
@@ -275,9 +280,136 @@ std::uint64_t ProjectiveRule::cleared(std::uint64_t brick) const {
 
 std::uint64_t ProjectiveRule::cleared_in_range(std::uint64_t brick, Key first) const {
   static const bool avx2 = detail::projective_avx2_available();  // the CPU does not change
-  if (!avx2) return cleared_plain(brick);
   const Vec3f base = brick_origin(first);
-  return detail::projective_cleared_avx2(*this, base, window_level(base));
+  const int level = window_level(base);
+  // Most bricks a walk reaches are cleared whole or not at all (TUM at 4 mm:
+  // 36% and 54%): bounds decide those for a tenth of a voxel-by-voxel pass.
+  if (const std::optional<std::uint64_t> whole = whole_bricks({base, base})) return *whole;
+  if (!avx2) return cleared_plain(brick);
+  return detail::projective_cleared_avx2(*this, base, level);
+}
+
+// Why the bounds hold. Each voxel's float coordinate is fl(origin + offset),
+// and rounding is monotonic, so it lies between fl(origin + least offset)
+// and fl(origin + largest offset). Likewise 1 / z lies between the bounds'
+// reciprocals; x (1 / z) between the least and largest of the four corner
+// products (the exact product of two intervals is extreme at a corner, and
+// rounding keeps the order); then times fx > 0 plus cx; the clamp into the
+// image, truncation and floor are monotonic too. So every voxel reads a
+// cell inside the rectangle spanned by the bounds' cells, and its reading
+// lies between the rectangle's least and largest. (The build forbids
+// contracting a * b + c into one rounding, which would break the equality
+// with cleared_plain as well.)
+ProjectiveRule::OriginBounds ProjectiveRule::brick_origins(Key first, int depth) const {
+  if (depth == 2) {
+    const Vec3f origin = brick_origin(first);
+    return {origin, origin};
+  }
+  // Camera coordinates are linear in the position, so the bricks' origins
+  // are extreme at the corner bricks; their double evaluation errs by far
+  // less than the pad, and rounding the padded bounds to float keeps them
+  // bounds of every brick's float origin (rounding is monotonic).
+  const double span = ((1u << depth) - 4) * grid->resolution();  // first voxel of the last brick
+  const Vec3d lo{grid->axis_center(first.x), grid->axis_center(first.y), grid->axis_center(first.z)};
+  Vec3d low = frame->to_camera(lo);
+  Vec3d high = low;
+  for (unsigned corner = 1; corner < 8; ++corner) {
+    const Vec3d c = frame->to_camera(
+        Vec3d{lo.x + (corner & 1u ? span : 0.0), lo.y + (corner & 2u ? span : 0.0), lo.z + (corner & 4u ? span : 0.0)});
+    low = Vec3d{std::min(low.x, c.x), std::min(low.y, c.y), std::min(low.z, c.z)};
+    high = Vec3d{std::max(high.x, c.x), std::max(high.y, c.y), std::max(high.z, c.z)};
+  }
+  const auto pad = [](double value) { return 1e-12 * (1.0 + std::abs(value)); };
+  return {Vec3f(Vec3d{low.x - pad(low.x), low.y - pad(low.y), low.z - pad(low.z)}),
+          Vec3f(Vec3d{high.x + pad(high.x), high.y + pad(high.y), high.z + pad(high.z)})};
+}
+
+std::optional<std::uint64_t> ProjectiveRule::whole_bricks(const OriginBounds& origins) const {
+  constexpr std::optional<std::uint64_t> undecided;
+  // window_level falls with the depth: one level for all when both ends agree.
+  const int level = window_level(origins.lo);
+  if (window_level(origins.hi) != level) return undecided;
+  const float x_lo = origins.lo.x + offset_min[0];
+  const float x_hi = origins.hi.x + offset_max[0];
+  const float y_lo = origins.lo.y + offset_min[1];
+  const float y_hi = origins.hi.y + offset_max[1];
+  const float z_lo = origins.lo.z + offset_min[2];
+  const float z_hi = origins.hi.z + offset_max[2];
+  // Near the camera plane the reciprocals grow without bound: left to the voxels.
+  if (!(z_lo > 1e-6f)) return undecided;
+  bool all_in_range = true;
+  if (max_range_squared > 0.0f) {
+    const auto largest_square = [](float lo, float hi) {
+      const float a = std::max(std::abs(lo), std::abs(hi));
+      return a * a;
+    };
+    const auto least_square = [](float lo, float hi) {
+      const float a = lo > 0.0f ? lo : (hi < 0.0f ? -hi : 0.0f);
+      return a * a;
+    };
+    const float nearest = (least_square(x_lo, x_hi) + least_square(y_lo, y_hi)) + least_square(z_lo, z_hi);
+    if (!(nearest <= max_range_squared)) return 0;  // no voxel within range
+    const float farthest = (largest_square(x_lo, x_hi) + largest_square(y_lo, y_hi)) + largest_square(z_lo, z_hi);
+    all_in_range = farthest <= max_range_squared;
+  }
+  const float inverse_lo = 1.0f / z_hi;
+  const float inverse_hi = 1.0f / z_lo;
+  struct Interval {
+    float lo;
+    float hi;
+  };
+  const auto projection = [&](float lo, float hi, float focal, float centre) {
+    const float a = lo * inverse_lo;
+    const float b = lo * inverse_hi;
+    const float c = hi * inverse_lo;
+    const float d = hi * inverse_hi;
+    return Interval{std::min(std::min(a, b), std::min(c, d)) * focal + centre,
+                    std::max(std::max(a, b), std::max(c, d)) * focal + centre};
+  };
+  const Interval u = projection(x_lo, x_hi, fx, cx_half);
+  const Interval v = projection(y_lo, y_hi, fy, cy_half);
+  // The cells the voxels can read (cleared_plain: clamped into the image first).
+  const auto clamp_u = [&](float value) { return std::min(std::max(value, 0.0f), width_inside); };
+  const auto clamp_v = [&](float value) { return std::min(std::max(value, 0.0f), height_inside); };
+  const float* lowest;   // the cells' least readings
+  const float* highest;  // and largest
+  int stride;
+  int u0, u1, v0, v1;
+  if (level == 0) {
+    lowest = frame->depth.data();  // a scan's half pixels read no nearer than their pixel's nearest
+    highest = frame->pyramid.level_max(0);
+    stride = frame->width;
+    u0 = static_cast<int>(clamp_u(u.lo));
+    u1 = static_cast<int>(clamp_u(u.hi));
+    v0 = static_cast<int>(clamp_v(v.lo));
+    v1 = static_cast<int>(clamp_v(v.hi));
+  } else {
+    // window_max's entry (b + 1) (width + 1) + (a + 1) for window (a, b).
+    lowest = highest = frame->pyramid.window_max(level);
+    stride = frame->pyramid.width(level) + 1;
+    const float scale = std::ldexp(1.0f, -level);
+    u0 = static_cast<int>(std::floor(clamp_u(u.lo) * scale - 0.5f)) + 1;
+    u1 = static_cast<int>(std::floor(clamp_u(u.hi) * scale - 0.5f)) + 1;
+    v0 = static_cast<int>(std::floor(clamp_v(v.lo) * scale - 0.5f)) + 1;
+    v1 = static_cast<int>(std::floor(clamp_v(v.hi) * scale - 0.5f)) + 1;
+  }
+  // Wide footprints (near the camera, wide bricks) are left to the voxels.
+  if ((u1 - u0 + 1) * (v1 - v0 + 1) > 64) return undecided;
+  float least = std::numeric_limits<float>::infinity();
+  float largest = 0.0f;
+  for (int row = v0; row <= v1; ++row) {
+    const std::size_t start = static_cast<std::size_t>(row) * static_cast<std::size_t>(stride);
+    for (int column = u0; column <= u1; ++column) {
+      least = std::min(least, lowest[start + static_cast<std::size_t>(column)]);
+      largest = std::max(largest, highest[start + static_cast<std::size_t>(column)]);
+    }
+  }
+  // No voxel nearer than every reading's d - margin: none cleared.
+  if (z_lo >= largest - margin) return 0;
+  // Every voxel seen (inside the image, in range) and nearer than every reading: all cleared.
+  const bool inside = u.lo >= 0.0f && u.hi < width && v.lo >= 0.0f && v.hi < height;
+  if (inside && all_in_range && z_hi < least - margin) return ~std::uint64_t{0};
+  return undecided;
 }
 
 }  // namespace umbra

@@ -183,6 +183,8 @@ struct ProjectiveRule {
   int top_level = 0;               ///< the pyramid's top level
   /// Camera-frame offset of brick voxel i (Morton index, 0..63) from the brick's first voxel.
   std::array<std::array<float, 64>, 3> offset_table{};
+  std::array<float, 3> offset_min{};  ///< per axis, the least of offset_table's 64 entries
+  std::array<float, 3> offset_max{};  ///< and the largest
   std::optional<KeyBox> box_keys;  ///< only voxels in it change
   /// The map before this scan (known obstacles: see the file comment), or
   /// none (then no voxel is held as an obstacle).
@@ -224,6 +226,24 @@ struct ProjectiveRule {
   [[nodiscard]] std::uint64_t cleared(std::uint64_t brick) const;
   /// cleared() for a brick known to be within range, whose first voxel is `first`.
   [[nodiscard]] std::uint64_t cleared_in_range(std::uint64_t brick, Key first) const;
+  /// Bounds on the float camera-frame origins (first voxels' centres, as
+  /// brick_origin) of all the bricks of a node: per axis, none is below `lo`
+  /// or above `hi`.
+  struct OriginBounds {
+    Vec3f lo;
+    Vec3f hi;
+  };
+  /// Those of the depth-`depth` node (>= 2) whose first voxel is `first`
+  /// (exact for a brick).
+  [[nodiscard]] OriginBounds brick_origins(Key first, int depth) const;
+  /// The rule's answer for every brick whose origin lies within `origins`
+  /// at once, when bounds decide it: 0 (they clear nothing) or all 64 bits
+  /// (they clear every voxel); none when some voxels may differ or the
+  /// bricks' window levels differ. Bounds, not an estimate: float rounding
+  /// is monotonic, so the voxels' float coordinates, projections and cells
+  /// lie between those of the extreme origins and offsets (see the .cpp),
+  /// and the answer is cleared_plain's for each brick (within range).
+  [[nodiscard]] std::optional<std::uint64_t> whole_bricks(const OriginBounds& origins) const;
 };
 
 namespace detail {

@@ -210,8 +210,31 @@ void ProjectiveTracer::trace_brick(std::uint64_t brick, Key first, UpdateBatch& 
   if (voxels != 0) batch.add_misses_in_brick(brick, voxels);
 }
 
+std::optional<ProjectiveTracer::Decision> ProjectiveTracer::bounded_decision(Key first, int depth) const {
+  // Only where every brick of the node answers to the same box and range
+  // tests as the node.
+  if (rule_.box_keys) {
+    const std::uint32_t last = (std::uint32_t{1} << depth) - 1;
+    const Key high{first.x + last, first.y + last, first.z + last};
+    if (!rule_.box_keys->contains(first) || !rule_.box_keys->contains(high)) return std::nullopt;
+  }
+  if (rule_.max_range > 0.0 && rule_.range_depth != 0) {
+    if (rule_.range_depth < depth) return std::nullopt;
+    if (!rule_.within_range(first)) return Decision::none;
+  }
+  const std::optional<std::uint64_t> whole = rule_.whole_bricks(rule_.brick_origins(first, depth));
+  if (!whole) return std::nullopt;
+  return *whole == 0 ? Decision::none : Decision::all;
+}
+
 void ProjectiveTracer::trace_node(std::uint64_t code, Key first, int depth, UpdateBatch& batch) const {
-  switch (classify_node(first, depth)) {
+  // Small nodes (a few pixels wide) first by the float bounds: exact, so
+  // they decide nodes the double test's margins and the pyramid's coarse
+  // rectangles leave split.
+  std::optional<Decision> decision;
+  if (depth <= kBoundedDepth) decision = bounded_decision(first, depth);
+  if (!decision) decision = classify_node(first, depth);
+  switch (*decision) {
     case Decision::none:
       return;
     case Decision::all:

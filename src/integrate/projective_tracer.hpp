@@ -70,6 +70,11 @@ class ProjectiveTracer {
   /// classify() and trace() of a node whose first voxel's key is `first`
   /// (the walk keeps keys, so that nodes are not decoded).
   [[nodiscard]] Decision classify_node(Key first, int depth) const;
+  /// The node decided by the rule's float bounds (ProjectiveRule::whole_bricks),
+  /// when they decide it and the node's bricks share its box and range tests.
+  [[nodiscard]] std::optional<Decision> bounded_decision(Key first, int depth) const;
+  /// Nodes up to this depth are asked bounded_decision first.
+  static constexpr int kBoundedDepth = 4;
   void trace_node(std::uint64_t code, Key first, int depth, UpdateBatch& batch) const;
   /// A split brick: the voxels it clears, in the box.
   void trace_brick(std::uint64_t brick, Key first, UpdateBatch& batch) const;

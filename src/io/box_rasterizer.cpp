@@ -29,7 +29,8 @@ BoxRasterizer::BoxRasterizer(const RenderCamera& camera, Image& image)
 
 double BoxRasterizer::shade(Vec3d normal) const { return 0.5 + 0.5 * std::max(0.0, normal.dot(light_)); }
 
-void BoxRasterizer::draw_box(Vec3d min, Vec3d max, Rgb colour) {
+template <typename Face>
+void BoxRasterizer::for_each_facing_face(Vec3d min, Vec3d max, Face&& face) const {
   const Vec3d size = max - min;
   for (int axis = 0; axis < 3; ++axis) {
     // The face of this axis that looks toward the viewer, if one does.
@@ -45,12 +46,25 @@ void BoxRasterizer::draw_box(Vec3d min, Vec3d max, Rgb colour) {
     const auto b = std::size_t((axis + 2) % 3);
     edge_a[a] = size[a];
     edge_b[b] = size[b];
-    const double factor = shade(normal);
-    draw_face(corner, edge_a, edge_b, {scaled(colour.r, factor), scaled(colour.g, factor), scaled(colour.b, factor)});
+    face(corner, edge_a, edge_b, normal);
   }
 }
 
-void BoxRasterizer::draw_face(Vec3d corner, Vec3d edge_a, Vec3d edge_b, Rgb colour) {
+void BoxRasterizer::draw_box(Vec3d min, Vec3d max, Rgb colour) {
+  for_each_facing_face(min, max, [&](Vec3d corner, Vec3d edge_a, Vec3d edge_b, Vec3d normal) {
+    const double factor = shade(normal);
+    draw_face(corner, edge_a, edge_b, {scaled(colour.r, factor), scaled(colour.g, factor), scaled(colour.b, factor)},
+              true);
+  });
+}
+
+void BoxRasterizer::paint_silhouette(Vec3d min, Vec3d max, Rgb colour) {
+  for_each_facing_face(min, max, [&](Vec3d corner, Vec3d edge_a, Vec3d edge_b, Vec3d) {
+    draw_face(corner, edge_a, edge_b, colour, false);
+  });
+}
+
+void BoxRasterizer::draw_face(Vec3d corner, Vec3d edge_a, Vec3d edge_b, Rgb colour, bool depth_tested) {
   const double mpp = camera_.metres_per_pixel;
   const auto [cx, cy] = camera_.pixel(corner);
   // The edges on screen (rows grow downwards).
@@ -82,10 +96,12 @@ void BoxRasterizer::draw_face(Vec3d corner, Vec3d edge_a, Vec3d edge_b, Rgb colo
       const double s = (qx * by - qy * bx) / det;
       const double t = (ax * qy - ay * qx) / det;
       if (s < -kEdgeSlack || s > 1 + kEdgeSlack || t < -kEdgeSlack || t > 1 + kEdgeSlack) continue;
-      const auto depth = static_cast<float>(depth0 + s * depth_a + t * depth_b);
       const std::size_t pixel = std::size_t(row) * std::size_t(image_.width) + std::size_t(column);
-      if (!(depth > depth_[pixel])) continue;
-      depth_[pixel] = depth;
+      if (depth_tested) {
+        const auto depth = static_cast<float>(depth0 + s * depth_a + t * depth_b);
+        if (!(depth > depth_[pixel])) continue;
+        depth_[pixel] = depth;
+      }
       std::uint8_t* out = image_.rgb.data() + 3 * pixel;
       out[0] = colour.r;
       out[1] = colour.g;

@@ -10,6 +10,10 @@
 // position). Equal depths keep the first face drawn, so a picture depends
 // only on the order of the calls.
 //
+// paint_silhouette paints the pixels a box covers in one flat colour below
+// everything drawn with draw_box: it neither tests nor writes the depth
+// buffer (state pictures paint free and unknown space behind the cubes).
+//
 // Cost: per face, one test per pixel of its bounding rectangle; memory: a
 // float per pixel for the depth buffer.
 #pragma once
@@ -35,8 +39,15 @@ class BoxRasterizer {
   /// Draws the box [min, max] in `colour`, shaded per face.
   void draw_box(Vec3d min, Vec3d max, Rgb colour);
 
+  /// Paints the pixels the box [min, max] covers in `colour`, unshaded, over
+  /// what was painted before but not over cubes (call it before draw_box).
+  void paint_silhouette(Vec3d min, Vec3d max, Rgb colour);
+
  private:
-  void draw_face(Vec3d corner, Vec3d edge_a, Vec3d edge_b, Rgb colour);
+  /// Calls face(corner, edge_a, edge_b, normal) for each face turned to the viewer.
+  template <typename Face>
+  void for_each_facing_face(Vec3d min, Vec3d max, Face&& face) const;
+  void draw_face(Vec3d corner, Vec3d edge_a, Vec3d edge_b, Rgb colour, bool depth_tested);
 
   RenderCamera camera_;
   Vec3d light_;

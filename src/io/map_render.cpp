@@ -9,6 +9,7 @@
 #include <string>
 
 #include "box_rasterizer.hpp"
+#include "picture_annotations.hpp"
 #include "umbra/io/topdown_image.hpp"
 #include "umbra/query/predicate.hpp"
 
@@ -39,8 +40,8 @@ struct Bounds {
   }
 };
 
-/// Heights at the ends of the ramp: the lowest and highest centre added.
-struct HeightRange {
+/// The ends of a colour ramp: the lowest and highest value added.
+struct RampRange {
   double low = std::numeric_limits<double>::infinity();
   double high = -std::numeric_limits<double>::infinity();
   void add(double z) {
@@ -87,11 +88,20 @@ Frame frame_for(RenderView view, const Bounds& content, const RenderOptions& opt
   return frame;
 }
 
+/// The value a node has on the ramp of `color` (height or depth), seen through `camera`.
+double ramp_value(const Node& node, RenderColor color, const RenderCamera& camera) {
+  return color == RenderColor::depth ? node.center.dot(camera.toward) : node.center.z;
+}
+
 /// The colour of an occupied node in the chosen colour mode.
-Rgb occupied_colour(const Node& node, const RenderOptions& options, const HeightRange& ramp) {
+Rgb occupied_colour(const Node& node, const RenderOptions& options, const RampRange& ramp,
+                    const RenderCamera& camera) {
   switch (options.color) {
     case RenderColor::height:
-      return height_ramp(ramp.high > ramp.low ? (node.center.z - ramp.low) / (ramp.high - ramp.low) : 0.0);
+    case RenderColor::depth: {
+      const double value = ramp_value(node, options.color, camera);
+      return height_ramp(ramp.high > ramp.low ? (value - ramp.low) / (ramp.high - ramp.low) : 0.0);
+    }
     case RenderColor::rgb:
       return node.color.value_or(options.uncoloured_colour);
     case RenderColor::state:
@@ -100,38 +110,80 @@ Rgb occupied_colour(const Node& node, const RenderOptions& options, const Height
   return options.occupied_colour;
 }
 
-MapPicture render_view(const OccupancyMap& map, const RenderOptions& options) {
-  Predicate obstacles = pred::leaf() && pred::occupied();
-  if (options.min_z || options.max_z) {
-    const double extent = map.grid().half_extent();
-    obstacles = obstacles && pred::intersects(Aabb{{-extent, -extent, options.min_z.value_or(-extent)},
-                                                   {extent, extent, options.max_z.value_or(extent)}});
+/// The part of the map a view draws: the height window and the section.
+Predicate view_window(const OccupancyMap& map, const RenderOptions& options) {
+  if (!options.min_z && !options.max_z && !options.section) return pred::leaf();
+  const double extent = map.grid().half_extent();
+  Aabb window{{-extent, -extent, options.min_z.value_or(-extent)}, {extent, extent, options.max_z.value_or(extent)}};
+  if (options.section && options.view == RenderView::front) window.min.y = *options.section;
+  if (options.section && options.view == RenderView::side) window.max.x = *options.section;
+  return pred::leaf() && pred::intersects(window);
+}
+
+/// The ramp's ends as MapPicture reports them: for depth the coordinates on
+/// the view's axis of the farthest and nearest centre.
+void report_ramp(MapPicture& picture, const RenderOptions& options, const RampRange& ramp) {
+  if (options.color != RenderColor::height && options.color != RenderColor::depth) return;
+  if (!(ramp.low <= ramp.high)) return;
+  picture.ramp_low = ramp.low;
+  picture.ramp_high = ramp.high;
+  if (options.color == RenderColor::depth && options.view != RenderView::iso) {
+    // toward is a unit axis, +-1: the coordinate is +-(distance along toward).
+    const Vec3d& toward = picture.camera.toward;
+    const double sign = toward.x + toward.y + toward.z;
+    picture.ramp_low = sign * ramp.low;
+    picture.ramp_high = sign * ramp.high;
   }
+}
+
+std::string window_words(const RenderOptions& options) {
+  std::string words;
+  if (options.min_z || options.max_z) words += " in the height window";
+  if (options.section) words += std::string(words.empty() ? "" : " and") + " behind the section";
+  return words;
+}
+
+MapPicture render_view(const OccupancyMap& map, const RenderOptions& options) {
+  const Predicate window = view_window(map, options);
+  const Predicate obstacles = window && pred::occupied();
+  const bool by_state = options.color == RenderColor::state;
+  const RenderCamera axes = RenderCamera::axes_of(options.view);
   Bounds content;
-  HeightRange ramp;
+  RampRange ramp;
+  std::size_t occupied = 0;
   for (const Node& node : map.query(obstacles, options.depth)) {
     content.add(node.min_corner(), node.max_corner());
-    ramp.add(node.center.z);
+    ramp.add(ramp_value(node, options.color, axes));
+    ++occupied;
   }
-  if (content.empty()) {
+  if (occupied == 0) {
     throw std::invalid_argument("render_map: the map has no occupied node at depth " + std::to_string(options.depth) +
-                                (options.min_z || options.max_z ? " in the height window" : "") +
+                                window_words(options) +
                                 ", so a view shows nothing (a slice shows free and unknown space)");
   }
-  const Frame frame = frame_for(options.view, content, options);
+  // With state colours the free space is drawn too: frame the known space.
+  Bounds known = content;
+  if (by_state) {
+    for (const Node& node : map.query(window && pred::free(), options.depth)) known.add(node.min_corner(), node.max_corner());
+  }
+  const Frame frame = frame_for(options.view, by_state ? known : content, options);
   MapPicture picture;
   picture.image = Image(frame.width, frame.height, options.background);
   picture.camera = frame.camera;
   picture.depth = options.depth;
   detail::BoxRasterizer rasterizer(frame.camera, picture.image);
+  if (by_state) {
+    // Behind every cube: the known box unknown, then what free space covers.
+    rasterizer.paint_silhouette(known.min, known.max, options.unknown_colour);
+    for (const Node& node : map.query(window && pred::free(), options.depth)) {
+      rasterizer.paint_silhouette(node.min_corner(), node.max_corner(), options.free_colour);
+    }
+  }
   for (const Node& node : map.query(obstacles, options.depth)) {
-    rasterizer.draw_box(node.min_corner(), node.max_corner(), occupied_colour(node, options, ramp));
+    rasterizer.draw_box(node.min_corner(), node.max_corner(), occupied_colour(node, options, ramp, frame.camera));
     ++picture.nodes_drawn;
   }
-  if (options.color == RenderColor::height) {
-    picture.ramp_low_z = ramp.low;
-    picture.ramp_high_z = ramp.high;
-  }
+  report_ramp(picture, options, ramp);
   return picture;
 }
 
@@ -170,6 +222,13 @@ MapPicture render_slice(const OccupancyMap& map, const RenderOptions& options) {
   if (known.empty()) {
     throw std::invalid_argument("render_map: the map has no known space, so a slice shows nothing");
   }
+  if (!(slice.position >= known.min[axis] && slice.position < known.max[axis])) {
+    std::ostringstream out;
+    out << "render_map: a slice at " << axis_name(slice.axis) << " = " << slice.position
+        << " m is outside the map's known space, which spans " << axis_name(slice.axis) << " from "
+        << known.min[axis] << " to " << known.max[axis] << " m";
+    throw std::invalid_argument(out.str());
+  }
   const Frame frame = frame_for(options.view, known, options);
 
   // The plane through the layer's centre, over the picture (margins
@@ -188,7 +247,7 @@ MapPicture render_slice(const OccupancyMap& map, const RenderOptions& options) {
   plane.min[axis] = plane.max[axis] = slice_plane(map.grid(), slice.position, options.depth);
   const Predicate layer = pred::leaf() && pred::intersects(plane);
 
-  HeightRange ramp;
+  RampRange ramp;
   if (options.color == RenderColor::height) {
     for (const Node& node : map.query(layer && pred::occupied(), options.depth)) ramp.add(node.center.z);
   }
@@ -199,18 +258,34 @@ MapPicture render_slice(const OccupancyMap& map, const RenderOptions& options) {
   for (const Node& node : map.query(layer, options.depth)) {
     Rgb colour = options.unknown_colour;
     if (node.state == OccupancyState::occupied) {
-      colour = occupied_colour(node, options, ramp);
+      colour = occupied_colour(node, options, ramp, camera);
     } else if (node.state == OccupancyState::free) {
       colour = options.free_colour;
     }
     paint_rectangle(picture.image, picture.camera, node, colour);
     ++picture.nodes_drawn;
   }
-  if (options.color == RenderColor::height && ramp.low <= ramp.high) {
-    picture.ramp_low_z = ramp.low;
-    picture.ramp_high_z = ramp.high;
-  }
+  report_ramp(picture, options, ramp);
   return picture;
+}
+
+/// The annotations' title: what the picture shows.
+std::string picture_title(const OccupancyMap& map, const RenderOptions& options) {
+  std::ostringstream out;
+  const Grid& grid = map.grid();
+  if (options.slice) {
+    const double centre = slice_plane(grid, options.slice->position, options.depth);
+    const double half = 0.5 * grid.node_size(options.depth);
+    out << "slice " << axis_name(options.slice->axis) << " = " << options.slice->position << " m: the layer from "
+        << centre - half << " to " << centre + half << " m";
+  } else {
+    out << to_string(options.view) << " view";
+    if (options.min_z) out << ", z >= " << *options.min_z << " m";
+    if (options.max_z) out << ", z <= " << *options.max_z << " m";
+    if (options.section) out << ", " << (options.view == RenderView::front ? "y >= " : "x <= ") << *options.section << " m";
+  }
+  if (options.depth > 0) out << ", " << grid.node_size(options.depth) << " m nodes";
+  return out.str();
 }
 
 }  // namespace
@@ -230,6 +305,7 @@ const char* to_string(RenderColor color) {
     case RenderColor::height: return "height";
     case RenderColor::rgb: return "rgb";
     case RenderColor::state: return "state";
+    case RenderColor::depth: return "depth";
   }
   return "?";
 }
@@ -285,8 +361,23 @@ void RenderOptions::validate() const {
   if (min_z && !std::isfinite(*min_z)) bad_option("min_z", "finite", *min_z);
   if (max_z && !std::isfinite(*max_z)) bad_option("max_z", "finite", *max_z);
   if (min_z && max_z && *min_z > *max_z) bad_option("max_z", ">= min_z (" + std::to_string(*min_z) + ")", *max_z);
+  if (annotate) {
+    const detail::AnnotationLayout layout = detail::annotation_layout(*this);
+    const int least = std::max(detail::kMinAnnotatedWidth, layout.left + layout.right + 2 * margin_pixels + 1);
+    if (width < least) {
+      bad_option("width", "at least " + std::to_string(least) + " with annotations (axes, legend, scale bar)", width);
+    }
+  }
+  if (section && !std::isfinite(*section)) bad_option("section", "finite", *section);
+  if (section && view != RenderView::front && view != RenderView::side) {
+    bad_option("section", "unset for a " + std::string(to_string(view)) +
+                              " view (a section is for front and side views; a top view has max_z)",
+               *section);
+  }
   if (slice) {
     if (min_z || max_z) bad_option("min_z and max_z", "unset for a slice (a height window is for views)", "a window");
+    if (section) bad_option("section", "unset for a slice (a section is for views)", *section);
+    if (color == RenderColor::depth) bad_option("color", "height, rgb or state for a slice (a slice is flat)", "depth");
     if (slice->axis < 0 || slice->axis > 2) bad_option("slice->axis", "0 (x), 1 (y) or 2 (z)", slice->axis);
     if (!std::isfinite(slice->position)) bad_option("slice->position", "finite", slice->position);
     if (view != slice_view(slice->axis)) {
@@ -305,18 +396,18 @@ void check_render_options(const OccupancyMap& map, const RenderOptions& options)
   if (options.color == RenderColor::rgb && !map.has_color()) {
     throw std::invalid_argument("RenderOptions::color is rgb, but the map has no colour (use height or state)");
   }
-  if (options.slice && !map.grid().axis_key(options.slice->position)) {
-    std::ostringstream out;
-    out << "RenderOptions::slice: " << axis_name(options.slice->axis) << " = " << options.slice->position
-        << " is outside the map, which spans [" << -map.grid().half_extent() << ", " << map.grid().half_extent()
-        << ") m on every axis";
-    throw std::invalid_argument(out.str());
-  }
 }
 
 MapPicture render_map(const OccupancyMap& map, const RenderOptions& options) {
   check_render_options(map, options);
-  return options.slice ? render_slice(map, options) : render_view(map, options);
+  if (!options.annotate) return options.slice ? render_slice(map, options) : render_view(map, options);
+  // The drawing, narrower by the gutters, then framed.
+  const detail::AnnotationLayout layout = detail::annotation_layout(options);
+  RenderOptions drawing = options;
+  drawing.annotate = false;
+  drawing.width = options.width - layout.left - layout.right;
+  const MapPicture picture = options.slice ? render_slice(map, drawing) : render_view(map, drawing);
+  return detail::annotate(picture, options, layout, picture_title(map, options));
 }
 
 }  // namespace umbra

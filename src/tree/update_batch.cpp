@@ -30,9 +30,10 @@ void UpdateBatch::reset_cache() {
 void UpdateBatch::reset(int depth_levels) {
   UMBRA_ASSERT(depth_levels >= 1 && depth_levels <= kMaxDepthLevels);
   depth_levels_ = depth_levels;
-  bricks_.clear();
-  inner_.clear();
+  // The pools keep their memory from scan to scan (GroupPool::recycle).
+  bricks_.recycle();
   inner_.resize(static_cast<std::size_t>(depth_levels) + 1);
+  for (GroupPool<Inner>& pool : inner_) pool.recycle();
   [[maybe_unused]] const std::uint32_t root_group = new_group(depth_levels, false);
   UMBRA_ASSERT(root_group == 0);
   reset_cache();

@@ -16,7 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "support/demo_maps.hpp"
-#include "support/map_agreement.hpp"
+#include "umbra/map/map_agreement.hpp"
 #include "support/map_internals.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/scan_source.hpp"
@@ -375,7 +375,7 @@ void check_fast_integrator(const std::string& name, const std::vector<Scan>& sca
   for (const int fine_steps : {2, 0}) {
     const OccupancyMap fast = build(scans, resolution, max_range, IntegratorKind::fast, fine_steps, clear_depth);
     ASSERT_EQ(test::check_invariants(fast), "");
-    const test::MapAgreement a = test::compare_maps(simple, fast);
+    const MapAgreement a = compare_maps(simple, fast);
     const std::string label = name + " at " + std::to_string(resolution).substr(0, 4) + " m n=" +
                               std::to_string(fine_steps);
     std::printf("[ fast     ] %s: %llu occupied in simple, %llu in fast; recall %.4f%%, precision %.4f%%; "

@@ -17,7 +17,7 @@
 #include "integrate/projective_tracer.hpp"
 #include "integrate/scan_images.hpp"
 #include "support/demo_maps.hpp"
-#include "support/map_agreement.hpp"
+#include "umbra/map/map_agreement.hpp"
 #include "support/map_internals.hpp"
 #include "support/test_support.hpp"
 #include "tree/occupancy_tree.hpp"
@@ -312,11 +312,11 @@ TEST(ProjectiveIntegrator, SameMapForAnyThreadCount) {
 /// box_half > 0 (compared away from its faces, where the integrators' box
 /// rules differ: the discrete hit rule takes a voxel whose centre ray the box
 /// clips, the simple one any end voxel in the box).
-test::MapAgreement agreement(const std::vector<sim::SimulatedDepthImage>& frames, std::size_t count, double res,
+MapAgreement agreement(const std::vector<sim::SimulatedDepthImage>& frames, std::size_t count, double res,
                              double max_range, double box_half = 0.0) {
   OccupancyMap simple(res);
   OccupancyMap projective(res);
-  std::optional<std::pair<Key, Key>> inside;
+  std::optional<VoxelBox> inside;
   std::vector<Vec3f> points;
   if (box_half > 0.0) {
     back_project(frames[0].view(), frames[0].camera, frames[0].pose, points);
@@ -325,7 +325,7 @@ test::MapAgreement agreement(const std::vector<sim::SimulatedDepthImage>& frames
     const Vec3d edge{2.0 * res, 2.0 * res, 2.0 * res};
     simple.set_bounding_box(Aabb{centre - half, centre + half});
     projective.set_bounding_box(Aabb{centre - half, centre + half});
-    inside = std::pair{simple.grid().key(centre - half + edge), simple.grid().key(centre + half - edge)};
+    inside = VoxelBox{simple.grid().key(centre - half + edge), simple.grid().key(centre + half - edge)};
   }
   InsertOptions options;
   options.max_range = max_range;
@@ -337,12 +337,12 @@ test::MapAgreement agreement(const std::vector<sim::SimulatedDepthImage>& frames
     options.integrator = IntegratorKind::projective;
     projective.insert_depth_image(f.view(), f.camera, f.pose, {}, options);
   }
-  return test::compare_maps(simple, projective, inside);
+  return compare_maps(simple, projective, inside);
 }
 
 /// The thresholds: occupied recall >= 99.5% and precision >= 99%
 /// against the simple integrator, at most 5% of its free voxels left unknown.
-void expect_faithful(const test::MapAgreement& a, const char* what, double min_recall = 0.995,
+void expect_faithful(const MapAgreement& a, const char* what, double min_recall = 0.995,
                      double min_precision = 0.99) {
   std::printf("simulated camera, %s: recall %.4f precision %.4f free left unknown %.4f (%llu occupied, %llu free)\n",
               what, a.recall(), a.precision(), a.free_left_unknown(),
@@ -466,7 +466,7 @@ namespace umbra {
 namespace {
 
 struct Fidelity {
-  test::MapAgreement agreement;
+  MapAgreement agreement;
   std::uint64_t projective_free = 0;
 };
 
@@ -488,14 +488,14 @@ Fidelity projective_against_simple(const std::vector<Scan>& scans, double res, d
     }
   }
   EXPECT_TRUE(test::check_invariants(projective).empty());
-  const test::MapAgreement a = test::compare_maps(simple, projective);
+  const MapAgreement a = compare_maps(simple, projective);
   return {a, a.other_count(OccupancyState::free)};
 }
 
 void expect_fidelity(const char* what, const std::vector<Scan>& scans, double res, double max_range,
                      double min_recall = 0.995) {
   const Fidelity f = projective_against_simple(scans, res, max_range);
-  const test::MapAgreement& a = f.agreement;
+  const MapAgreement& a = f.agreement;
   std::printf("[ projective ] %s at %.3f m: recall %.4f, precision %.4f, %.2f%% of %llu free voxels left unknown, "
               "%llu free in the projective map\n",
               what, res, a.recall(), a.precision(), 100.0 * a.free_left_unknown(),

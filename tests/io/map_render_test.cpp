@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -138,7 +139,6 @@ TEST(MapRender, VoxelsLandOnThePredictedPixels) {
   for (const RenderView view : kViews) {
     RenderOptions options;
     options.view = view;
-    options.color = RenderColor::state;
     options.width = 400;  // a voxel is about 10 pixels across
     const MapPicture picture = render_map(map, options);
     const Axes axes = documented_axes(view);
@@ -156,8 +156,9 @@ TEST(MapRender, VoxelsLandOnThePredictedPixels) {
     }
     Vec3d normal{};
     normal[facing_axis] = axes.toward[facing_axis] > 0 ? 1.0 : -1.0;
-    const Rgb expected = shaded(options.occupied_colour, documented_shade(axes, normal));
     for (const Vec3d& c : centres) {
+      // Height colours: the voxels' centres are at z 0.05, 0.55 and 1.05.
+      const Rgb expected = shaded(height_ramp((c.z - 0.05) / 1.0), documented_shade(axes, normal));
       const Vec3d face_centre = c + normal * (0.5 * kResolution);
       const auto [column, row] = frame.pixel(axes, face_centre);
       EXPECT_EQ(picture.image.at(column, row), expected)
@@ -193,8 +194,8 @@ TEST(MapRender, NearerVoxelsHideFartherOnes) {
   options.width = 200;
   options.view = RenderView::top;
   const MapPicture top = render_map(map, options);
-  EXPECT_DOUBLE_EQ(top.ramp_low_z, voxel(0, 0, 0).z);
-  EXPECT_DOUBLE_EQ(top.ramp_high_z, voxel(0, 0, 10).z);
+  EXPECT_DOUBLE_EQ(top.ramp_low, voxel(0, 0, 0).z);
+  EXPECT_DOUBLE_EQ(top.ramp_high, voxel(0, 0, 10).z);
   const Axes top_axes = documented_axes(RenderView::top);
   const double top_shade = documented_shade(top_axes, {0, 0, 1});
   auto at = [](const MapPicture& picture, Vec3d p) {
@@ -228,7 +229,6 @@ TEST(MapRender, CoarserDepthDrawsParentCubes) {
   map.set_log_odds(voxel(8, 8, 8), 2.0f);
   RenderOptions options;
   options.view = RenderView::top;
-  options.color = RenderColor::state;
   options.depth = 2;  // 0.4 m cubes
   options.margin_pixels = 0;
   options.width = 80;  // 0.8 m across (two depth-2 nodes apart by one): 100 pixels per metre
@@ -345,6 +345,117 @@ TEST(MapRenderSlice, CoarseLayerShowsTheMaximumOfItsVoxels) {
   EXPECT_EQ(picture.image.at(int(x3), int(y3)), options.free_colour);
 }
 
+// --- colour by depth, sections, state views -------------------------------------------
+
+TEST(MapRender, DepthColoursRunFromNearRedToFarBlue) {
+  OccupancyMap map(kResolution);
+  map.set_log_odds(voxel(0, 0, 0), 2.0f);   // nearest to a viewer in the south (front view)
+  map.set_log_odds(voxel(5, 10, 0), 2.0f);  // farthest
+  map.set_log_odds(voxel(10, 5, 0), 2.0f);  // half way
+  RenderOptions options;
+  options.view = RenderView::front;
+  options.color = RenderColor::depth;
+  options.width = 200;
+  const MapPicture picture = render_map(map, options);
+  // The ramp's ends as coordinates on the view axis: far (low) and near (high).
+  EXPECT_DOUBLE_EQ(picture.ramp_low, voxel(5, 10, 0).y);
+  EXPECT_DOUBLE_EQ(picture.ramp_high, voxel(0, 0, 0).y);
+  const double shade = documented_shade(documented_axes(RenderView::front), {0, -1, 0});
+  auto at = [&](Vec3d p) {
+    const auto [x, y] = picture.camera.pixel(p - Vec3d{0, 0.05, 0});  // on the face toward the viewer
+    return picture.image.at(static_cast<int>(std::floor(x)), static_cast<int>(std::floor(y)));
+  };
+  EXPECT_EQ(at(voxel(0, 0, 0)), shaded(height_ramp(1.0), shade));
+  EXPECT_EQ(at(voxel(5, 10, 0)), shaded(height_ramp(0.0), shade));
+  EXPECT_EQ(at(voxel(10, 5, 0)), shaded(height_ramp(0.5), shade));
+}
+
+TEST(MapRender, SectionLeavesOutWhatLiesBetweenThePlaneAndTheViewer) {
+  OccupancyMap map(kResolution);
+  map.set_log_odds(voxel(0, 0, 0), 2.0f);
+  map.set_log_odds(voxel(0, 10, 0), 2.0f);
+  map.set_log_odds(voxel(10, 10, 0), 2.0f);
+  RenderOptions options;
+  options.view = RenderView::front;  // the viewer is south (low y): y < 0.5 is in front
+  options.section = 0.5;
+  options.width = 200;
+  EXPECT_EQ(render_map(map, options).nodes_drawn, 2u);
+  options.section = 0.05;  // through the first voxel's middle: it reaches behind, so it stays
+  EXPECT_EQ(render_map(map, options).nodes_drawn, 3u);
+  options.view = RenderView::side;  // the viewer is east (high x): x > 0.5 is in front
+  options.section = 0.5;
+  EXPECT_EQ(render_map(map, options).nodes_drawn, 2u);
+  options.section = 2.0;  // every voxel lies behind the plane
+  EXPECT_EQ(render_map(map, options).nodes_drawn, 3u);
+  options.section = -1.0;  // everything is in front of the plane
+  EXPECT_THROW((void)render_map(map, options), std::invalid_argument);
+}
+
+TEST(MapRender, StateViewPaintsFreeAndUnknownSpaceBehindTheCubes) {
+  // free_box_map with one column (7, 4, *) left unknown.
+  OccupancyMap map(kResolution);
+  for (int i = 0; i < 10; ++i) {
+    for (int j = 0; j < 6; ++j) {
+      for (int k = 0; k < 4; ++k) {
+        if (i != 7 || j != 4) map.set_log_odds(voxel(i, j, k), -1.0f);
+      }
+    }
+  }
+  map.set_log_odds(voxel(3, 2, 1), 2.0f);
+  RenderOptions options;
+  options.view = RenderView::top;
+  options.color = RenderColor::state;
+  options.width = 220;
+  const MapPicture picture = render_map(map, options);
+  auto at = [&](Vec3d p) {
+    const auto [x, y] = picture.camera.pixel(p);
+    return picture.image.at(static_cast<int>(std::floor(x)), static_cast<int>(std::floor(y)));
+  };
+  const double shade = documented_shade(documented_axes(RenderView::top), {0, 0, 1});
+  EXPECT_EQ(at(voxel(3, 2, 3)), shaded(options.occupied_colour, shade)) << "the obstacle, shaded";
+  EXPECT_EQ(at(voxel(5, 1, 3)), options.free_colour) << "free space seen from above";
+  EXPECT_EQ(at(voxel(7, 4, 3)), options.unknown_colour) << "a column nothing was seen in";
+  // The frame is the known space (10 x 6 voxels), not the one obstacle.
+  EXPECT_NEAR(picture.camera.metres_per_pixel, 1.0 / (options.width - 2 * options.margin_pixels), 1e-12);
+  EXPECT_EQ(picture.image.at(0, 0), options.background);
+  std::size_t counts[3] = {0, 0, 0};
+  for (int row = 0; row < picture.image.height; ++row) {
+    for (int column = 0; column < picture.image.width; ++column) {
+      const Rgb c = picture.image.at(column, row);
+      counts[0] += c == shaded(options.occupied_colour, shade) ? 1 : 0;
+      counts[1] += c == options.free_colour ? 1 : 0;
+      counts[2] += c == options.unknown_colour ? 1 : 0;
+    }
+  }
+  // Pixel areas: one voxel each for the obstacle and the hole, the rest free.
+  const double voxel_pixels = std::pow(kResolution / picture.camera.metres_per_pixel, 2);
+  EXPECT_NEAR(double(counts[0]), voxel_pixels, 4 * std::sqrt(voxel_pixels) + 4);
+  EXPECT_NEAR(double(counts[2]), voxel_pixels, 4 * std::sqrt(voxel_pixels) + 4);
+  EXPECT_NEAR(double(counts[1]), 58 * voxel_pixels, 4 * 58 * std::sqrt(voxel_pixels));
+}
+
+TEST(MapRenderSlice, OutsideTheKnownSpaceIsAnErrorNamingTheValueAndTheExtent) {
+  const OccupancyMap map = free_box_map();  // known z from 0 to 0.4
+  RenderOptions options;
+  options.view = RenderView::top;
+  options.color = RenderColor::state;
+  for (const double z : {100.0, 0.4, -0.05, 1e9}) {
+    options.slice = RenderSlice{2, z};
+    try {
+      (void)render_map(map, options);
+      ADD_FAILURE() << "a slice at z = " << z << " was drawn";
+    } catch (const std::invalid_argument& error) {
+      const std::string message = error.what();
+      std::ostringstream value;
+      value << "z = " << z << " m";
+      EXPECT_NE(message.find(value.str()), std::string::npos) << message;
+      EXPECT_NE(message.find("spans z from 0 to 0.4 m"), std::string::npos) << message;
+    }
+  }
+  options.slice = RenderSlice{2, 0.39};
+  EXPECT_GT(render_map(map, options).nodes_drawn, 0u);
+}
+
 // --- the demo building against per-voxel lookups --------------------------------------
 
 const OccupancyMap& demo_map() {
@@ -393,8 +504,8 @@ TEST(MapRenderReference, AxisViewsOfTheDemoBuildingMatchPerVoxelLookups) {
     options.width = columns + 2 * options.margin_pixels;  // one pixel per voxel
     const MapPicture picture = render_map(map, options);
     ASSERT_NEAR(picture.camera.metres_per_pixel, kResolution, 1e-12) << to_string(view);
-    EXPECT_DOUBLE_EQ(picture.ramp_low_z, z_low);
-    EXPECT_DOUBLE_EQ(picture.ramp_high_z, z_high);
+    EXPECT_DOUBLE_EQ(picture.ramp_low, z_low);
+    EXPECT_DOUBLE_EQ(picture.ramp_high, z_high);
     Vec3d facing{};
     facing[depth_axis] = axes.toward[depth_axis];
     const double shade = documented_shade(axes, facing);

@@ -1,13 +1,18 @@
 // `umbra convert` and `umbra info` with OctoMap files, run as a user would:
 // .umb -> .bt -> .ot -> .umb keeps every voxel's class (and .umb -> .ot ->
 // .umb every value and colour), info reads all three formats, and bad names
-// are usage errors (exit code 2) with a message. Cost: a few runs of the
-// program on a small simulated map, well under a second.
+// are usage errors (exit code 2) with a message; info's OctoMap node count
+// is liboctomap's. Cost: a few runs of the program on a small simulated map,
+// well under a second.
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cstdio>
+#include <memory>
 #include <string>
+
+#include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
 
 #include "support/test_support.hpp"
 #include "support/map_internals.hpp"
@@ -102,6 +107,46 @@ TEST(OctoMapCli, InfoReadsAllThreeFormats) {
   }
 }
 
+/// The "octomap_nodes" of `umbra info --json`.
+std::size_t info_octomap_nodes(const fs::path& map) {
+  const CommandResult info = run(cli() + " info --json " + quoted(map));
+  EXPECT_EQ(info.exit_code, 0) << info.output;
+  const auto at = info.output.find("\"octomap_nodes\": ");
+  EXPECT_NE(at, std::string::npos) << info.output;
+  return at == std::string::npos ? 0 : std::stoull(info.output.substr(at + 17));
+}
+
+// umbra's node count is larger than OctoMap's (every node with children has
+// all eight); `info` gives OctoMap's too, which liboctomap itself confirms
+// on the same map read from .ot and .bt (written by umbra), and on OctoMap's
+// own geb079.bt.
+TEST(OctoMapCli, InfoGivesLiboctomapsNodeCountAndSaysWhy) {
+  const auto dir = test::scratch_dir();
+  const OccupancyMap map = office_map();
+  save_map(map, dir / "a.umb");
+  save_any_map(map, dir / "a.ot");
+  save_any_map(map, dir / "a.bt");
+  const std::unique_ptr<octomap::AbstractOcTree> full(octomap::AbstractOcTree::read((dir / "a.ot").string()));
+  ASSERT_NE(full, nullptr);
+  octomap::OcTree binary(0.1);
+  ASSERT_TRUE(binary.readBinary((dir / "a.bt").string()));
+  EXPECT_EQ(info_octomap_nodes(dir / "a.umb"), full->size());
+  EXPECT_EQ(info_octomap_nodes(dir / "a.ot"), full->size());
+  EXPECT_EQ(info_octomap_nodes(dir / "a.bt"), binary.size());
+  EXPECT_LT(full->size(), map.node_counts().total()) << "the office map should show the difference";
+  const CommandResult text = run(cli() + " info " + quoted(dir / "a.umb"));
+  EXPECT_TRUE(contains(text.output, "  OctoMap nodes     " + std::to_string(full->size()) +
+                                        " (liboctomap's count for this map: it stores no unknown children"))
+      << text.output;
+  EXPECT_TRUE(contains(run(cli() + " info --help").output, "OctoMap leaves unobserved children out"));
+
+  UMBRA_REQUIRE_SHARED_DATA(geb079, "octomap/geb079.bt");
+  octomap::OcTree corridor(0.1);
+  ASSERT_TRUE(corridor.readBinary(geb079.string()));
+  EXPECT_EQ(info_octomap_nodes(geb079), corridor.size());
+  EXPECT_EQ(corridor.size(), 532566u);  // shared/data/README.md's figure from OctoMap 1.9.7
+}
+
 TEST(OctoMapCli, BadNamesAndMapsAreErrorsWithMessages) {
   const auto dir = test::scratch_dir();
   save_map(office_map(), dir / "a.umb");
@@ -115,8 +160,10 @@ TEST(OctoMapCli, BadNamesAndMapsAreErrorsWithMessages) {
   const CommandResult bad_in = run(cli() + " convert " + quoted(dir / "a.xyz") + " " + quoted(dir / "b.bt"));
   EXPECT_EQ(bad_in.exit_code, 2) << bad_in.output;
   EXPECT_TRUE(contains(bad_in.output, "'.xyz'")) << bad_in.output;
-  // Missing input.
-  EXPECT_EQ(run(cli() + " convert " + quoted(dir / "none.bt") + " " + quoted(dir / "b.ot")).exit_code, 2);
+  // Missing input: an input failure (exit code 1) naming the file.
+  const CommandResult missing = run(cli() + " convert " + quoted(dir / "none.bt") + " " + quoted(dir / "b.ot"));
+  EXPECT_EQ(missing.exit_code, 1) << missing.output;
+  EXPECT_TRUE(contains(missing.output, "none.bt': No such file or directory")) << missing.output;
   // A map of 12 depth levels cannot become an OctoMap file.
   OccupancyMap shallow(0.1, 12);
   shallow.update_hit(Vec3d{0.0, 0.0, 0.0});

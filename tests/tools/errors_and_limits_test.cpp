@@ -115,9 +115,8 @@ TEST(ErrorsAndLimits, BadUsageIsExitCodeTwoWithTheValueInTheMessage) {
       {build + "--clear-depth 30", "--clear-depth"},
       {build + "--max-memory lots", "--max-memory expects a size such as 512M, 2G or 1.5GiB"},
       {build + "--max-memory 0", "got '0'"},
-      {"build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "out.map"), "unknown map format"},
+      {"build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "out.map"), "unknown map file extension '.map'"},
       {"build " + quoted(dir / "room.xyz") + " -o " + quoted(dir / "no" / "out.umb"), "does not exist"},
-      {"build " + quoted(dir / "missing.xyz") + " -o " + quoted(dir / "out.umb"), "missing.xyz"},
       {"info --max-memory -5 " + quoted(dir / "room.xyz"), "--max-memory"},
       {"query " + quoted(dir / "room.xyz") + " line --input - --radius nan",
        "the capsule radius in metres must be a number in [0, 1e+06], got 'nan'"},
@@ -132,6 +131,12 @@ TEST(ErrorsAndLimits, BadUsageIsExitCodeTwoWithTheValueInTheMessage) {
     const CommandResult result = run(c.arguments);
     EXPECT_EQ(result.exit_code, 2) << c.arguments << "\n" << result.output;
     EXPECT_TRUE(contains(result.output, c.expected)) << c.arguments << "\n" << result.output;
+    // One line saying what is wrong, one saying where the help is: not the help itself.
+    const std::string command = c.arguments.substr(0, c.arguments.find(' '));
+    EXPECT_TRUE(result.output.starts_with("umbra: error: ")) << c.arguments << "\n" << result.output;
+    EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 2) << c.arguments << "\n" << result.output;
+    EXPECT_TRUE(result.output.ends_with("\nRun `umbra " + command + " --help` for the options.\n"))
+        << c.arguments << "\n" << result.output;
     EXPECT_EQ(result.output.find("0000000000000000000000"), std::string::npos) << "a number printed in full";
   }
   EXPECT_FALSE(fs::exists(dir / "out.umb"));

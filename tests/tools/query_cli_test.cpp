@@ -253,7 +253,7 @@ TEST_F(QueryCli, MalformedLinesAreReportedByNumberAndTheRestIsAnswered) {
   expect_timing(run, "sphere", 4);  // lines 1, 7, 8, 9 reached the library
 
   // Usage errors: exit code 2.
-  EXPECT_EQ(run_query(quoted(dir_ / "map.umb") + " sphere", dir_).exit_code, 2);  // no --input
+  // No --input reads standard input, or is a usage error on a terminal (cli_usability_test.cpp).
   EXPECT_EQ(run_query(quoted(dir_ / "map.umb") + " cone --input x", dir_).exit_code, 2);
   EXPECT_EQ(run_query(quoted(dir_ / "map.umb") + " nodes --depth 9", dir_).exit_code, 2);
   EXPECT_EQ(run_query(quoted(dir_ / "map.umb") + " nodes --sphere 0,0,0,-1", dir_).exit_code, 2);

@@ -34,15 +34,19 @@ std::vector<std::uint32_t> take(Pool& pool, std::uint32_t count, std::uint32_t o
 
 /// Every live group still holds its mark, and no index is handed out twice.
 void expect_marks(const Pool& pool, const std::vector<std::vector<std::uint32_t>>& live) {
-  std::set<std::uint32_t> seen;
+  std::vector<bool> seen;
+  std::size_t count = 0;
   for (std::uint32_t owner = 0; owner < live.size(); ++owner) {
     for (const std::uint32_t index : live[owner]) {
-      ASSERT_TRUE(seen.insert(index).second) << "index " << index << " handed out twice";
-      EXPECT_EQ(pool[index].owner, owner);
-      EXPECT_EQ(pool[index].index, index);
+      if (index >= seen.size()) seen.resize(std::size_t{index} * 2 + 1);
+      ASSERT_FALSE(seen[index]) << "index " << index << " handed out twice";
+      seen[index] = true;
+      ++count;
+      ASSERT_EQ(pool[index].owner, owner);
+      ASSERT_EQ(pool[index].index, index);
     }
   }
-  EXPECT_EQ(pool.size(), seen.size());
+  EXPECT_EQ(pool.size(), count);
 }
 
 TEST(GroupPool, SequentialAllocationReusesReleasedGroupsAndGrowsInBlocks) {
@@ -50,7 +54,7 @@ TEST(GroupPool, SequentialAllocationReusesReleasedGroupsAndGrowsInBlocks) {
   EXPECT_EQ(pool.memory_bytes(), 0u);
   std::vector<std::vector<std::uint32_t>> live{take(pool, 3000, 0)};
   expect_marks(pool, live);
-  // Three blocks: two full, the last grown by doubling to hold 952 groups.
+  // Three full blocks: the first grown by doubling, the others full sized from the start.
   EXPECT_GE(pool.memory_bytes(), 3000 * sizeof(Group));
   EXPECT_LE(pool.memory_bytes(), (2 * Pool::kBlockGroups + Pool::kBlockGroups) * sizeof(Group) + 256);
 
@@ -60,6 +64,47 @@ TEST(GroupPool, SequentialAllocationReusesReleasedGroupsAndGrowsInBlocks) {
   live.push_back(take(pool, 1000, 1));
   expect_marks(pool, live);
   EXPECT_EQ(pool.memory_bytes(), before) << "released groups are handed out before the pool grows";
+}
+
+TEST(GroupPool, LargePoolsGrowInHugePageChunks) {
+  // Past kHugePageAfterBytes new blocks are carved from 2 MiB chunks: the
+  // groups keep their marks through growth, a concurrent phase, recycling
+  // and a copy, and the pool counts whole chunks, at most one of them unused.
+  Pool pool;
+  const std::uint32_t count = static_cast<std::uint32_t>(5 * Pool::kHugePageAfterBytes / 4 / sizeof(Group));
+  std::vector<std::vector<std::uint32_t>> live{take(pool, count, 0), {}, {}};
+  expect_marks(pool, live);
+  const std::size_t chunk = detail::HugePageChunks::kChunkBytes;
+  EXPECT_GE(pool.huge_page_bytes(), std::size_t{count} * sizeof(Group) - Pool::kHugePageAfterBytes - chunk);
+  EXPECT_GE(pool.memory_bytes(), std::size_t{count} * sizeof(Group));
+  EXPECT_LE(pool.memory_bytes(), std::size_t{count} * sizeof(Group) + chunk + Pool::kBlockGroups * sizeof(Group) + 4096 +
+                                     (count / Pool::kBlockGroups + 1) * 16);
+  pool.begin_concurrent(2, 2 * Pool::kBlockGroups * 40);
+  std::thread first([&] {
+    for (std::uint32_t i = 0; i < Pool::kBlockGroups * 40; ++i) {
+      const std::uint32_t index = pool.allocate(0u);
+      pool[index] = {1, index};
+      live[1].push_back(index);
+    }
+  });
+  for (std::uint32_t i = 0; i < Pool::kBlockGroups * 40; ++i) {
+    const std::uint32_t index = pool.allocate(1u);
+    pool[index] = {2, index};
+    live[2].push_back(index);
+  }
+  first.join();
+  pool.end_concurrent();
+  expect_marks(pool, live);
+  const Pool copy = pool;
+  expect_marks(copy, live);
+  const std::size_t before = pool.memory_bytes();
+  pool.recycle();
+  EXPECT_EQ(pool.size(), 0u);
+  const std::vector<std::vector<std::uint32_t>> again{take(pool, count, 5)};
+  std::set<std::uint32_t> indices(again[0].begin(), again[0].end());
+  EXPECT_EQ(indices.size(), again[0].size());
+  for (const std::uint32_t index : again[0]) ASSERT_EQ(pool[index].owner, 5u);
+  EXPECT_EQ(pool.memory_bytes(), before) << "recycled groups reuse the memory";
 }
 
 TEST(GroupPool, ConcurrentWorkersGetDistinctGroups) {
@@ -142,15 +187,16 @@ TEST(GroupPool, AttachedRecordsStayWithTheirGroups) {
     pool.attached(index) = {index, ~std::uint64_t{index}};
     live.push_back(index);
   };
-  // Across the doubling of the last block and into a second block.
+  // Across the doubling of the first block and into a second block.
   for (std::uint32_t i = 0; i < 1500; ++i) {
     mark(pool.allocate(), 0);
     plain.allocate();
   }
-  // The same blocks as a plain pool, each with its records: a full block
-  // and a last block doubled from 8 to 512 groups for the other 476.
+  // The same blocks as a plain pool, each with its records: the first block
+  // doubled from 8 groups to full size, and a second block full sized from
+  // the start for the other 476.
   EXPECT_EQ(pool.memory_bytes() - plain.memory_bytes(),
-            (TaggedPool::kBlockGroups + 512) * sizeof(Tag) + 2 * sizeof(std::unique_ptr<Tag[]>))
+            2 * TaggedPool::kBlockGroups * sizeof(Tag) + 2 * sizeof(std::unique_ptr<Tag[], detail::BlockDeleter<Tag>>))
       << "two blocks of records and their two table entries";
   for (std::size_t i = 0; i < 300; ++i) pool.release(live[i]);
   live.erase(live.begin(), live.begin() + 300);

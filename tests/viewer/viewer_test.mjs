@@ -7,13 +7,17 @@
 // that at every depth the page offers, the boxes it draws per state, and
 // their volume, equal what the library counts for the same depth and state;
 // that the budget picks the finest depth that fits and the page says so;
-// that a screenshot shows a drawn map; and that `umbra view --serve` serves
+// that a screenshot shows a drawn map; that the page starts cut below the
+// ceiling `umbra render --view top` finds and that a height cut draws exactly
+// the nodes whose bottom lies below it; that the panel lies beside the
+// picture, never over it, and folds; and that `umbra view --serve` serves
 // the same page. The expected numbers come from the library through the
 // CLI: `umbra query MAP nodes --state S --depth D --count` for the counts,
 // and the same query's node list (centre, size) for the volumes; unknown
 // nodes are limited, as on the page, to those meeting the box around the
 // known space (`umbra info --json`) shrunk by half a voxel, and their volume
-// to the part inside it.
+// to the part inside it; a height cut (at the middle of a voxel layer) is
+// the same box ending at the cut.
 //
 //   node viewer_test.mjs --umbra PATH --modules NODE_MODULES --work DIR
 // Exit codes: 0 passed, 1 failed, 77 skipped (no Chromium).
@@ -54,17 +58,25 @@ function check(condition, message) {
 
 const umbra = (...command) => execFileSync(args.umbra, command, { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
 const expectedAt = new Map();
-/// What the library reports for a depth: per state, the node count and volume.
-function expected(map, depth) {
-  const key = map + '@' + depth;
+/// What the library reports for a depth (and a height cut, in map metres):
+/// per state, the node count and volume.
+function expected(map, depth, cut = Infinity) {
+  const key = map + '@' + depth + '@' + cut;
   if (expectedAt.has(key)) return expectedAt.get(key);
   const info = JSON.parse(umbra('info', map, '--json'));
   const half = info.resolution / 2;
   const box = [...info.known_min.map((v) => v + half), ...info.known_max.map((v) => v - half)];
+  const cutBox = [...info.known_min, info.known_max[0], info.known_max[1], Math.min(cut, info.known_max[2])];
   const result = {};
   for (const state of ['occupied', 'free', 'unknown']) {
     const query = ['query', map, 'nodes', '--state', state, '--depth', String(depth)];
-    if (state === 'unknown') query.push('--box=' + box.map((v) => v.toPrecision(17)).join(','));
+    if (state === 'unknown') {
+      const clipped = [...box];
+      clipped[5] = Math.min(clipped[5], cut);
+      query.push('--box=' + clipped.map((v) => v.toPrecision(17)).join(','));
+    } else if (cut < Infinity) {
+      query.push('--box=' + cutBox.map((v) => v.toPrecision(17)).join(','));
+    }
     const count = Number(umbra(...query, '--count').trim());
     let volume = 0;
     for (const line of umbra(...query).split('\n')) {
@@ -117,7 +129,7 @@ async function open(file) {
   return { page, errors };
 }
 
-/// Share of the screenshot's pixels outside the panel that differ from the background.
+/// Share of the screenshot's pixels on the canvas that differ from the background.
 async function drawnShare(page, file) {
   const png = await page.screenshot();
   writeFileSync(file, png);
@@ -131,12 +143,11 @@ async function drawnShare(page, file) {
     const context = canvas.getContext('2d');
     context.drawImage(image, 0, 0);
     const pixels = context.getImageData(0, 0, canvas.width, canvas.height).data;
-    const panel = document.getElementById('panel').getBoundingClientRect();
+    const view = document.getElementById('view').getBoundingClientRect();
     let drawn = 0;
     let total = 0;
-    for (let y = 0; y < canvas.height; ++y) {
-      for (let x = 0; x < canvas.width; ++x) {
-        if (x >= panel.left && x <= panel.right && y >= panel.top && y <= panel.bottom) continue;
+    for (let y = Math.ceil(view.top); y < Math.floor(view.bottom); ++y) {
+      for (let x = Math.ceil(view.left); x < Math.floor(view.right); ++x) {
         const i = 4 * (y * canvas.width + x);
         total += 1;
         // The page's background is #15161c.
@@ -147,6 +158,18 @@ async function drawnShare(page, file) {
   }, png.toString('base64'));
 }
 
+/// The panel's and the canvas's boxes on the page.
+async function boxes(page) {
+  return page.evaluate(() => {
+    const box = (id) => {
+      const r = document.getElementById(id).getBoundingClientRect();
+      return { left: r.left, right: r.right, top: r.top, bottom: r.bottom, width: r.width };
+    };
+    return { panel: box('panel'), view: box('view') };
+  });
+}
+const overlap = (a, b) => a.left < b.right && b.left < a.right && a.top < b.bottom && b.top < a.bottom;
+
 note('Chromium started');
 const stateNames = ['occupied', 'free', 'unknown'];
 
@@ -154,16 +177,35 @@ const stateNames = ['occupied', 'free', 'unknown'];
 {
   const { page, errors } = await open(join(args.work, 'demo.html'));
   const first = await page.evaluate(() => window.umbraStats);
-  const depth0 = expected(map, 0);
+  // The page starts cut half a voxel below the ceiling that `umbra render` finds.
+  const ceiling = /ceiling found at ([-\d.]+) m/.exec(umbra('render', map, '-o', join(args.work, 'top.png'), '--view', 'top'));
+  check(ceiling !== null, 'umbra render finds the demo building\'s ceiling');
+  const ceilingCut = ceiling ? Number(ceiling[1]) - 0.1 : NaN;  // --res 0.2: half a voxel
+  check(close(first.cut, ceilingCut), `the page starts cut at z ${first.cut}, below the ceiling at ${ceiling[1]}`);
+  const depth0cut = expected(map, 0, first.cut);
   check(first.depth === 0 && first.finestDepth === 0, `the page starts at depth 0 (got ${first.depth})`);
-  check(first.drawn.occupied === depth0.occupied.count,
-    `depth 0 draws ${first.drawn.occupied} occupied boxes, the library counts ${depth0.occupied.count}`);
+  check(first.drawn.occupied === depth0cut.occupied.count,
+    `depth 0 below the cut draws ${first.drawn.occupied} occupied boxes, the library counts ${depth0cut.occupied.count}`);
+  check(first.drawn.occupied < expected(map, 0).occupied.count, 'the cut hides the ceiling\'s boxes');
   check(first.drawn.free === 0 && first.drawn.unknown === 0, 'free and unknown space start hidden');
   const share = await drawnShare(page, join(args.work, 'demo-screenshot.png'));
   check(share > 0.02, `the screenshot shows a map (${(100 * share).toFixed(1)}% of the pixels drawn, want > 2%)`);
   const numbers = await page.textContent('#numbers');
   check(numbers.includes('0.2 m') && numbers.includes('memory'), `the corner shows the map's numbers: ${numbers}`);
 
+  // The panel is beside the picture, never over it; folded it leaves the picture more room.
+  const open_ = await boxes(page);
+  check(!overlap(open_.panel, open_.view), `the panel (${JSON.stringify(open_.panel)}) does not cover the picture (${JSON.stringify(open_.view)})`);
+  await page.evaluate(() => window.umbraViewer.fold());
+  const folded = await boxes(page);
+  check(!overlap(folded.panel, folded.view) && folded.panel.width <= 48 && folded.view.width > open_.view.width + 200,
+    `folded, the panel is a strip (${folded.panel.width} px) and the picture wider (${open_.view.width} -> ${folded.view.width} px)`);
+  const foldedShare = await drawnShare(page, join(args.work, 'demo-folded.png'));
+  check(foldedShare > 0.02, `folded, the picture still shows the map (${(100 * foldedShare).toFixed(1)}%)`);
+  await page.evaluate(() => window.umbraViewer.fold());
+
+  // No cut: every node, as before the cut existed.
+  await page.evaluate(async () => window.umbraViewer.setCut(Infinity));
   const depths = await page.evaluate(() => window.umbraViewer.depths);
   check(depths.length === 8 && depths[0] === 0, `the slider offers depths 0..7 (got ${depths})`);
   await page.evaluate(async () => {
@@ -187,6 +229,23 @@ const stateNames = ['occupied', 'free', 'unknown'];
     note(`depth ${depth}: ${stats.instances} boxes`);
     check(stats.instances === stateNames.reduce((sum, s) => sum + library[s].count, 0), `depth ${depth}: instance total`);
   }
+  // A cut at z = 1.1 m (the middle of a voxel layer): the boxes whose bottom lies below it.
+  for (const depth of [0, 2]) {
+    const stats = await page.evaluate(async (d) => {
+      await window.umbraViewer.show(d);
+      await window.umbraViewer.setCut(1.1);
+      return window.umbraStats;
+    }, depth);
+    const library = expected(map, depth, 1.1);
+    for (const state of stateNames) {
+      check(stats.drawn[state] === library[state].count,
+        `depth ${depth} cut at 1.1 m: ${stats.drawn[state]} ${state} boxes drawn, the library counts ${library[state].count}`);
+      check(close(stats.volume[state], library[state].volume),
+        `depth ${depth} cut at 1.1 m: ${state} boxes hold ${stats.volume[state]} m^3, the library's nodes ${library[state].volume}`);
+    }
+  }
+  const cutText = await page.textContent('#status');
+  check(cutText.includes('below the cut at z 1.10 m'), `the status says where the cut is: "${cutText}"`);
   check(errors.length === 0, 'no errors in demo.html: ' + errors.join('; '));
   await page.close();
 }
@@ -194,7 +253,10 @@ const stateNames = ['occupied', 'free', 'unknown'];
 // --- a budget that depth 0 does not fit ----------------------------------------------
 {
   const { page, errors } = await open(join(args.work, 'budget.html'));
-  const stats = await page.evaluate(() => window.umbraStats);
+  const stats = await page.evaluate(async () => {
+    await window.umbraViewer.setCut(Infinity);  // every node, as the budget counts them
+    return window.umbraStats;
+  });
   const finest = stats.finestDepth;
   check(finest > 0 && stats.depth === finest, `a budget of ${smallBudget} starts the page at depth ${finest} > 0`);
   check(expected(map, finest).occupied.count <= smallBudget && expected(map, finest - 1).occupied.count > smallBudget,

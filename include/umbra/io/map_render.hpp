@@ -4,8 +4,10 @@
 // camera (parallel projection: sizes do not shrink with distance):
 //  - a view (no slice): every occupied node at the chosen depth drawn as a
 //    solid cube, hidden faces removed with a depth buffer, each visible face
-//    shaded by a fixed light so that the 3D shape reads. Free and unknown
-//    space are not drawn; the background shows through.
+//    shaded by a fixed light so that the 3D shape reads. With the colour
+//    modes height, depth and rgb free and unknown space are not drawn (the
+//    background shows through); with `state` they are painted behind the
+//    cubes (see Colours).
 //  - a slice: the layer of depth-`depth` nodes one node thick that contains
 //    a coordinate on one axis, seen along that axis, every pixel painted by
 //    the state of the node under it: occupied, free or unknown (the state
@@ -20,26 +22,48 @@
 //          (standing south-west and above, at 35.26 degrees elevation)
 // A slice along z is drawn as the top view, along y as front, along x as side.
 //
+// What a view draws: the nodes whose cube meets the height window [min_z,
+// max_z] and, for front and side views with a `section`, the half of the
+// map behind the section plane (front: y >= section, side: x <= section),
+// so that a front view looks into a building instead of at its outer wall.
+// render_cuts.hpp finds the cuts a user usually wants (a ceiling, the middle).
+//
 // Colours: `height` puts each occupied node's centre height on height_ramp
-// (topdown_image.hpp) between the lowest and highest drawn centre; `rgb` uses
-// the node's colour (maps with colour only; a node without one gets
-// `uncoloured_colour`); `state` paints occupied nodes `occupied_colour`.
+// (topdown_image.hpp) between the lowest and highest drawn centre; `depth`
+// puts its distance from the viewer on the same ramp, nearest red, farthest
+// blue (for front and side views, where height would only repeat the row);
+// `rgb` uses the node's colour (maps with colour only; a node without one
+// gets `uncoloured_colour`); `state` paints occupied nodes `occupied_colour`
+// and, in a view, every pixel that no cube covers by what lies along its line
+// of sight inside the drawn window: free_colour where that line meets a free
+// node, unknown_colour where it crosses the box of the known space without
+// meeting one, the background outside that box.
 // A face's colour is multiplied by 0.5 + 0.5 max(0, n.l), with n its normal
 // and l = unit(toward + 0.8 up - 0.4 right): in the iso view the top faces
 // are brightest and the faces to the right darkest; in the other views every
-// visible face gets the same 0.87.
+// visible face gets the same 0.87. Free and unknown space are not shaded.
 //
 // Framing: the picture is `width` pixels wide; the drawn content (a view:
-// the box around the drawn nodes; a slice: the box around the map's known
-// space) fills it less `margin_pixels` on each side, centred; the height
-// follows from the content's aspect ratio (capped at kMaxRenderPixels, the
-// content then shrinks to fit). MapPicture::camera maps points to pixels.
+// the box around the drawn nodes, with `state` around the drawn known space;
+// a slice: the box around the map's known space) fills it less
+// `margin_pixels` on each side, centred; the height follows from the
+// content's aspect ratio (capped at kMaxRenderPixels, the content then
+// shrinks to fit). MapPicture::camera maps points to pixels.
+//
+// Annotations (`annotate`, off by default; `umbra render` turns them on):
+// the drawing is made narrower and framed by a title line (what is shown),
+// for axis-aligned pictures coordinate ticks in metres along the left and
+// bottom edges with the axis names, and a footer with the legend (the state
+// colours, or the ramp with its two end values) and, for axis-aligned
+// pictures, a scale bar; picture_annotations.hpp gives the layout. The
+// picture stays `width` pixels wide and grows by the annotation rows.
 //
 // Cost model: the nodes come from OccupancyMap::query (pred::leaf() and
 // pred::occupied(), or pred::intersects of the slice's plane), walked twice
 // (framing, then drawing) without storing them; a node costs its query
-// visit plus the pixels its faces cover. Memory: the picture (3 bytes per
-// pixel) plus a 4-byte depth per pixel for views.
+// visit plus the pixels its faces cover. `state` in a view adds a walk over
+// the free nodes in the window. Memory: the picture (3 bytes per pixel)
+// plus a 4-byte depth per pixel for views.
 #pragma once
 
 #include <cstddef>
@@ -54,14 +78,16 @@
 namespace umbra {
 
 enum class RenderView : unsigned char { top, front, side, iso };
-enum class RenderColor : unsigned char { height, rgb, state };
+enum class RenderColor : unsigned char { height, rgb, state, depth };
 
-/// "top", "front", "side", "iso" / "height", "rgb", "state".
+/// "top", "front", "side", "iso" / "height", "rgb", "state", "depth".
 const char* to_string(RenderView view);
 const char* to_string(RenderColor color);
 
 /// Largest picture side render_map makes, in pixels.
 inline constexpr int kMaxRenderPixels = 16384;
+/// Narrowest picture with annotations, in pixels (the legend needs the room).
+inline constexpr int kMinAnnotatedRenderWidth = 200;
 
 /// A slice: the layer of nodes that contains `position` on `axis`.
 struct RenderSlice {
@@ -84,6 +110,12 @@ struct RenderOptions {
   /// max_z] are drawn (e.g. to cut a building's ceiling away). Not for slices.
   std::optional<double> min_z;
   std::optional<double> max_z;
+  /// Section plane of a front or side view, metres on the view's axis (front:
+  /// y, side: x): only nodes whose cube reaches behind it, as the viewer sees
+  /// it (front: y >= section, side: x <= section), are drawn.
+  std::optional<double> section;
+  /// Title, axes, scale bar and legend around the drawing (see the top).
+  bool annotate = false;
   int width = 1024;       ///< pixels, in [2 * margin_pixels + 1, kMaxRenderPixels]
   int margin_pixels = 8;  ///< >= 0
   Rgb background{255, 255, 255};
@@ -119,19 +151,24 @@ struct MapPicture {
   /// Nodes drawn: a view, the occupied nodes; a slice, the layer's nodes
   /// (any state) that overlap the picture.
   std::size_t nodes_drawn = 0;
-  double ramp_low_z = 0.0;      ///< heights at the ends of the height ramp (0 when unused)
-  double ramp_high_z = 0.0;
+  /// The ends of the ramp, metres: `height` the lowest and highest centre z;
+  /// `depth` the farthest and nearest centre's coordinate on the view axis
+  /// (front: y, side: x, top: z; iso: the distance along toward). Both 0 for
+  /// the other colour modes.
+  double ramp_low = 0.0;
+  double ramp_high = 0.0;
 };
 
 /// Throws std::invalid_argument for options that do not fit `map`: a bad
 /// field (validate()), a depth above the map's depth levels, `rgb` for a map
-/// without colour, a slice position outside the map.
+/// without colour.
 void check_render_options(const OccupancyMap& map, const RenderOptions& options);
 
 /// Draws the picture described at the top of this file. Throws what
 /// check_render_options throws, and std::invalid_argument when there is
-/// nothing to draw (a view of a map without occupied space, a slice of a
-/// map without known space).
+/// nothing to draw (a view of a map without occupied space in its window, a
+/// slice of a map without known space, a slice outside the known space: the
+/// message names the position and the known space's extent on that axis).
 MapPicture render_map(const OccupancyMap& map, const RenderOptions& options = {});
 
 }  // namespace umbra

@@ -9,10 +9,15 @@
 // per axis and (occupied layers of coloured maps) a colour per instance: 28
 // bytes of GPU memory per node.
 //
+// A height cut (the "cut above" slider) hides every box whose bottom is at
+// or above it, in the vertex shader, so that ceilings do not hide rooms; the
+// page starts cut at the ceiling `umbra render` finds (data.ceilingCut), or
+// above everything.
+//
 // For tests and scripts the page keeps window.umbraStats up to date (ready,
-// depth, drawn instances and their volume per state, errors) and offers
-// window.umbraViewer.show(depth) and .setVisible(state, on), which return
-// promises that settle once the picture is drawn.
+// depth, cut, drawn instances and their volume per state, errors) and offers
+// window.umbraViewer.show(depth), .setVisible(state, on) and .setCut(z),
+// which return promises that settle once the picture is drawn.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
@@ -34,6 +39,7 @@ const vertexShader = /* glsl */ `
   uniform float zLow;
   uniform float zHigh;
   uniform float shrink;
+  uniform float cutZ;  // nodes whose bottom is at or above this height are not drawn
   varying vec3 shaded;
 
   // umbra's height ramp (include/umbra/io/topdown_image.hpp): blue, cyan,
@@ -52,6 +58,11 @@ const vertexShader = /* glsl */ `
   }
 
   void main() {
+    if (cornerAt.z >= cutZ) {
+      gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // outside the clip volume: the whole box is dropped
+      shaded = vec3(0.0);
+      return;
+    }
     vec3 centre = cornerAt + 0.5 * edge;
     vec3 world = centre + (position - 0.5) * edge * shrink;
     vec3 base = flatColour;
@@ -79,6 +90,7 @@ const resolution = data.stats.resolution;
 const stats = {
   ready: false,
   depth: null,
+  cut: null,
   finestDepth: data.finestDepth,
   budget: data.budget,
   drawn: { occupied: 0, free: 0, unknown: 0 },
@@ -147,41 +159,91 @@ async function inflate(id) {
 
 const unitCube = new THREE.BoxGeometry(1, 1, 1).translate(0.5, 0.5, 0.5);
 
+// The 30 low bits of a Morton code -> the 10 low bits of one axis (bits 0, 3, 6, ...).
+function compact10(v) {
+  v &= 0x09249249;
+  v = (v ^ (v >>> 2)) & 0x030c30c3;
+  v = (v ^ (v >>> 4)) & 0x0300f00f;
+  v = (v ^ (v >>> 8)) & 0xff0000ff;
+  v = (v ^ (v >>> 16)) & 0x000003ff;
+  return v;
+}
+
+const TWO_30 = 1073741824;
+
 /// A layer's instances: corners, edges and colours in metres from the known
-/// space's lowest corner, their total volume and height range.
+/// space's lowest corner (clipped to the known space), their
+/// total volume and height range. The format is tools/viewer_data.hpp's:
+/// varint code deltas, depth bytes, 5-6-5 colour columns.
 async function decodeLayer(layer) {
   const n = layer.count;
-  const buffer = await inflate(layer.id);
-  const Ints = data.keyBytes === 2 ? Uint16Array : Uint32Array;
+  const bytes = new Uint8Array(await inflate(layer.id));
   const withColours = layer.state === 'occupied' && data.hasColor;
-  const expected = n * (6 * data.keyBytes + (withColours ? 3 : 0));
-  if (buffer.byteLength !== expected) {
-    throw new Error(`layer ${layer.id} holds ${buffer.byteLength} bytes, expected ${expected}`);
-  }
-  const ints = new Ints(buffer, 0, 6 * n);
   const corners = new Float32Array(3 * n);
   const edges = new Float32Array(3 * n);
+  const bottoms = new Float64Array(n);  // for the height cut
+  const volumes = new Float64Array(n);  // m^3, from whole voxel counts
+  let at = 0;
+  let code = 0;
+  const codes = new Float64Array(n);
+  for (let i = 0; i < n; ++i) {
+    // Codes stay below 2^51: a Number holds them exactly.
+    let delta = 0;
+    let scale = 1;
+    for (;;) {
+      if (at >= bytes.length) throw new Error(`layer ${layer.id} ends inside node ${i} of ${n}`);
+      const byte = bytes[at++];
+      delta += (byte & 0x7f) * scale;
+      scale *= 128;
+      if (byte < 0x80) break;
+    }
+    code += delta;
+    codes[i] = code;
+  }
+  const expected = at + n + (withColours ? 3 * n : 0);
+  if (bytes.length !== expected) {
+    throw new Error(`layer ${layer.id} holds ${bytes.length} bytes, expected ${expected}`);
+  }
   let volume = 0;
   let zLow = Infinity;
   let zHigh = -Infinity;
+  const key = [0, 0, 0];
   for (let i = 0; i < n; ++i) {
+    const high = Math.floor(codes[i] / TWO_30);
+    const low = codes[i] - high * TWO_30;
+    for (let axis = 0; axis < 3; ++axis) key[axis] = compact10(low >>> axis) + compact10(high >>> axis) * 1024;
+    const size = 2 ** (layer.depth + bytes[at + i]);  // finest voxels
+    let cells = 1;
     for (let axis = 0; axis < 3; ++axis) {
-      corners[3 * i + axis] = ints[axis * n + i] * resolution;
-      edges[3 * i + axis] = ints[(axis + 3) * n + i] * resolution;
+      // Clipped to the known space: unknown nodes and coarse ones reach beyond it.
+      const first = Math.max(key[axis] * 2 ** layer.depth - data.origin[axis], 0);
+      const end = Math.min(key[axis] * 2 ** layer.depth - data.origin[axis] + size, data.size[axis]);
+      corners[3 * i + axis] = first * resolution;
+      if (axis === 2) bottoms[i] = first * resolution;  // in double, for exact counts
+      edges[3 * i + axis] = (end - first) * resolution;
+      cells *= end - first;
     }
-    volume += ints[3 * n + i] * ints[4 * n + i] * ints[5 * n + i];
-    const z = (ints[2 * n + i] + 0.5 * ints[5 * n + i]) * resolution;
+    volume += cells;
+    volumes[i] = cells * resolution ** 3;
+    const z = corners[3 * i + 2] + 0.5 * edges[3 * i + 2];
     zLow = Math.min(zLow, z);
     zHigh = Math.max(zHigh, z);
   }
   const colours = new Uint8Array(3 * n);
   if (withColours) {
-    const bytes = new Uint8Array(buffer, 6 * n * data.keyBytes, 3 * n);
+    const base = at + n;
+    const last = [0, 0, 0];
+    const bits = [5, 6, 5];
     for (let i = 0; i < n; ++i) {
-      for (let channel = 0; channel < 3; ++channel) colours[3 * i + channel] = bytes[channel * n + i];
+      for (let channel = 0; channel < 3; ++channel) {
+        last[channel] = (last[channel] + bytes[base + channel * n + i]) & 0xff;
+        const v = last[channel];
+        // Back to 8 bits: the high bits repeated below (31 -> 255, 63 -> 255).
+        colours[3 * i + channel] = (v << (8 - bits[channel])) | (v >> (2 * bits[channel] - 8));
+      }
     }
   }
-  return { count: n, corners, edges, colours, volume: volume * resolution ** 3, zLow, zHigh };
+  return { count: n, corners, edges, colours, bottoms, volumes, volume: volume * resolution ** 3, zLow, zHigh };
 }
 
 function meshOf(state, decoded) {
@@ -204,6 +266,7 @@ function meshOf(state, decoded) {
       zHigh: { value: decoded.zHigh },
       shrink: { value: look.shrink },
       opacity: { value: look.opacity },
+      cutZ: { value: cutScene() },
     },
     transparent: look.opacity < 1,
     depthWrite: look.opacity === 1,
@@ -231,8 +294,9 @@ function render() {
 }
 
 function fitToWindow() {
-  const width = window.innerWidth;
-  const height = window.innerHeight;
+  // The canvas fills the room the panel leaves (page.html's flex layout).
+  const width = Math.max(1, canvas.clientWidth);
+  const height = Math.max(1, canvas.clientHeight);
   renderer.setSize(width, height, false);
   camera.aspect = width / Math.max(1, height);
   camera.updateProjectionMatrix();
@@ -262,6 +326,13 @@ function setUpScene() {
 // --- what is on show ---------------------------------------------------------------
 
 const visible = { occupied: true, free: false, unknown: false };
+// The height cut in map metres: boxes whose bottom is at or above it are hidden.
+const knownLow = data.stats.known_min ? data.stats.known_min[2] : 0;
+const knownHigh = data.stats.known_max ? data.stats.known_max[2] : 0;
+let cut = data.ceilingCut === null || data.ceilingCut === undefined ? knownHigh : data.ceilingCut;
+function cutScene() {
+  return cut - knownLow;
+}
 let colourMode = 0;  // 0 height, 1 the map's colours
 let current = { depth: null, meshes: {}, decoded: {} };
 let request = 0;  // the latest show() wins when several overlap
@@ -296,20 +367,51 @@ async function show(depth) {
     scene.add(current.meshes[state]);
   }
   if (mine !== request) return;
-  stats.instances = 0;
-  for (const state of STATES) {
-    const mesh = current.meshes[state];
-    if (mesh) mesh.visible = visible[state];
-    const on = Boolean(mesh && visible[state]);
-    stats.drawn[state] = on ? current.decoded[state].count : 0;
-    stats.volume[state] = on ? current.decoded[state].volume : 0;
-    stats.instances += stats.drawn[state];
-  }
+  applyCut();
   applyColourMode();
   stats.depth = depth;
   describe(depth);
   render();
   stats.ready = true;
+}
+
+/// The boxes below the cut, per state: what the picture draws.
+function countDrawn() {
+  stats.instances = 0;
+  const limit = cutScene();
+  for (const state of STATES) {
+    const mesh = current.meshes[state];
+    if (mesh) mesh.visible = visible[state];
+    const decoded = current.decoded[state];
+    let count = 0;
+    let volume = 0;
+    if (mesh && visible[state]) {
+      for (let i = 0; i < decoded.count; ++i) {
+        if (decoded.bottoms[i] >= limit) continue;
+        count += 1;
+        volume += decoded.volumes[i];
+      }
+    }
+    stats.drawn[state] = count;
+    stats.volume[state] = volume;
+    stats.instances += count;
+  }
+}
+
+function applyCut() {
+  for (const mesh of Object.values(current.meshes)) mesh.material.uniforms.cutZ.value = cutScene();
+  stats.cut = cut;
+  element('cut').value = cut;
+  element('cut-label').textContent = cut >= knownHigh ? 'none' : `z ${fixed(cut)} m`;
+  countDrawn();
+}
+
+function setCut(z) {
+  cut = Math.min(Math.max(Number(z), knownLow), knownHigh);
+  applyCut();
+  if (current.depth !== null) describe(current.depth);
+  render();
+  return Promise.resolve();
 }
 
 function describe(depth) {
@@ -327,13 +429,16 @@ function describe(depth) {
   const drawn = STATES.filter((s) => stats.drawn[s] > 0).map((s) => `${stats.drawn[s].toLocaleString('en')} ${s}`);
   const line = document.createElement('div');
   line.id = 'drawn';
-  line.textContent = drawn.length ? `drawing ${drawn.join(', ')} nodes (${stats.instances.toLocaleString('en')} boxes)` : 'nothing to draw at this depth';
+  const below = cut < knownHigh ? ` below the cut at z ${fixed(cut)} m` : '';
+  line.textContent = drawn.length ? `drawing ${drawn.join(', ')} nodes (${stats.instances.toLocaleString('en')} boxes)${below}` : `nothing to draw at this depth${below}`;
   status.appendChild(line);
   if (data.finestDepth > 0) {
     const note = document.createElement('div');
     note.className = 'note';
-    note.textContent = `depth 0 holds ${data.depthZeroOccupied.toLocaleString('en')} occupied nodes, more than the budget of ` +
-      `${data.budget.toLocaleString('en')} (umbra view --budget): the finest depth drawn is ${data.finestDepth}`;
+    note.textContent = data.depthZeroOccupied > data.budget
+      ? `depth 0 holds ${data.depthZeroOccupied.toLocaleString('en')} occupied nodes, more than the budget of ` +
+        `${data.budget.toLocaleString('en')} (umbra view --budget): the finest depth drawn is ${data.finestDepth}`
+      : `a map of ${data.stats.depth_levels} depth levels starts at depth ${data.finestDepth} (the page's codes hold 17 levels)`;
     status.appendChild(note);
   }
   for (const message of stats.errors) {
@@ -356,6 +461,12 @@ function wireControls() {
   slider.max = depths[depths.length - 1];
   slider.value = depths[0];
   slider.addEventListener('input', () => show(Number(slider.value)));
+  const cutSlider = element('cut');
+  cutSlider.min = knownLow;
+  cutSlider.max = knownHigh;
+  cutSlider.step = resolution;
+  cutSlider.value = cut;
+  cutSlider.addEventListener('input', () => setCut(cutSlider.value));
   for (const state of STATES) {
     element('show-' + state).addEventListener('change', (event) => setVisible(state, event.target.checked));
   }
@@ -368,6 +479,17 @@ function wireControls() {
   });
 }
 
+/// The panel beside the picture folds to a strip; the picture takes the room.
+function wirePanel() {
+  const button = element('fold');
+  button.addEventListener('click', () => {
+    const folded = document.body.classList.toggle('folded');
+    button.textContent = folded ? '>' : '<';
+    button.title = folded ? 'show the panel' : 'hide the panel';
+    if (renderer) fitToWindow();
+  });
+}
+
 window.umbraViewer = {
   depths,
   show: (depth) => {
@@ -375,9 +497,15 @@ window.umbraViewer = {
     return show(depth);
   },
   setVisible,
+  setCut,
+  fold: () => {
+    element('fold').click();
+    return Promise.resolve();
+  },
 };
 
 showNumbers();
+wirePanel();
 try {
   setUpScene();
 } catch (error) {
