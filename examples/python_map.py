@@ -1,6 +1,9 @@
 """Build a map in Python from real laser scans, query it with numpy, and plot it.
 
-    PYTHONPATH=build/python python3 examples/python_map.py map.png
+    build/python/python3 examples/python_map.py map.png
+
+(build/python/python3 runs the python3 the module was built for, with
+build/python on PYTHONPATH; with umbra installed, plain python3 does.)
 
 Reads the three registered 3DTK scans of ../shared/data (the simulated
 office when that folder is absent), builds a 10 cm map, asks it what a
@@ -14,7 +17,12 @@ import sys
 import time
 from pathlib import Path
 
-import matplotlib.pyplot as plt
+try:
+    import matplotlib.pyplot as plt
+except ModuleNotFoundError as error:
+    # Another python3 than the one umbra was built for (first on PATH) may lack it.
+    sys.exit(f"examples/python_map.py: {sys.executable} cannot import {error.name} "
+             "(Debian: apt-get install python3-matplotlib); build/python/python3 runs the python3 umbra was built for")
 import numpy as np
 
 import umbra

@@ -14,6 +14,8 @@ UMBRA_APT_PACKAGES=(
   bzip2 python3                                 # test helpers
   python3-dev python3-pybind11 pybind11-dev     # the Python module umbra (python/)
   python3-numpy python3-pytest python3-matplotlib  # its tests and examples/python_map.py
+  python3-pip python3-venv python3-setuptools python3-wheel  # pip install ./python offline (--no-build-isolation)
+  file                                          # cpack -G DEB (dpkg-shlibdeps comes with build-essential)
   chromium                                      # the `umbra view` page tested in a headless browser
   # ROS 1 (ros/: umbra_server, `umbra build` of .bag files, their tests; optional, found by CMake):
   ros-core-dev libroscpp-dev libsensor-msgs-dev libtf2-ros-dev librosbag-dev

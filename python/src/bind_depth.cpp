@@ -72,7 +72,8 @@ void bind_depth(py::module_& m, MapClass& map) {
              camera.validate();
              return camera;
            }),
-           py::arg("fx"), py::arg("fy"), py::arg("cx"), py::arg("cy"))
+           py::arg("fx"), py::arg("fy"), py::arg("cx"), py::arg("cy"),
+           "Focal lengths fx, fy and principal point cx, cy, pixels (focal lengths > 0, all finite).")
       .def_readonly("fx", &PinholeCamera::fx, "Focal length along u, pixels.")
       .def_readonly("fy", &PinholeCamera::fy, "Focal length along v, pixels.")
       .def_readonly("cx", &PinholeCamera::cx, "Principal point u, pixels.")

@@ -156,12 +156,14 @@ void bind_io(py::module_& m, MapClass& map) {
              return DepthCamera{fx, fy, cx, cy, depth_scale};
            }),
            py::arg("fx") = 580.8, py::arg("fy") = 581.8, py::arg("cx") = 308.8, py::arg("cy") = 253.0,
-           py::arg("depth_scale") = 5000.0)
+           py::arg("depth_scale") = 5000.0, "The intrinsics in pixels and raw units per metre.")
       .def_readonly("fx", &DepthCamera::fx, "Focal length along u, pixels.")
       .def_readonly("fy", &DepthCamera::fy, "Focal length along v, pixels.")
       .def_readonly("cx", &DepthCamera::cx, "Principal point u, pixels.")
       .def_readonly("cy", &DepthCamera::cy, "Principal point v, pixels.")
-      .def_readonly("depth_scale", &DepthCamera::depth_scale, "Raw depth units per metre.");
+      .def_readonly("depth_scale", &DepthCamera::depth_scale, "Raw depth units per metre.")
+      .def("__repr__",
+           [](py::handle self) { return repr_of_attributes(self, "DepthCamera", {"fx", "fy", "cx", "cy", "depth_scale"}); });
 
   py::class_<ScanReader>(m, "ScanReader",
                          "An iterator of scans (origin (3,) float32, points (N, 3) float32, colors (N, 3) uint8 "
@@ -171,7 +173,9 @@ void bind_io(py::module_& m, MapClass& map) {
       .def_property_readonly("scan_count", &ScanReader::scan_count,
                              "Number of scans when the format says so up front, else 0.")
       .def_property_readonly("progress", &ScanReader::progress, "Fraction of the input read, 0..1.")
-      .def_property_readonly("name", &ScanReader::name, "Where the last scan came from, e.g. 'run.graph scan 3'.");
+      .def_property_readonly("name", &ScanReader::name, "Where the last scan came from, e.g. 'run.graph scan 3'.")
+      .def("__repr__",
+           [](py::handle self) { return repr_of_attributes(self, "ScanReader", {"name", "scan_count", "progress"}); });
 
   m.def("read_scans", &read_scans, py::arg("path"), py::arg("format") = py::none(), py::kw_only(),
         py::arg("origin") = py::make_tuple(0.0, 0.0, 0.0), py::arg("poses") = py::none(),

@@ -248,7 +248,10 @@ MapClass bind_map(py::module_& m) {
             return OccupancyMap(config);
           }),
           py::arg("resolution"), py::arg("depth_levels") = 16, py::arg("color") = false,
-          py::arg("sensor_model") = py::none(), py::arg("thresholds") = py::none());
+          py::arg("sensor_model") = py::none(), py::arg("thresholds") = py::none(),
+          "An empty map, everything unknown: finest voxels of resolution metres, depth_levels levels (1..21; the "
+          "map spans [-resolution * 2**(depth_levels - 1), resolution * 2**(depth_levels - 1)) on every axis), a "
+          "colour per voxel when color, and a SensorModel and Thresholds (None: OctoMap's defaults).");
   bind_settings(map);
   bind_insertion_and_updates(map);
   bind_point_lookups(map);

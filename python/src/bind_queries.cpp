@@ -7,6 +7,7 @@
 // library's work: building the shapes of a batch (one pass, 32-80 bytes per
 // shape) and the checks themselves. Matching nodes are collected in a
 // std::vector and turned into a structured array afterwards.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -339,7 +340,7 @@ void bind_results(py::module_& m) {
           "point", [](const RayHit& h) { return to_tuple(h.point); }, "origin + direction * distance.")
       .def("__bool__", [](const RayHit& h) { return h.hit; })
       .def("__repr__", [](const RayHit& h) {
-        return h.hit ? "RayHit(hit=True, distance=" + std::to_string(h.distance) +
+        return h.hit ? "RayHit(hit=True, distance=" + std::string(py::repr(py::float_(h.distance))) +
                            ", node=" + std::string(py::repr(py::cast(h.node))) + ")"
                      : std::string("RayHit(hit=False)");
       });
@@ -350,7 +351,12 @@ void bind_results(py::module_& m) {
       .def_readonly("point", &RayHits::point, "(N, 3) origin + direction * distance, or NaN.")
       .def_readonly("center", &RayHits::center, "(N, 3) centre of the node hit, or NaN.")
       .def_readonly("size", &RayHits::size, "(N,) edge of the node hit, or NaN.")
-      .def("__len__", [](const RayHits& h) { return h.hit.size(); });
+      .def("__len__", [](const RayHits& h) { return h.hit.size(); })
+      .def("__repr__", [](const RayHits& h) {
+        // A summary: the arrays are attributes and can be long.
+        const auto hits = std::count(h.hit.data(), h.hit.data() + h.hit.size(), true);
+        return "RayHits(rays=" + std::to_string(h.hit.size()) + ", hits=" + std::to_string(hits) + ")";
+      });
 }
 
 }  // namespace

@@ -58,7 +58,7 @@ void bind_boxes(py::module_& m) {
       .def(py::init([](py::handle min, py::handle max) {
              return validated(Aabb{vec3_of(min, "min"), vec3_of(max, "max")});
            }),
-           py::arg("min"), py::arg("max"))
+           py::arg("min"), py::arg("max"), "The box from corner min (3,) to corner max (3,).")
       .def_property_readonly("min", [](const Aabb& b) { return to_tuple(b.min); }, "Lowest corner.")
       .def_property_readonly("max", [](const Aabb& b) { return to_tuple(b.max); }, "Highest corner.")
       .def(py::self == py::self)
@@ -75,7 +75,9 @@ void bind_boxes(py::module_& m) {
              if (!rotation.is_none()) box.axes = axes_of(rotation);
              return validated(box);
            }),
-           py::arg("center"), py::arg("half_extents"), py::arg("rotation") = py::none())
+           py::arg("center"), py::arg("half_extents"), py::arg("rotation") = py::none(),
+           "The box of half edge lengths half_extents (3,) about center (3,), turned by rotation (3, 3) "
+           "(None: not turned).")
       .def_static(
           "from_yaw_pitch_roll",
           [](py::handle center, py::handle half_extents, double yaw, double pitch, double roll) {
@@ -112,7 +114,7 @@ void bind_boxes(py::module_& m) {
 void bind_round_shapes(py::module_& m) {
   py::class_<Sphere>(m, "Sphere", "A ball: centre and radius (>= 0) in metres.")
       .def(py::init([](py::handle center, double radius) { return validated(Sphere{vec3_of(center, "center"), radius}); }),
-           py::arg("center"), py::arg("radius"))
+           py::arg("center"), py::arg("radius"), "The ball of radius about center (3,).")
       .def_property_readonly("center", [](const Sphere& s) { return to_tuple(s.center); }, "Centre.")
       .def_readonly("radius", &Sphere::radius, "Radius.")
       .def("__repr__", [](const Sphere& s) { return "Sphere(center=" + text(s.center) + ", radius=" + text(s.radius) + ")"; });
@@ -121,7 +123,8 @@ void bind_round_shapes(py::module_& m) {
       .def(py::init([](py::handle a, py::handle b, double radius) {
              return validated(Capsule{vec3_of(a, "a"), vec3_of(b, "b"), radius});
            }),
-           py::arg("a"), py::arg("b"), py::arg("radius"))
+           py::arg("a"), py::arg("b"), py::arg("radius"),
+           "The points within radius of the segment from a (3,) to b (3,).")
       .def_property_readonly("a", [](const Capsule& c) { return to_tuple(c.a); }, "One end of the axis.")
       .def_property_readonly("b", [](const Capsule& c) { return to_tuple(c.b); }, "The other end.")
       .def_readonly("radius", &Capsule::radius, "Radius.")
@@ -135,7 +138,7 @@ void bind_round_shapes(py::module_& m) {
       .def(py::init([](py::handle start, py::handle end) {
              return validated(Segment{vec3_of(start, "start"), vec3_of(end, "end")});
            }),
-           py::arg("start"), py::arg("end"))
+           py::arg("start"), py::arg("end"), "The segment from start (3,) to end (3,).")
       .def_property_readonly("start", [](const Segment& s) { return to_tuple(s.from); }, "First point.")
       .def_property_readonly("end", [](const Segment& s) { return to_tuple(s.to); }, "Last point.")
       .def("__repr__", [](const Segment& s) { return "Segment(start=" + text(s.from) + ", end=" + text(s.to) + ")"; });
@@ -150,7 +153,8 @@ void bind_frustum(py::module_& m) {
              return validated(Frustum{vec3_of(origin, "origin"), yaw, pitch, hfov, vfov, min_range, max_range});
            }),
            py::arg("origin"), py::arg("yaw"), py::arg("pitch"), py::arg("hfov"), py::arg("vfov"),
-           py::arg("min_range"), py::arg("max_range"))
+           py::arg("min_range"), py::arg("max_range"),
+           "The field of view from origin (3,), angles in radians (from_degrees takes degrees).")
       .def_static(
           "from_degrees",
           [](py::handle origin, double yaw, double pitch, double hfov, double vfov, double min_range,

@@ -19,7 +19,8 @@ void bind_sim(py::module_& m) {
 
   py::class_<SensorPose>(sim, "SensorPose", "Where a sensor is and its heading (yaw, radians about +z).")
       .def(py::init([](py::handle position, double yaw) { return SensorPose{vec3_of(position, "position"), yaw}; }),
-           py::arg("position"), py::arg("yaw") = 0.0)
+           py::arg("position"), py::arg("yaw") = 0.0,
+           "A sensor at position (3,) metres, heading yaw radians counter-clockwise from +x.")
       .def_property_readonly("position", [](const SensorPose& p) { return to_tuple(p.position); }, "Metres.")
       .def_readonly("yaw", &SensorPose::yaw, "Heading, radians counter-clockwise from +x.")
       .def("__repr__", [](const SensorPose& p) {
@@ -28,7 +29,7 @@ void bind_sim(py::module_& m) {
       });
 
   py::class_<Scene>(sim, "Scene", "Solid axis-aligned boxes and vertical cylinders.")
-      .def(py::init<>())
+      .def(py::init<>(), "An empty scene.")
       .def(
           "add_box",
           [](Scene& s, py::handle min, py::handle max) { s.add_box({vec3_of(min, "min"), vec3_of(max, "max")}); },
@@ -76,10 +77,13 @@ void bind_sim(py::module_& m) {
            }),
            py::arg("rings") = 32, py::arg("fov_down_deg") = -25.0, py::arg("fov_up_deg") = 15.0,
            py::arg("azimuth_steps") = 720, py::arg("max_range") = 30.0, py::arg("range_noise_stddev") = 0.0,
-           py::arg("seed") = 1)
+           py::arg("seed") = 1, "The beams and their noise; raises ValueError for a model that cannot scan.")
       .def_readonly("rings", &LidarModel::rings, "Beams per azimuth step.")
       .def_readonly("azimuth_steps", &LidarModel::azimuth_steps, "Beams per ring over 360 degrees.")
-      .def_readonly("max_range", &LidarModel::max_range, "Metres; farther hits are not returned.");
+      .def_readonly("max_range", &LidarModel::max_range, "Metres; farther hits are not returned.")
+      .def("__repr__", [](py::handle self) {
+        return repr_of_attributes(self, "LidarModel", {"rings", "azimuth_steps", "max_range"});
+      });
 
   sim.def("demo_scene", &sim::make_demo_scene,
           "The office floor of the demo: x in [0, 20], y in [0, 12], z in [0, 3], a corridor at y in [5, 7] and "

@@ -35,6 +35,20 @@ void write_record(const Node& node, NodeRecord& r) {
   }
 }
 
+std::string repr_of_attributes(py::handle object, const std::string& class_name,
+                               std::initializer_list<const char*> attributes) {
+  std::string text = class_name + "(";
+  const char* separator = "";
+  for (const char* name : attributes) {
+    text += separator;
+    text += name;
+    text += "=";
+    text += py::repr(object.attr(name));
+    separator = ", ";
+  }
+  return text + ")";
+}
+
 py::array node_array(const std::vector<Node>& nodes) {
   py::array_t<NodeRecord> array(static_cast<py::ssize_t>(nodes.size()));
   NodeRecord* out = array.mutable_data();
@@ -98,7 +112,7 @@ void bind_sensor_model_and_thresholds(py::module_& m) {
              return model;
            }),
            py::arg("p_hit") = 0.7, py::arg("p_miss") = 0.4, py::arg("clamp_min") = 0.1192,
-           py::arg("clamp_max") = 0.971)
+           py::arg("clamp_max") = 0.971, "The probabilities; the defaults are OctoMap's.")
       .def_readonly("p_hit", &SensorModel::p_hit, "Probability a hit stands for.")
       .def_readonly("p_miss", &SensorModel::p_miss, "Probability a miss stands for.")
       .def_readonly("clamp_min", &SensorModel::clamp_min, "Lowest probability a voxel keeps.")
@@ -117,7 +131,8 @@ void bind_sensor_model_and_thresholds(py::module_& m) {
              thresholds.validate();
              return thresholds;
            }),
-           py::arg("occupied") = 0.5, py::arg("free") = 0.5)
+           py::arg("occupied") = 0.5, py::arg("free") = 0.5,
+           "The two thresholds on the occupancy probability; the defaults are OctoMap's.")
       .def_readonly("occupied", &Thresholds::occupied, "Probability above which a voxel is occupied.")
       .def_readonly("free", &Thresholds::free, "Probability below which a voxel is free.")
       .def(py::self == py::self)
@@ -179,7 +194,12 @@ void bind_counts_and_stats(py::module_& m) {
             if (!s.has_known_space) return py::none();
             return to_tuple(s.known_max);
           },
-          "Highest corner of the known space, or None.");
+          "Highest corner of the known space, or None.")
+      .def("__repr__", [](py::handle self) {
+        return repr_of_attributes(self, "MapStatistics",
+                                  {"resolution", "depth_levels", "nodes", "memory_bytes", "occupied_voxels",
+                                   "free_voxels", "occupied_volume_m3", "free_volume_m3", "known_min", "known_max"});
+      });
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,11 @@ struct PyPredicate {
 /// The predicate argument of a query: None (every node) or a umbra.pred value.
 Predicate predicate_of(const py::object& object);
 
+/// "Name(a=..., b=...)": the repr() of each named attribute of object, for
+/// the __repr__ of value classes whose attributes say it all.
+std::string repr_of_attributes(py::handle object, const std::string& class_name,
+                               std::initializer_list<const char*> attributes);
+
 /// The options insert() and insert_depth_image() share; ValueError for negative threads or an unknown integrator.
 InsertOptions insert_options(const std::string& integrator, double max_range, int clear_depth, int fine_steps,
                              int threads);
@@ -71,5 +77,7 @@ void bind_gain(py::module_& m, MapClass& map);
 void bind_io(py::module_& m, MapClass& map);
 void bind_depth(py::module_& m, MapClass& map);
 void bind_sim(py::module_& m);
+/// Gives every function of m and its submodules a __text_signature__ (text_signatures.cpp); call last.
+void add_text_signatures(py::module_& m);
 
 }  // namespace umbra::python

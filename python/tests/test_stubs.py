@@ -4,6 +4,8 @@ names, and each docstring word for word the runtime one."""
 import ast
 import importlib
 import inspect
+import re
+import types
 from pathlib import Path
 
 import pytest
@@ -31,19 +33,35 @@ def stub_docs(path):
     return docs
 
 
+def without_signature(name, doc):
+    """A function's docstring without the signature lines pybind11 puts in front of it ("name(a: T = 1) -> R"),
+    and of an overloaded function the docstrings of its overloads, one a line."""
+    name = name.split(".")[-1]
+    if not doc or not doc.startswith(name + "("):
+        return doc
+    parts = doc.rstrip("\n").split("\n\n")
+    if parts[0] == f"{name}(*args, **kwargs)\nOverloaded function.":
+        overload = re.compile(rf"\d+\. {re.escape(name)}\(")
+        return "\n".join(part for part in parts[1:] if not overload.match(part))
+    assert len(parts) > 1, f"{name}: no text after the signature {parts[0]!r}"
+    return "\n\n".join(parts[1:])
+
+
 def runtime_docs(module):
-    """{qualified name: docstring} of the public functions, classes and their members at run time."""
+    """{qualified name: docstring} of the public functions, classes, their members and constructors at run time."""
     docs = {}
     for name, value in vars(module).items():
         if name.startswith("_") or inspect.ismodule(value) or not callable(value):
             continue
-        docs[name] = value.__doc__
+        docs[name] = without_signature(name, value.__doc__)
         if inspect.isclass(value) and not issubclass(value, BaseException):
-            for member in vars(value):
-                if member.startswith("_"):
-                    continue  # __init__ is documented by the class
+            for member, raw in vars(value).items():
+                if member.startswith("_") and member != "__init__":
+                    continue
+                if isinstance(raw, types.WrapperDescriptorType):
+                    continue  # a class without constructor: Python's slot, not umbra's
                 # getattr, not vars(): a static method's own docstring, not staticmethod's.
-                docs[f"{name}.{member}"] = getattr(value, member).__doc__
+                docs[f"{name}.{member}"] = without_signature(member, getattr(value, member).__doc__)
     return docs
 
 
@@ -56,7 +74,7 @@ def test_stubs_match_the_module(stub, module):
     actual = runtime_docs(module)
     if module is umbra._umbra:
         actual["FormatError"] = umbra.FormatError.__doc__
-    dunder = {name for name in written if name.split(".")[-1].startswith("__")}
+    dunder = {name for name in written if name.split(".")[-1].startswith("__") and not name.endswith(".__init__")}
     missing = sorted(set(actual) - set(written))
     extra = sorted(set(written) - set(actual) - dunder)
     assert not missing, f"{stub} lacks {missing}"
@@ -71,3 +89,12 @@ def test_every_public_name_is_exported():
     # The submodules import as modules too.
     assert importlib.import_module("umbra.pred") is umbra.pred
     assert importlib.import_module("umbra.sim").demo_scene is umbra.sim.demo_scene
+
+
+def test_every_constructor_is_documented():
+    for module in (umbra._umbra, umbra.sim):
+        for name, value in vars(module).items():
+            own = vars(value).get("__init__") if inspect.isclass(value) else None
+            if own is not None and not isinstance(own, types.WrapperDescriptorType):
+                doc = without_signature("__init__", value.__init__.__doc__)
+                assert doc and not doc.startswith("__init__("), f"{name}.__init__ has no docstring"

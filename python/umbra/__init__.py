@@ -6,10 +6,40 @@ and makes ``umbra.pred`` and ``umbra.sim`` importable as modules. Type stubs:
 """
 
 import sys as _sys
+from pathlib import Path as _Path
 
-import numpy as _numpy  # noqa: F401  (the module returns numpy arrays; fail early with a clear ImportError)
 
-from . import _umbra
+def _import_error(what, error):
+    """An ImportError that says which interpreter failed to import what, and what to do."""
+    folder = _Path(__file__).resolve().parent
+    python = f"{_sys.executable} (Python {_sys.version_info[0]}.{_sys.version_info[1]})"
+    if what == "numpy":
+        return ImportError(
+            f"umbra needs numpy, which {python} cannot import ({error}); on Debian: apt-get install "
+            "python3-numpy, or a virtual environment made with --system-site-packages"
+        )
+    import sysconfig
+
+    wanted = "_umbra" + sysconfig.get_config_var("EXT_SUFFIX")
+    built = sorted(path.name for path in folder.glob("_umbra*.so"))
+    if built and wanted not in built:
+        return ImportError(
+            f"umbra in {folder} was built for another Python: it holds {', '.join(built)}, {python} needs "
+            f"{wanted}. Run it with the python3 it was built for (in a build folder: build/python/python3), "
+            "or build it for this one (pip install ./python)"
+        )
+    return ImportError(f"umbra's compiled part {wanted} could not be loaded from {folder}: {error}")
+
+
+try:
+    import numpy as _numpy  # noqa: F401  (the module returns numpy arrays; fail early with a clear ImportError)
+except ImportError as _error:
+    raise _import_error("numpy", _error) from _error
+
+try:
+    from . import _umbra
+except ImportError as _error:
+    raise _import_error("_umbra", _error) from _error
 from ._umbra import (
     FREE,
     GAIN_DTYPE,
@@ -38,6 +68,7 @@ from ._umbra import (
     Segment,
     Sphere,
     Thresholds,
+    __version__,
     back_project,
     load,
     pred,

@@ -19,6 +19,7 @@ Vec3 = Tuple[float, float, float]
 PathLike = Union[str, os.PathLike[str]]
 ShapeType = Union["Aabb", "Sphere", "OrientedBox", "Capsule", "Segment"]
 
+__version__: str
 UNKNOWN: int
 FREE: int
 OCCUPIED: int
@@ -77,7 +78,8 @@ class SensorModel:
     """Probabilities of the inverse sensor model (OctoMap's defaults). Raises ValueError unless 0.5 < p_hit < 1, 0 < p_miss < 0.5 and 0 < clamp_min <= 0.5 <= clamp_max < 1."""
     def __init__(
         self, p_hit: float = 0.7, p_miss: float = 0.4, clamp_min: float = 0.1192, clamp_max: float = 0.971
-    ) -> None: ...
+    ) -> None:
+        """The probabilities; the defaults are OctoMap's."""
     @property
     def p_hit(self) -> float:
         """Probability a hit stands for."""
@@ -93,7 +95,8 @@ class SensorModel:
 
 class Thresholds:
     """Occupied if p > occupied, free if p < free, unknown otherwise. Raises ValueError unless 0 < free <= occupied < 1."""
-    def __init__(self, occupied: float = 0.5, free: float = 0.5) -> None: ...
+    def __init__(self, occupied: float = 0.5, free: float = 0.5) -> None:
+        """The two thresholds on the occupancy probability; the defaults are OctoMap's."""
     @property
     def occupied(self) -> float:
         """Probability above which a voxel is occupied."""
@@ -178,7 +181,8 @@ class MapStatistics:
 
 class Aabb:
     """An axis-aligned box [min, max] in metres. ValueError unless min <= max, finite."""
-    def __init__(self, min: ArrayLike, max: ArrayLike) -> None: ...
+    def __init__(self, min: ArrayLike, max: ArrayLike) -> None:
+        """The box from corner min (3,) to corner max (3,)."""
     @property
     def min(self) -> Vec3:
         """Lowest corner."""
@@ -188,7 +192,8 @@ class Aabb:
 
 class OrientedBox:
     """A box turned in space: centre, half edge lengths along its own axes, and a rotation matrix whose columns are those axes in map coordinates (orthonormal; identity when None)."""
-    def __init__(self, center: ArrayLike, half_extents: ArrayLike, rotation: Optional[ArrayLike] = None) -> None: ...
+    def __init__(self, center: ArrayLike, half_extents: ArrayLike, rotation: Optional[ArrayLike] = None) -> None:
+        """The box of half edge lengths half_extents (3,) about center (3,), turned by rotation (3, 3) (None: not turned)."""
     @staticmethod
     def from_yaw_pitch_roll(
         center: ArrayLike, half_extents: ArrayLike, yaw: float, pitch: float = 0.0, roll: float = 0.0
@@ -209,7 +214,8 @@ class OrientedBox:
 
 class Sphere:
     """A ball: centre and radius (>= 0) in metres."""
-    def __init__(self, center: ArrayLike, radius: float) -> None: ...
+    def __init__(self, center: ArrayLike, radius: float) -> None:
+        """The ball of radius about center (3,)."""
     @property
     def center(self) -> Vec3:
         """Centre."""
@@ -219,7 +225,8 @@ class Sphere:
 
 class Capsule:
     """The points within radius of the segment from a to b."""
-    def __init__(self, a: ArrayLike, b: ArrayLike, radius: float) -> None: ...
+    def __init__(self, a: ArrayLike, b: ArrayLike, radius: float) -> None:
+        """The points within radius of the segment from a (3,) to b (3,)."""
     @property
     def a(self) -> Vec3:
         """One end of the axis."""
@@ -232,7 +239,8 @@ class Capsule:
 
 class Segment:
     """A line segment; in checks, the voxels of its ray walk from start (OctoMap's computeRayKeys) plus the voxel of end."""
-    def __init__(self, start: ArrayLike, end: ArrayLike) -> None: ...
+    def __init__(self, start: ArrayLike, end: ArrayLike) -> None:
+        """The segment from start (3,) to end (3,)."""
     @property
     def start(self) -> Vec3:
         """First point."""
@@ -244,7 +252,8 @@ class Frustum:
     """A sensor's field of view from origin, looking along (cos p cos y, cos p sin y, sin p); angles in radians, full fields of view in (0, pi), min_range <= |d| <= max_range."""
     def __init__(
         self, origin: ArrayLike, yaw: float, pitch: float, hfov: float, vfov: float, min_range: float, max_range: float
-    ) -> None: ...
+    ) -> None:
+        """The field of view from origin (3,), angles in radians (from_degrees takes degrees)."""
     @staticmethod
     def from_degrees(
         origin: ArrayLike, yaw: float, pitch: float, hfov: float, vfov: float, min_range: float, max_range: float
@@ -347,7 +356,8 @@ class OccupancyMap:
         color: bool = False,
         sensor_model: Optional[SensorModel] = None,
         thresholds: Optional[Thresholds] = None,
-    ) -> None: ...
+    ) -> None:
+        """An empty map, everything unknown: finest voxels of resolution metres, depth_levels levels (1..21; the map spans [-resolution * 2**(depth_levels - 1), resolution * 2**(depth_levels - 1)) on every axis), a colour per voxel when color, and a SensorModel and Thresholds (None: OctoMap's defaults)."""
     @property
     def resolution(self) -> float:
         """Edge of a finest voxel, metres."""
@@ -558,7 +568,8 @@ class DepthCamera:
     """A pinhole depth camera: pixel (u, v) with raw depth d lies at z = d / depth_scale metres, x = (u - cx) z / fx, y = (v - cy) z / fy. Defaults: the TUM fr2 Kinect."""
     def __init__(
         self, fx: float = 580.8, fy: float = 581.8, cx: float = 308.8, cy: float = 253.0, depth_scale: float = 5000.0
-    ) -> None: ...
+    ) -> None:
+        """The intrinsics in pixels and raw units per metre."""
     @property
     def fx(self) -> float:
         """Focal length along u, pixels."""
@@ -577,7 +588,8 @@ class DepthCamera:
 
 class PinholeCamera:
     """Pinhole intrinsics in pixels: pixel (u, v) (from 0 at the top-left pixel's centre) with depth z lies at x = (u - cx) z / fx, y = (v - cy) z / fy in the optical frame (x right, y down, z forward)."""
-    def __init__(self, fx: float, fy: float, cx: float, cy: float) -> None: ...
+    def __init__(self, fx: float, fy: float, cx: float, cy: float) -> None:
+        """Focal lengths fx, fy and principal point cx, cy, pixels (focal lengths > 0, all finite)."""
     @property
     def fx(self) -> float:
         """Focal length along u, pixels."""

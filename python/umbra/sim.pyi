@@ -9,7 +9,8 @@ Vec3 = Tuple[float, float, float]
 
 class SensorPose:
     """Where a sensor is and its heading (yaw, radians about +z)."""
-    def __init__(self, position: ArrayLike, yaw: float = 0.0) -> None: ...
+    def __init__(self, position: ArrayLike, yaw: float = 0.0) -> None:
+        """A sensor at position (3,) metres, heading yaw radians counter-clockwise from +x."""
     @property
     def position(self) -> Vec3:
         """Metres."""
@@ -19,7 +20,8 @@ class SensorPose:
 
 class Scene:
     """Solid axis-aligned boxes and vertical cylinders."""
-    def __init__(self) -> None: ...
+    def __init__(self) -> None:
+        """An empty scene."""
     def add_box(self, min: ArrayLike, max: ArrayLike) -> None:
         """Adds a solid box [min, max] (min < max on every axis)."""
     def add_cylinder(self, center_x: float, center_y: float, radius: float, z_min: float, z_max: float) -> None:
@@ -40,7 +42,8 @@ class LidarModel:
         max_range: float = 30.0,
         range_noise_stddev: float = 0.0,
         seed: int = 1,
-    ) -> None: ...
+    ) -> None:
+        """The beams and their noise; raises ValueError for a model that cannot scan."""
     @property
     def rings(self) -> int:
         """Beams per azimuth step."""
