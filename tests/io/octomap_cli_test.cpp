@@ -14,6 +14,7 @@
 #include <octomap/AbstractOcTree.h>
 #include <octomap/OcTree.h>
 
+#include "support/cli_commands.hpp"
 #include "support/test_support.hpp"
 #include "support/map_internals.hpp"
 #include "umbra/io/map_file.hpp"
@@ -30,9 +31,9 @@ namespace fs = std::filesystem;
 using test::CommandResult;
 CommandResult run(const std::string& command) { return test::run_command(command); }
 
-std::string cli() { return UMBRA_CLI_PATH; }
-std::string quoted(const fs::path& path) { return "'" + path.string() + "'"; }
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using test::cli;
+using test::quoted;
+using test::contains;
 
 /// A coloured map of the simulated office from two poses, 20 cm voxels.
 OccupancyMap office_map() {

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/cli_commands.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/scan_graph.hpp"
@@ -20,9 +21,8 @@ namespace {
 using test::CommandResult;
 CommandResult run(const std::string& command) { return test::run_command(command); }
 
-std::string cli() { return UMBRA_CLI_PATH; }
-
-std::string quoted(const std::filesystem::path& path) { return "'" + path.string() + "'"; }
+using test::cli;
+using test::quoted;
 
 /// A small room seen from its centre: 6 walls sampled on a grid.
 std::vector<Vec3f> room_scan() {

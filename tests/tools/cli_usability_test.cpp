@@ -19,6 +19,7 @@
 
 #include "progress_bar.hpp"
 #include "query_lines.hpp"
+#include "support/cli_commands.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/map_formats.hpp"
@@ -30,10 +31,10 @@ namespace {
 namespace fs = std::filesystem;
 using test::CommandResult;
 
-std::string cli() { return UMBRA_CLI_PATH; }
-std::string quoted(const fs::path& path) { return "'" + path.string() + "'"; }
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
-CommandResult run(const std::string& arguments) { return test::run_command(cli() + " " + arguments); }
+using test::cli;
+using test::quoted;
+using test::contains;
+using test::run;
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path);

@@ -27,6 +27,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/cli_commands.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/scan_graph.hpp"
@@ -38,10 +39,10 @@ namespace {
 namespace fs = std::filesystem;
 using test::CommandResult;
 
-std::string cli() { return UMBRA_CLI_PATH; }
-std::string quoted(const fs::path& path) { return "'" + path.string() + "'"; }
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
-CommandResult run(const std::string& arguments) { return test::run_command(cli() + " " + arguments); }
+using test::cli;
+using test::quoted;
+using test::contains;
+using test::run;
 
 /// `n` points on the walls of a 4 m room around the origin.
 std::vector<Vec3f> room_points(int n) {

@@ -20,6 +20,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/cli_commands.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/map_formats.hpp"
@@ -34,10 +35,10 @@ namespace {
 namespace fs = std::filesystem;
 using test::CommandResult;
 
-std::string cli() { return UMBRA_CLI_PATH; }
-std::string quoted(const fs::path& path) { return "'" + path.string() + "'"; }
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
-CommandResult run(const std::string& arguments) { return test::run_command(cli() + " " + arguments); }
+using test::cli;
+using test::quoted;
+using test::contains;
+using test::run;
 
 /// A coloured room (4 m, 10 cm voxels) seen from two places, with a pruned
 /// occupied 2 x 2 x 2 block (one depth-1 node) and a voxel without colour.

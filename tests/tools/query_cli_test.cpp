@@ -13,14 +13,15 @@
 #include <gtest/gtest.h>
 
 #include "support/query_oracle.hpp"
+#include "support/cli_commands.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
 
 namespace umbra {
 namespace {
 
-std::string cli() { return UMBRA_CLI_PATH; }
-std::string quoted(const std::filesystem::path& path) { return "'" + path.string() + "'"; }
+using test::cli;
+using test::quoted;
 
 struct CliRun {
   int exit_code;

@@ -20,6 +20,7 @@
 #include <tuple>
 #include <vector>
 
+#include "support/cli_commands.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/map_render.hpp"
@@ -37,8 +38,8 @@ namespace {
 
 using test::CommandResult;
 
-std::string cli() { return UMBRA_CLI_PATH; }
-std::string quoted(const std::filesystem::path& path) { return "'" + path.string() + "'"; }
+using test::cli;
+using test::quoted;
 
 /// The demo building at 20 cm, with colour, saved as DIR/building.umb.
 std::filesystem::path building_map(const std::filesystem::path& dir) {
