@@ -2,7 +2,7 @@
 // planner runs on umbra (umbra_exploration_map.hpp) and on OctoMap
 // (bench/explore/octomap_exploration_map.hpp) with identical logic.
 //
-// Semantics both sides keep (DESIGN.md §1): a voxel belongs to a ball when
+// Semantics both sides keep (docs/design.md, Semantics): a voxel belongs to a ball when
 // its cube is within the radius of the centre; unknown voxels block the
 // robot; the gain of a view counts the unknown voxels whose centres lie in
 // the frustum and are not hidden behind an occupied voxel. Which threads call

@@ -1,4 +1,4 @@
-// Grid: the key rule of DESIGN.md §1, the map's extent, centres.
+// Grid: the key rule of docs/design.md (Semantics), the map's extent, centres.
 #include <cmath>
 #include <cstdio>
 #include <limits>

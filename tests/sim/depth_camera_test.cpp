@@ -1,5 +1,5 @@
 // Tests of the simulated depth camera: its pinhole geometry against the
-// frustum of DESIGN.md (computed here independently), exact points on the
+// frustum of docs/design.md, Semantics (computed here independently), exact points on the
 // surfaces it sees, the range limits, Gaussian noise along the ray with the
 // configured spread, determinism from the seed, and its demo trajectory.
 #include <gtest/gtest.h>
@@ -33,8 +33,8 @@ DepthCameraModel small_camera() {
   return model;
 }
 
-/// Horizontal and vertical angle of direction d seen from a pose, as DESIGN.md
-/// defines the information-gain frustum (forward f, left l, up u = f x l).
+/// Horizontal and vertical angle of direction d seen from a pose, as docs/design.md
+/// (Semantics) defines the information-gain frustum (forward f, left l, up u = f x l).
 std::pair<double, double> frustum_angles(const CameraPose& pose, Vec3d d) {
   const Vec3d f{std::cos(pose.pitch) * std::cos(pose.yaw), std::cos(pose.pitch) * std::sin(pose.yaw),
                 std::sin(pose.pitch)};

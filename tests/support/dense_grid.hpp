@@ -1,5 +1,5 @@
 // DenseGrid: the test oracle. A plain 3D array of log-odds, one float per
-// finest voxel, with the scan rules of DESIGN.md §1 written out the obvious
+// finest voxel, with the scan rules of docs/design.md (Semantics) written out the obvious
 // way: a literal key-based copy of OctoMap's ray walk, std::set to
 // de-duplicate, the occupied set subtracted from the free set, then add and
 // clamp. Nothing here shares code with the library except the Key struct,

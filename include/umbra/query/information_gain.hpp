@@ -1,5 +1,5 @@
 // Information gain of a sensor pose: how much unknown space a sensor placed
-// there would see (DESIGN.md §1), the quantity exploration planners rank
+// there would see (docs/design.md, Semantics), the quantity exploration planners rank
 // candidate poses by.
 //
 //   umbra::Frustum view = umbra::Frustum::from_degrees({1, 2, 1.2}, 30, -10, 115, 60, 0.0, 6.5);

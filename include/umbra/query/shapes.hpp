@@ -1,7 +1,7 @@
 // Shapes that queries take: regions to iterate, check for collision or look
 // into. Coordinates in metres, angles in radians.
 //
-// When does a node belong to a shape (DESIGN.md §1)?
+// When does a node belong to a shape (docs/design.md, Semantics)?
 //  - Aabb, Sphere, OrientedBox, Capsule: when its cube (closed) intersects
 //    the shape; for a sphere, when the squared distance from the centre to
 //    the cube is at most r^2; for a capsule, when the distance from its
@@ -59,7 +59,7 @@ struct OrientedBox {
   void validate() const;
 };
 
-/// A sensor's field of view (DESIGN.md §1): seen from `origin` looking along
+/// A sensor's field of view (docs/design.md, Semantics): seen from `origin` looking along
 /// f = (cos p cos y, cos p sin y, sin p) with left l = (-sin y, cos y, 0) and
 /// up u = f x l, a point c with d = c - origin is inside iff d.f > 0,
 /// |atan2(d.l, d.f)| <= hfov/2, |atan2(d.u, d.f)| <= vfov/2 and

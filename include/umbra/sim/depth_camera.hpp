@@ -8,7 +8,7 @@
 // centre) looks along d = f - ((u + 0.5 - width / 2) / fx) l - ((v + 0.5 -
 // height / 2) / fy) up, normalised, where the pose gives forward f = (cos p
 // cos y, cos p sin y, sin p), left l = (-sin y, cos y, 0) and up = f x l (the
-// frame DESIGN.md uses for the information gain, so a pixel's ray lies in the
+// frame docs/design.md (Semantics) uses for the information gain, so a pixel's ray lies in the
 // frustum of the same hfov, vfov and range). The ray is cast into a Scene; a
 // surface at Euclidean range r in [min_range, max_range] gives the point at
 // r + n along the ray, n Gaussian noise with standard deviation
