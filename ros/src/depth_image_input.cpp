@@ -71,6 +71,12 @@ std::string DepthImageInput::describe(Drop why) const {
   return "an unknown reason";
 }
 
+std::string DepthImageInput::topics() const {
+  std::string text = "'" + depth_subscriber_.getTopic() + "' with '" + info_subscriber_.getTopic() + "'";
+  if (nearest_) text += " and colours from '" + color_subscriber_.getTopic() + "'";
+  return text;
+}
+
 void DepthImageInput::matched(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info,
                               const sensor_msgs::Image::ConstPtr& color) {
   ++matched_count_;

@@ -62,6 +62,9 @@ class DepthImageInput {
   /// The reason in words ("tf2 had no transform from its frame to the map frame at its stamp").
   [[nodiscard]] std::string describe(Drop why) const;
 
+  /// The resolved topics, for the start-up line: "'/depth/image' with '/depth/camera_info'" (and the colour images').
+  [[nodiscard]] std::string topics() const;
+
   /// Depth images received since the start.
   [[nodiscard]] std::size_t received() const { return received_; }
 

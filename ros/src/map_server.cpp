@@ -50,6 +50,7 @@ MapServer::MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, Serve
       tf_listener_(tf_buffer_, node),
       cloud_subscriber_(node, "cloud_in", kCloudQueue),
       cloud_filter_(cloud_subscriber_, tf_buffer_, settings_.frame, kCloudQueue, node),
+      cloud_wait_(node, tf_buffer_, settings_.frame),
       image_input_(node, tf_buffer_, settings_.frame, settings_.image_colors,
                    [this](const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info,
                           const sensor_msgs::Image::ConstPtr& color) { insert_image(depth, info, color); },
@@ -57,10 +58,11 @@ MapServer::MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, Serve
   map_.set_auto_prune(settings_.compress_map);
   cloud_filter_.registerCallback(&MapServer::insert_cloud, this);
   cloud_filter_.registerFailureCallback(
-      [](const sensor_msgs::PointCloud2::ConstPtr& cloud, tf2_ros::filter_failure_reasons::FilterFailureReason) {
-        ROS_WARN_THROTTLE(5.0, "umbra_server: dropped a cloud in frame '%s' at %.3f: no transform to the map frame",
-                          cloud->header.frame_id.c_str(), cloud->header.stamp.toSec());
+      [this](const sensor_msgs::PointCloud2::ConstPtr& cloud, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+        drop_cloud(cloud, why);
       });
+  cloud_subscriber_.registerCallback(
+      [this](const sensor_msgs::PointCloud2::ConstPtr& cloud) { cloud_wait_.arrived(*cloud); });
   const bool latch = settings_.latch;
   binary_publisher_ = node.advertise<octomap_msgs::Octomap>("octomap_binary", 1, latch);
   full_publisher_ = node.advertise<octomap_msgs::Octomap>("octomap_full", 1, latch);
@@ -72,13 +74,41 @@ MapServer::MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, Serve
   reset_service_ = private_node.advertiseService("reset", &MapServer::reset, this);
   clear_bbx_service_ = private_node.advertiseService("clear_bbx", &MapServer::clear_bbx, this);
   check_collision_service_ = private_node.advertiseService("check_collision", &MapServer::check_collision, this);
+  log_start();
+}
+
+void MapServer::log_start() const {
+  ROS_INFO("umbra_server: mapping in frame '%s' at %g m (integrator %s): clouds from '%s' and depth images from %s, "
+           "each once TF can move its frame into '%s'", settings_.frame.c_str(), map_.resolution(),
+           to_string(settings_.insert.integrator), cloud_subscriber_.getTopic().c_str(), image_input_.topics().c_str(),
+           settings_.frame.c_str());
+  std::string topics = "'" + binary_publisher_.getTopic() + "', '" + full_publisher_.getTopic() + "', '" +
+                       occupied_publisher_.getTopic() + "', '" + centers_publisher_.getTopic() + "'";
+  if (settings_.cells.free_cells) topics += ", '" + free_publisher_.getTopic() + "'";
+  ROS_INFO("umbra_server: publishing %s; services '%s', '%s', '%s', '%s', '%s'", topics.c_str(),
+           binary_service_.getService().c_str(), full_service_.getService().c_str(), reset_service_.getService().c_str(),
+           clear_bbx_service_.getService().c_str(), check_collision_service_.getService().c_str());
 }
 
 bool MapServer::wanted(const ros::Publisher& publisher) const {
   return settings_.latch || publisher.getNumSubscribers() > 0;
 }
 
+void MapServer::drop_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud,
+                           tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
+  cloud_wait_.left();
+  ++clouds_dropped_;
+  // Throttled: until TF knows the frame every cloud is dropped; the count says how many were.
+  const std::string why = reason == tf2_ros::filter_failure_reasons::EmptyFrameID
+                              ? "it has no frame_id"
+                              : "tf2 had no transform from '" + cloud->header.frame_id + "' to the map frame '" +
+                                    settings_.frame + "' at its stamp (" + cloud_wait_.known_frames() + ")";
+  ROS_WARN_THROTTLE(5.0, "umbra_server: dropped the cloud in frame '%s' at %f: %s (clouds dropped so far: %zu)",
+                    cloud->header.frame_id.c_str(), cloud->header.stamp.toSec(), why.c_str(), clouds_dropped_);
+}
+
 void MapServer::insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
+  cloud_wait_.left();
   const std::string name = "cloud in frame '" + cloud->header.frame_id + "' at " + std::to_string(cloud->header.stamp.toSec());
   // Whatever goes wrong with one cloud (a malformed message, a transform tf2 cannot give, an error inside the
   // integrator) is logged and the cloud dropped: the node keeps its map and goes on with the next one.
@@ -311,6 +341,9 @@ bool MapServer::check_collision(umbra_msgs::CheckCollision::Request& request,
       response.blocking_center.y = result.blocking->center.y;
       response.blocking_center.z = result.blocking->center.z;
       response.blocking_size = result.blocking->size;
+      // A blocking node that holds no occupied voxel blocks because it holds unknown space.
+      response.blocking_state = result.blocking->contains_occupied() ? umbra_msgs::CheckCollision::Response::OCCUPIED
+                                                                     : umbra_msgs::CheckCollision::Response::UNKNOWN;
     }
   } catch (const std::exception& e) {  // a bad shape or depth, a region outside the map
     response.valid = false;

@@ -4,7 +4,9 @@
 // holds each cloud until the transform from its frame to ~frame_id at its
 // stamp is known, then the cloud is decoded, moved into the map frame,
 // cut to (pointcloud_min_z, pointcloud_max_z) and inserted with umbra's
-// integrator from the sensor frame's origin. It also subscribes to depth
+// integrator from the sensor frame's origin. Clouds that wait for a
+// transform more than 5 s, or that the filter drops, are named in a
+// warning with the frames tf2 knows (cloud_wait_monitor.hpp). It also subscribes to depth
 // images (`depth/image` with `depth/camera_info`, and `rgb/image` with
 // ~image_colors: depth_image_input.hpp): each is placed with the transform
 // from its frame (the camera's optical frame) to ~frame_id at its stamp and
@@ -20,7 +22,9 @@
 // Services: octomap_binary and octomap_full (octomap_msgs/GetOctomap),
 // ~reset (std_srvs/Empty: forget everything), ~clear_bbx
 // (octomap_msgs/BoundingBoxQuery: every known voxel in the box becomes
-// free at the clamping minimum; unknown voxels stay unknown).
+// free at the clamping minimum; unknown voxels stay unknown),
+// ~check_collision (umbra_msgs/CheckCollision). At start-up it logs the
+// map frame and the resolved names of its topics and services.
 //
 // Threads: ROS callbacks run one at a time (ros::spin); each insertion
 // uses ~threads cores inside umbra.
@@ -45,6 +49,7 @@
 #include <array>
 #include <memory>
 
+#include "cloud_wait_monitor.hpp"
 #include "depth_image_input.hpp"
 #include "image_message.hpp"
 #include "server_settings.hpp"
@@ -64,6 +69,11 @@ class MapServer {
 
  private:
   void insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud);
+  /// Logs a cloud the tf2 filter dropped (no frame_id, or no transform while 5 newer clouds came).
+  void drop_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud,
+                  tf2_ros::filter_failure_reasons::FilterFailureReason reason);
+  /// The start-up lines: map frame, resolution, integrator, topics and services by their resolved names.
+  void log_start() const;
   void insert_image(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info,
                     const sensor_msgs::Image::ConstPtr& color);
   /// Logs a depth image that will not be inserted (no transform, no CameraInfo) and counts it.
@@ -88,6 +98,7 @@ class MapServer {
   tf2_ros::TransformListener tf_listener_;
   message_filters::Subscriber<sensor_msgs::PointCloud2> cloud_subscriber_;
   tf2_ros::MessageFilter<sensor_msgs::PointCloud2> cloud_filter_;
+  CloudWaitMonitor cloud_wait_;
   DepthImageInput image_input_;
   ros::Publisher binary_publisher_;
   ros::Publisher full_publisher_;
@@ -104,6 +115,7 @@ class MapServer {
   DecodedDepthImage decoded_image_;
   std::vector<Rgb> image_colors_;
   std::size_t images_refused_ = 0;  ///< depth images malformed or dropped since the start
+  std::size_t clouds_dropped_ = 0;  ///< clouds the tf2 filter dropped since the start
   std::array<ros::WallTime, 3> last_drop_warning_{};  ///< per DepthImageInput::Drop
 };
 
