@@ -14,8 +14,10 @@
 // must empty the map. Depth images (16UC1 and 32FC1, with their CameraInfo,
 // a colour image, and TF for the camera's optical frame) must give the map
 // the library's insert_depth_image makes of the same images, and malformed
-// ones a log line naming the image while the node goes on. Every process the test starts is stopped by its id at
-// the end. Without roscore or umbra_server the test is skipped with a message.
+// ones a log line naming the image while the node goes on. ROS's own command-line tools must work on the
+// node as a user types them (rostopic echo, rosservice call, after sourcing build/ros/messages/setup.sh), and
+// a cloud in a frame TF does not name must be named in a warning. Every process the test starts is stopped by
+// its id at the end. Without roscore or umbra_server the test is skipped with a message.
 //
 // Waiting has generous limits (a hung node fails the test instead of hanging
 // CI); they bound waits, they do not measure speed.
@@ -41,6 +43,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <cstdlib>
@@ -189,6 +192,49 @@ struct Latest {
 
 std::vector<std::uint8_t> data_of(const octomap_msgs::Octomap& message) {
   return std::vector<std::uint8_t>(message.data.begin(), message.data.end());
+}
+
+/// `map` after ~clear_bbx of [low, high]: every known voxel in the box free at the clamping minimum, unknown ones
+/// unknown. `known` receives how many voxels were known.
+OccupancyMap cleared_box(const OccupancyMap& map, const Vec3d& low, const Vec3d& high, std::size_t& known) {
+  OccupancyMap cleared = map;
+  const Key from = cleared.key(low);
+  const Key to = cleared.key(high);
+  known = 0;
+  for (std::uint32_t x = from.x; x <= to.x; ++x) {
+    for (std::uint32_t y = from.y; y <= to.y; ++y) {
+      for (std::uint32_t z = from.z; z <= to.z; ++z) {
+        const Key key{x, y, z};
+        if (map.node(key).state == OccupancyState::unknown) continue;
+        cleared.set_log_odds(key, cleared.sensor_model().clamp_min_log_odds());
+        ++known;
+      }
+    }
+  }
+  return cleared;
+}
+
+/// The value of `name: value` at the start of a line of the YAML rostopic and rosservice print; "(none)" if absent.
+std::string yaml_value(const std::string& text, const std::string& name) {
+  const std::string key = "\n" + name + ": ";
+  const std::string padded = "\n" + text;
+  const std::size_t at = padded.find(key);
+  if (at == std::string::npos) return "(none)";
+  const std::size_t start = at + key.size();
+  return padded.substr(start, padded.find('\n', start) - start);
+}
+
+/// A double as YAML text that reads back to the same double.
+std::string yaml_number(double value) {
+  std::array<char, 32> text{};
+  std::snprintf(text.data(), text.size(), "%.17g", value);
+  return text.data();
+}
+
+/// Runs a ROS command-line tool in the shell with umbra's message types known (build/ros/messages/setup.sh),
+/// talking to the test's roscore (ROS_MASTER_URI is in the environment). `timeout` only guards against a hang.
+CommandResult ros_tool(const std::string& command) {
+  return run_command(". " + std::string(UMBRA_ROS_MESSAGES_DIR) + "/setup.sh && timeout 300 " + command + " 2>&1");
 }
 
 /// One roscore and one ROS client for the whole test program (roscpp can be initialised once per process).
@@ -434,20 +480,8 @@ TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
   const std::size_t before = full_.count;
   ASSERT_TRUE(ros::service::call("/umbra_server/clear_bbx", box));
   ASSERT_TRUE(wait_for([&] { return full_.count > before; }, kMessageLimit));
-  OccupancyMap cleared = reference;
-  const Key low = cleared.key({2.0, 4.0, -0.5});
-  const Key high = cleared.key({3.2, 7.5, 1.0});
   std::size_t known = 0;
-  for (std::uint32_t x = low.x; x <= high.x; ++x) {
-    for (std::uint32_t y = low.y; y <= high.y; ++y) {
-      for (std::uint32_t z = low.z; z <= high.z; ++z) {
-        const Key key{x, y, z};
-        if (reference.node(key).state == OccupancyState::unknown) continue;
-        cleared.set_log_odds(key, cleared.sensor_model().clamp_min_log_odds());
-        ++known;
-      }
-    }
-  }
+  const OccupancyMap cleared = cleared_box(reference, {2.0, 4.0, -0.5}, {3.2, 7.5, 1.0}, known);
   EXPECT_GT(known, 1000u);
   ASSERT_TRUE(wait_for([&] { return full_.get() && binary_.get() && binary_.count == full_.count; }, kMessageLimit));
   ASSERT_NO_FATAL_FAILURE(expect_published(cleared));
@@ -457,6 +491,7 @@ TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
     std::mt19937 rng(12);
     std::uniform_real_distribution<double> x(0.5, 19.5), y(0.5, 11.5), z(0.2, 2.8), r(0.05, 0.6);
     std::size_t free_answers = 0;
+    std::size_t blocked_by_unknown = 0;
     for (int i = 0; i < 60; ++i) {
       umbra_msgs::CheckCollision check;
       const Vec3d a{x(rng), y(rng), z(rng)};
@@ -485,11 +520,20 @@ TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
       if (!want.free) {
         EXPECT_EQ(check.response.blocking_center.x, want.blocking->center.x) << "check " << i;
         EXPECT_EQ(check.response.blocking_size, want.blocking->size) << "check " << i;
+        EXPECT_EQ(int{check.response.blocking_state}, want.blocking->contains_occupied()
+                                                          ? int{umbra_msgs::CheckCollision::Response::OCCUPIED}
+                                                          : int{umbra_msgs::CheckCollision::Response::UNKNOWN})
+            << "check " << i;
+        blocked_by_unknown += want.blocking->contains_occupied() ? 0 : 1;
+      } else {
+        EXPECT_EQ(int{check.response.blocking_state}, int{umbra_msgs::CheckCollision::Response::NONE}) << "check " << i;
       }
       free_answers += want.free ? 1 : 0;
     }
     EXPECT_GT(free_answers, 0u);
     EXPECT_LT(free_answers, 60u);
+    EXPECT_GT(blocked_by_unknown, 0u);  // both kinds of blocking node were seen
+    EXPECT_LT(blocked_by_unknown, 60u - free_answers);
     // A bad request: an answer saying why, not a failed call.
     umbra_msgs::CheckCollision bad;
     bad.request.shape = umbra_msgs::CheckCollision::Request::SPHERE;
@@ -506,6 +550,160 @@ TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
   ASSERT_TRUE(wait_for([&] { return full_.count > before_reset && binary_.count == full_.count; }, kMessageLimit));
   EXPECT_TRUE(full_.get()->data.empty());
   EXPECT_TRUE(binary_.get()->data.empty());
+}
+
+// Issue 23, item 7: ROS's command-line tools on the node, as a user types them. rostopic needs Debian's
+// python3-sensor-msgs for the centres; the Octomap topic and the services of octomap_msgs and umbra_msgs need the
+// Python modules and package folders the build generates (build/ros/messages, ros/generate_python_messages.py).
+TEST_F(Loopback, CommandLineToolsEchoTopicsAndCallServices) {
+  ASSERT_FALSE(std::string(UMBRA_ROS_MESSAGES_DIR).empty())
+      << "CMake found no genpy (Debian: python3-genpy, scripts/common.sh): the Python message modules are not built";
+  const double resolution = 0.1;
+  const std::vector<RosScan> scans = office_scans(3);
+  ASSERT_NO_FATAL_FAILURE(start_server(resolution));
+  ASSERT_NO_FATAL_FAILURE(publish(scans, 4000.0));
+  const OccupancyMap reference = reference_map(scans, resolution);
+  ASSERT_NO_FATAL_FAILURE(expect_published(reference));
+
+  // The latched centres of the occupied cells: one point per occupied leaf.
+  const CommandResult centers = ros_tool("rostopic echo -n 1 --noarr /octomap_point_cloud_centers");
+  ASSERT_EQ(centers.exit_code, 0) << centers.output;
+  std::size_t occupied = 0;
+  reference.for_each_leaf([&](const Node& leaf) { occupied += leaf.state == OccupancyState::occupied ? 1 : 0; });
+  EXPECT_GT(occupied, 100u);
+  EXPECT_EQ(yaml_value(centers.output, "width"), std::to_string(occupied)) << centers.output;
+  EXPECT_EQ(yaml_value(centers.output, "  frame_id"), "\"map\"") << centers.output;
+  EXPECT_EQ(yaml_value(centers.output, "    secs"), "4000") << centers.output;
+
+  const CommandResult binary = ros_tool("rostopic echo -n 1 --noarr /octomap_binary");
+  ASSERT_EQ(binary.exit_code, 0) << binary.output;
+  EXPECT_EQ(yaml_value(binary.output, "id"), "\"OcTree\"") << binary.output;
+  EXPECT_EQ(yaml_value(binary.output, "binary"), "True") << binary.output;
+  EXPECT_EQ(yaml_value(binary.output, "resolution"), "0.1") << binary.output;
+
+  // ~clear_bbx (octomap_msgs/BoundingBoxQuery) from rosservice: the node's map is the cleared one.
+  const std::size_t before_clear = full_.count;
+  const CommandResult clear = ros_tool(
+      "rosservice call /umbra_server/clear_bbx '{min: {x: 2.0, y: 4.0, z: -0.5}, max: {x: 3.2, y: 7.5, z: 1.0}}'");
+  ASSERT_EQ(clear.exit_code, 0) << clear.output;
+  ASSERT_TRUE(wait_for([&] { return full_.count > before_clear && binary_.count == full_.count; }, kMessageLimit));
+  std::size_t known = 0;
+  const OccupancyMap cleared = cleared_box(reference, {2.0, 4.0, -0.5}, {3.2, 7.5, 1.0}, known);
+  EXPECT_GT(known, 1000u);
+  ASSERT_NO_FATAL_FAILURE(expect_published(cleared));
+
+  // ~check_collision (umbra_msgs/CheckCollision) from rosservice: the library's answer on the cleared map, and
+  // why the blocking node blocks. A free voxel, an occupied one, and a ball far out in space never seen (a
+  // large unknown node, the issue's "51.2 m node").
+  std::optional<Vec3d> free_voxel;
+  std::optional<Vec3d> occupied_voxel;
+  cleared.for_each_leaf([&](const Node& leaf) {
+    if (leaf.depth != 0) return;
+    if (leaf.state == OccupancyState::free && !free_voxel) free_voxel = leaf.center;
+    if (leaf.state == OccupancyState::occupied && !occupied_voxel) occupied_voxel = leaf.center;
+  });
+  ASSERT_TRUE(free_voxel && occupied_voxel);
+  struct Check {
+    Vec3d center;
+    double radius;
+    int state;  // the expected blocking_state: 0 free, 1 occupied, 2 unknown
+  };
+  for (const Check& c : {Check{*free_voxel, 0.01, 0}, Check{*occupied_voxel, 0.01, 1}, Check{{60.0, 60.0, 1.0}, 0.3, 2}}) {
+    const CommandResult answer = ros_tool(
+        "rosservice call /umbra_server/check_collision '{shape: 0, a: {x: " + yaml_number(c.center.x) + ", y: " +
+        yaml_number(c.center.y) + ", z: " + yaml_number(c.center.z) + "}, radius: " + yaml_number(c.radius) +
+        ", unknown_is_free: false, depth: 0}'");
+    ASSERT_EQ(answer.exit_code, 0) << answer.output;
+    const CollisionResult want = cleared.is_free(Sphere{c.center, c.radius}, {false, 0});
+    EXPECT_EQ(yaml_value(answer.output, "valid"), "True") << answer.output;
+    EXPECT_EQ(yaml_value(answer.output, "free"), want.free ? "True" : "False") << answer.output;
+    EXPECT_EQ(yaml_value(answer.output, "blocking_state"), std::to_string(c.state)) << answer.output;
+    if (c.state == 0) {
+      EXPECT_TRUE(want.free);
+      continue;
+    }
+    ASSERT_FALSE(want.free);
+    EXPECT_EQ(want.blocking->contains_occupied(), c.state == 1);
+    EXPECT_EQ(std::stod(yaml_value(answer.output, "blocking_size")), want.blocking->size) << answer.output;
+  }
+
+  // ~reset (std_srvs/Empty, python3-std-srvs).
+  const std::size_t before_reset = full_.count;
+  const CommandResult reset = ros_tool("rosservice call /umbra_server/reset");
+  ASSERT_EQ(reset.exit_code, 0) << reset.output;
+  ASSERT_TRUE(wait_for([&] { return full_.count > before_reset && binary_.count == full_.count; }, kMessageLimit));
+  EXPECT_TRUE(full_.get()->data.empty());
+}
+
+// Issue 23, item 7: a cloud in a frame TF does not name used to wait in tf2's filter without a word. The node
+// names the frames it maps and serves at start-up, warns about a cloud waiting for its transform (naming the
+// cloud's frame, the map frame and the frames tf2 knows), inserts it once the transform comes, and names the
+// clouds the filter drops.
+TEST_F(Loopback, CloudsWithoutTransformAreNamedInAWarning) {
+  ASSERT_NO_FATAL_FAILURE(start_server(0.1));
+  const fs::path log = dir_ / "umbra_server.log";
+  // The log line that starts with `start`, without roscpp's colour codes around it.
+  const auto line_of = [&](const std::string& start) {
+    const std::string text = log_text(log);
+    const std::size_t at = text.find(start);
+    return at == std::string::npos ? std::string("(no line '" + start + "' in:\n" + text + ")")
+                                   : text.substr(at, text.find_first_of("\n\x1B", at) - at);
+  };
+  const auto logged = [&](const std::string& part) {
+    return wait_for([&] { return log_text(log).find(part) != std::string::npos; }, kMessageLimit);
+  };
+  ASSERT_TRUE(logged("umbra_server: publishing")) << log_text(log);
+  EXPECT_EQ(line_of("umbra_server: mapping in frame"),
+            "umbra_server: mapping in frame 'map' at 0.1 m (integrator simple): clouds from '/robot/points' and depth "
+            "images from '/camera/depth/image_rect_raw' with '/camera/depth/camera_info', each once TF can move its "
+            "frame into 'map'");
+  EXPECT_EQ(line_of("umbra_server: publishing"),
+            "umbra_server: publishing '/octomap_binary', '/octomap_full', '/occupied_cells_vis_array', "
+            "'/octomap_point_cloud_centers'; services '/octomap_binary', '/octomap_full', '/umbra_server/reset', "
+            "'/umbra_server/clear_bbx', '/umbra_server/check_collision'");
+
+  // TF knows map -> lidar, not the frame of the cloud.
+  const std::vector<RosScan> scans = office_scans(1);
+  tf2_msgs::TFMessage tf;
+  tf.transforms.push_back(to_transform(scans[0], "map", "lidar", ros::Time(8000.0)));
+  tf_pub_.publish(tf);
+  cloud_pub_.publish(to_cloud(scans[0], "nowhere", ros::Time(8000.0)));
+  ASSERT_TRUE(logged("umbra_server: 1 cloud has waited")) << log_text(log);
+  const std::string waited = line_of("umbra_server: 1 cloud has waited");
+  EXPECT_NE(waited.find("for a transform from 'nowhere' to the map frame 'map' (the latest at 8000.000000); none is "
+                        "inserted until TF connects the two (frames tf2 knows: "),
+            std::string::npos)
+      << waited;
+  EXPECT_NE(waited.find("'lidar'"), std::string::npos) << waited;
+  EXPECT_NE(waited.find("'map'"), std::string::npos) << waited;
+
+  // Its transform comes: the cloud is inserted.
+  tf.transforms[0] = to_transform(scans[0], "map", "nowhere", ros::Time(8000.0));
+  tf_pub_.publish(tf);
+  ASSERT_TRUE(wait_for([&] { const auto b = binary_.get(); return b && b->header.stamp == ros::Time(8000.0); },
+                       kMessageLimit))
+      << log_text(log);
+  ASSERT_NO_FATAL_FAILURE(expect_published(reference_map(scans, 0.1)));
+
+  // Clouds of another unknown frame: held until 5 newer ones push them out of the queue, then named.
+  int published = 0;
+  EXPECT_TRUE(wait_for(
+      [&] {
+        if (log_text(log).find("dropped the cloud in frame 'elsewhere'") != std::string::npos) return true;
+        if (published < 1000) cloud_pub_.publish(to_cloud(scans[0], "elsewhere", ros::Time(8001.0 + 0.01 * published++)));
+        return false;
+      },
+      kMessageLimit))
+      << log_text(log);
+  const std::string dropped = line_of("umbra_server: dropped the cloud in frame 'elsewhere' at 8001.000000");
+  EXPECT_NE(dropped.find(": tf2 had no transform from 'elsewhere' to the map frame 'map' at its stamp (frames tf2 "
+                         "knows: "),
+            std::string::npos)
+      << dropped;
+  EXPECT_NE(dropped.find("'nowhere'"), std::string::npos) << dropped;
+  EXPECT_NE(dropped.find("(clouds dropped so far: 1)"), std::string::npos) << dropped;
+  EXPECT_GE(published, 6);
+  EXPECT_TRUE(server_->running()) << log_text(log);
 }
 
 TEST_F(Loopback, IntegratorRangeAndHeightParameters) {
