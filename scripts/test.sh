@@ -20,7 +20,7 @@ excluded_labels="fuzz|install|sanitize|tsan"
 labels=(-LE "$excluded_labels")
 for argument in "$@"; do
   case "$argument" in
-    -L | -LE | --label-regex | --label-exclude | -L?* | -LE?* | --label-regex=* | --label-exclude=*) labels=() ;;
+    -L | -LE | --label-regex | --label-exclude) labels=() ;;
   esac
 done
 
