@@ -24,7 +24,7 @@ std::string statistics_json(const MapStatistics& stats, const std::string& extra
 /// node only where something below it was observed, so it counts the
 /// childless nodes whose value is not exactly 0 (unknown) and every node
 /// above one. umbra's own count (NodeCounts) is larger: a node with children
-/// has all eight, unknown ones included (DESIGN.md). One pass over the
+/// has all eight, unknown ones included (docs/design.md, Semantics). One pass over the
 /// childless nodes.
 std::size_t octomap_node_count(const OccupancyMap& map);
 
