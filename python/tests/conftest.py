@@ -91,7 +91,7 @@ def shared_data():
 
 
 def finest_keys(points, resolution, depth_levels=16):
-    """Finest keys (N, 3) of points as DESIGN.md defines them: floor(c / res) + 2^(depth_levels - 1)."""
+    """Finest keys (N, 3) of points as docs/design.md (Semantics) defines them: floor(c / res) + 2^(depth_levels - 1)."""
     return np.floor(np.asarray(points, dtype=np.float64) * (1.0 / resolution)).astype(np.int64) + (
         1 << (depth_levels - 1)
     )

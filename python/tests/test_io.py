@@ -139,7 +139,7 @@ def test_read_the_3dtk_graph(shared_data):
     reader = umbra.read_scans(graph)
     assert reader.scan_count == 3
     sizes = [len(points) for _, points, _ in reader]
-    assert sizes == [77690, 77910, 77584]  # DESIGN.md / docs/benchmarks.md
+    assert sizes == [77690, 77910, 77584]  # the data set described in the README, "Data for the examples"
 
 
 def test_read_tum_frames(shared_data):

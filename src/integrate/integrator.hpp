@@ -1,7 +1,7 @@
 // Integrator: turns one scan (sensor origin + points) into map updates.
 //
 // Semantics of the simple and discrete integrators are OctoMap's
-// insertPointCloud (DESIGN.md §1), voxel for voxel:
+// insertPointCloud (docs/design.md, Semantics), voxel for voxel:
 //  - simple:   a ray from the origin to every point; the voxels before the
 //              end voxel get a miss, the end voxel a hit
 //              (insertPointCloud(..., discretize = false));
