@@ -54,7 +54,7 @@ py::object back_project_image(py::handle depth_object, py::handle camera_object,
   }
   py::array_t<float> point_array({static_cast<py::ssize_t>(points.size()), py::ssize_t{3}});
   if (!points.empty()) std::copy_n(&points.data()->x, 3 * points.size(), point_array.mutable_data());
-  if (!return_pixels) return std::move(point_array);
+  if (!return_pixels) return point_array;
   py::array_t<std::uint32_t> pixel_array(static_cast<py::ssize_t>(pixels.size()));
   std::copy(pixels.begin(), pixels.end(), pixel_array.mutable_data());
   return py::make_tuple(point_array, pixel_array);

@@ -160,7 +160,7 @@ TEST(OctomapQueries, ProceduralBuildingWithSimulatedLidar) {
   std::vector<Scan> scans;
   const auto path = sim::demo_path();
   for (std::size_t i = 0; i < path.size(); i += 4) {
-    scans.push_back({static_cast<Vec3f>(path[i].position), sim::simulate_scan(scene, path[i], lidar), {}, {}});
+    scans.push_back({static_cast<Vec3f>(path[i].position), sim::simulate_scan(scene, path[i], lidar), {}, {}, {}});
   }
   compare_queries(build(scans, 0.1, 30.0), "procedural building at 10 cm");
 }
