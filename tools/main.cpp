@@ -74,6 +74,7 @@ int main(int argc, char** argv) {
   commands.push_back(umbra::cli::add_query_command(app));
   commands.push_back(umbra::cli::add_render_command(app));
   commands.push_back(umbra::cli::add_view_command(app));
+  commands.push_back(umbra::cli::add_project_command(app));
 
   // CLI11 would say "A subcommand is required" for a misspelt one.
   if (argc >= 2 && argv[1][0] != '-' && !is_command(app, argv[1])) {
