@@ -29,6 +29,7 @@
 #include <unistd.h>
 
 #include <octomap_msgs/BoundingBoxQuery.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <octomap_msgs/Octomap.h>
 #include <ros/ros.h>
 #include <rosbag/bag.h>
@@ -54,6 +55,7 @@
 #include <thread>
 
 #include "map_messages.hpp"
+#include "umbra/query/navigation_grid.hpp"
 #include "ros_test_support.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
@@ -552,6 +554,62 @@ TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
   EXPECT_TRUE(binary_.get()->data.empty());
 }
 
+// projected_map (nav_msgs/OccupancyGrid) after every scan equals the offline projection (project_to_grid, itself
+// checked against brute force in tests/query/) of the library's map of the same scans, over the band
+// ~occupancy_min_z .. ~occupancy_max_z; and with unbounded heights (octomap_server's defaults) the whole map.
+TEST_F(Loopback, ProjectedMapEqualsTheOfflineProjectionAfterEveryScan) {
+  const double resolution = 0.1;
+  const std::vector<RosScan> scans = office_scans(4);
+  for (const bool bounded : {true, false}) {
+    SCOPED_TRACE(bounded ? "band 0.15 .. 1.25 m, all_known, depth 1" : "unbounded band, the default rule any_free");
+    Latest<nav_msgs::OccupancyGrid> projected;
+    ros::Subscriber projected_sub = node_->subscribe<nav_msgs::OccupancyGrid>(
+        "/projected_map", 5, [&](const nav_msgs::OccupancyGrid::ConstPtr& m) { projected.take(m); });
+    std::vector<std::string> params;
+    if (bounded) {
+      params = {"_occupancy_min_z:=0.15", "_occupancy_max_z:=1.25", "_projected_map_rule:=all_known",
+                "_projected_map_depth:=1"};
+    }
+    ASSERT_NO_FATAL_FAILURE(start_server(resolution, params));
+    const ProjectionOptions options = bounded ? ProjectionOptions{0.15, 1.25, 1, ProjectionRule::all_known}
+                                              : ProjectionOptions{-3276.8, 3276.8, 0, ProjectionRule::any_free};
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      const ros::Time stamp(3000.0 + 0.1 * static_cast<double>(i));
+      tf2_msgs::TFMessage tf;
+      tf.transforms.push_back(to_transform(scans[i], "map", "lidar", stamp));
+      tf_pub_.publish(tf);
+      cloud_pub_.publish(to_cloud(scans[i], "lidar", stamp));
+      ASSERT_TRUE(wait_for([&] { const auto m = projected.get(); return m && m->header.stamp == stamp; },
+                           kMessageLimit))
+          << "no projected map for scan " << i << ":\n" << log_text(dir_ / "umbra_server.log");
+      const auto got = projected.get();
+      const std::vector<RosScan> so_far(scans.begin(), scans.begin() + static_cast<std::ptrdiff_t>(i) + 1);
+      const NavigationGrid want = project_to_grid(reference_map(so_far, resolution), options);
+      ASSERT_FALSE(want.empty());
+      EXPECT_EQ(got->header.frame_id, "map");
+      EXPECT_EQ(got->info.resolution, static_cast<float>(want.resolution));
+      EXPECT_EQ(got->info.origin.position.x, want.origin_x);
+      EXPECT_EQ(got->info.origin.position.y, want.origin_y);
+      EXPECT_EQ(got->info.origin.orientation.w, 1.0);
+      ASSERT_EQ(got->info.width, want.width) << "scan " << i;
+      ASSERT_EQ(got->info.height, want.height) << "scan " << i;
+      ASSERT_EQ(got->data.size(), want.cells.size());
+      std::size_t differ = 0;
+      std::array<std::size_t, 3> kinds{};  // occupied, free, unknown
+      for (std::size_t k = 0; k < want.cells.size(); ++k) {
+        differ += got->data[k] != static_cast<std::int8_t>(want.cells[k]) ? 1 : 0;
+        ++kinds[want.cells[k] == GridCell::occupied ? 0 : want.cells[k] == GridCell::free ? 1 : 2];
+      }
+      EXPECT_EQ(differ, 0u) << "cells differ after scan " << i;
+      EXPECT_GT(kinds[0], 10u);
+      EXPECT_GT(kinds[1], 10u);
+      EXPECT_GT(kinds[2], 10u);
+    }
+    projected_sub.shutdown();
+    server_.reset();
+  }
+}
+
 // Issue 23, item 7: ROS's command-line tools on the node, as a user types them. rostopic needs Debian's
 // python3-sensor-msgs for the centres; the Octomap topic and the services of octomap_msgs and umbra_msgs need the
 // Python modules and package folders the build generates (build/ros/messages, ros/generate_python_messages.py).
@@ -659,7 +717,8 @@ TEST_F(Loopback, CloudsWithoutTransformAreNamedInAWarning) {
             "frame into 'map'");
   EXPECT_EQ(line_of("umbra_server: publishing"),
             "umbra_server: publishing '/octomap_binary', '/octomap_full', '/occupied_cells_vis_array', "
-            "'/octomap_point_cloud_centers'; services '/octomap_binary', '/octomap_full', '/umbra_server/reset', "
+            "'/octomap_point_cloud_centers', '/projected_map'; services '/octomap_binary', '/octomap_full', "
+            "'/umbra_server/reset', "
             "'/umbra_server/clear_bbx', '/umbra_server/check_collision'");
 
   // TF knows map -> lidar, not the frame of the cloud.

@@ -237,5 +237,19 @@ TEST(ProjectCli, BadArgumentsAreNamedAndWriteNothing) {
   EXPECT_FALSE(fs::exists(dir / "out.yaml"));
 }
 
+// The README's example (section "Navigation grid") on the shared geb079.bt prints what the README quotes.
+TEST(ProjectCli, ReadmeExampleOnGeb079PrintsWhatTheReadmeQuotes) {
+  const auto geb079 = test::shared_data("octomap/geb079.bt");
+  if (!geb079) GTEST_SKIP() << "../shared/data/octomap/geb079.bt is not present";
+  const fs::path dir = test::scratch_dir();
+  const test::CommandResult r =
+      run("project " + quoted(*geb079) + " -o " + quoted(dir / "geb079.pgm") + " --z-min 0.1 --z-max 1.8 --rule any_free");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string first_line = r.output.substr(0, r.output.find('\n'));
+  const std::vector<std::uint8_t> readme = test::read_bytes(test::source_dir() / "README.md");
+  EXPECT_TRUE(contains(std::string(readme.begin(), readme.end()), "# " + first_line))
+      << "README does not quote the output line: " << first_line;
+}
+
 }  // namespace
 }  // namespace umbra
