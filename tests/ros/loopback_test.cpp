@@ -560,19 +560,26 @@ TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
 TEST_F(Loopback, ProjectedMapEqualsTheOfflineProjectionAfterEveryScan) {
   const double resolution = 0.1;
   const std::vector<RosScan> scans = office_scans(4);
-  for (const bool bounded : {true, false}) {
-    SCOPED_TRACE(bounded ? "band 0.15 .. 1.25 m, all_known, depth 1" : "unbounded band, the default rule any_free");
+  struct Run {
+    std::vector<std::string> params;
+    ProjectionOptions options;  ///< what the parameters mean (unbounded: the map's extent, 3276.8 m at 0.1 m)
+  };
+  const std::vector<Run> runs = {
+      {{"_occupancy_min_z:=0.15", "_occupancy_max_z:=1.25", "_projected_map_rule:=all_known"},
+       {0.15, 1.25, 0, ProjectionRule::all_known}},
+      {{"_occupancy_min_z:=0.15", "_occupancy_max_z:=1.25", "_projected_map_depth:=1"},
+       {0.15, 1.25, 1, ProjectionRule::any_free}},
+      {{}, {-3276.8, 3276.8, 0, ProjectionRule::any_free}},  // octomap_server's defaults
+  };
+  for (const Run& run : runs) {
+    const ProjectionOptions& options = run.options;
+    SCOPED_TRACE("z " + std::to_string(options.z_min) + " .. " + std::to_string(options.z_max) + " depth " +
+                 std::to_string(options.depth) + " rule " + std::string(to_string(options.rule)));
     Latest<nav_msgs::OccupancyGrid> projected;
     ros::Subscriber projected_sub = node_->subscribe<nav_msgs::OccupancyGrid>(
         "/projected_map", 5, [&](const nav_msgs::OccupancyGrid::ConstPtr& m) { projected.take(m); });
-    std::vector<std::string> params;
-    if (bounded) {
-      params = {"_occupancy_min_z:=0.15", "_occupancy_max_z:=1.25", "_projected_map_rule:=all_known",
-                "_projected_map_depth:=1"};
-    }
-    ASSERT_NO_FATAL_FAILURE(start_server(resolution, params));
-    const ProjectionOptions options = bounded ? ProjectionOptions{0.15, 1.25, 1, ProjectionRule::all_known}
-                                              : ProjectionOptions{-3276.8, 3276.8, 0, ProjectionRule::any_free};
+    ASSERT_NO_FATAL_FAILURE(start_server(resolution, run.params));
+    std::array<std::size_t, 3> kinds{};  // occupied, free, unknown cells compared, over all scans
     for (std::size_t i = 0; i < scans.size(); ++i) {
       const ros::Time stamp(3000.0 + 0.1 * static_cast<double>(i));
       tf2_msgs::TFMessage tf;
@@ -595,16 +602,16 @@ TEST_F(Loopback, ProjectedMapEqualsTheOfflineProjectionAfterEveryScan) {
       ASSERT_EQ(got->info.height, want.height) << "scan " << i;
       ASSERT_EQ(got->data.size(), want.cells.size());
       std::size_t differ = 0;
-      std::array<std::size_t, 3> kinds{};  // occupied, free, unknown
       for (std::size_t k = 0; k < want.cells.size(); ++k) {
         differ += got->data[k] != static_cast<std::int8_t>(want.cells[k]) ? 1 : 0;
         ++kinds[want.cells[k] == GridCell::occupied ? 0 : want.cells[k] == GridCell::free ? 1 : 2];
       }
       EXPECT_EQ(differ, 0u) << "cells differ after scan " << i;
-      EXPECT_GT(kinds[0], 10u);
-      EXPECT_GT(kinds[1], 10u);
-      EXPECT_GT(kinds[2], 10u);
     }
+    // Every value occurred, or the comparison proves little.
+    EXPECT_GT(kinds[0], 10u);
+    EXPECT_GT(kinds[1], 10u);
+    EXPECT_GT(kinds[2], 10u);
     projected_sub.shutdown();
     server_.reset();
   }
