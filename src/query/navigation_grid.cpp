@@ -14,7 +14,8 @@
 //    is one cell (or part of one), whose band holds all its voxels.
 // Any other node is opened. A node that only partly overlaps the band must
 // be opened unless one of the first two holds: its states may come from
-// voxels outside the band.
+// voxels outside the band. A node of depth 1 is opened inline (its eight
+// voxels classified in a loop, no call each).
 #include "umbra/query/navigation_grid.hpp"
 
 #include <algorithm>
@@ -154,6 +155,21 @@ class Projection {
       for (std::uint32_t y = clipped.y0; y <= clipped.y1; ++y) {
         std::uint8_t* row = states_.data() + std::size_t{y - extent_.y0} * width_ - extent_.x0;
         for (std::uint32_t x = clipped.x0; x <= clipped.x1; ++x) row[x] |= states;
+      }
+      return;
+    }
+    if (node.depth == 1) {
+      // The children are voxels: classified here rather than by a call each
+      // (most nodes a projection opens are voxels at the band's faces and
+      // along surfaces; the calls were most of its time).
+      for (unsigned slot = 0; slot < 8; ++slot) {
+        const Key voxel = child_key(key, 1, slot);
+        if (voxel.z < band_lo_ || voxel.z > band_hi_) continue;
+        const std::uint32_t x = voxel.x >> cell_depth_, y = voxel.y >> cell_depth_;
+        if (x < extent_.x0 || x > extent_.x1 || y < extent_.y0 || y > extent_.y1) continue;
+        const float value = tree_.log_odds(tree_.child(node, slot));
+        states_[std::size_t{y - extent_.y0} * width_ + (x - extent_.x0)] |=
+            t_.is_occupied(value) ? kOccupied : t_.is_free(value) ? kFree : kUnknown;
       }
       return;
     }
