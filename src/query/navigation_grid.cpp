@@ -24,6 +24,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/memory_budget.hpp"
 #include "map/map_access.hpp"
 #include "query/node_context.hpp"
 #include "tree/occupancy_tree.hpp"
@@ -221,6 +222,13 @@ NavigationGrid project_to_grid(const OccupancyMap& map, const ProjectionOptions&
   const bool known = detail::MapAccess::read(map, [&](const OccupancyTree& tree) {
     Projection projection(tree, options.depth, band_lo, band_hi);
     if (!projection.find_extent(extent)) return false;
+    // Two bytes a cell (the states, then the values): a band known over a
+    // large area at a fine depth is refused before it is allocated.
+    const std::uint64_t cells = std::uint64_t{extent.x1 - extent.x0 + 1} * (extent.y1 - extent.y0 + 1);
+    detail::require_memory("project_to_grid",
+                           "a grid of " + std::to_string(extent.x1 - extent.x0 + 1) + " x " +
+                               std::to_string(extent.y1 - extent.y0 + 1) + " cells",
+                           2 * cells);
     states = projection.collect_states(extent);
     return true;
   });

@@ -21,6 +21,7 @@
 
 #include "support/query_oracle.hpp"
 #include "umbra/core/log_odds.hpp"
+#include "umbra/core/memory_limit.hpp"
 #include "umbra/query/navigation_grid.hpp"
 
 namespace umbra {
@@ -205,6 +206,23 @@ TEST(NavigationGrid, ExtentIsTheKnownPartOfTheBandAndCoarseCellsMergeFineOnes) {
   grid = project_to_grid(map, {1.0, 2.0});
   EXPECT_TRUE(grid.empty());
   EXPECT_EQ(grid.width, 0u);
+}
+
+TEST(NavigationGrid, AGridBeyondTheMemoryLimitIsRefusedBeforeItIsAllocated) {
+  OccupancyMap map(kResolution, 12);
+  map.update_miss({-100.0, -100.0, 0.5});
+  map.update_miss({100.0, 100.0, 0.5});  // 1,601 x 1,601 cells apart
+  const std::uint64_t saved = memory_limit();
+  set_memory_limit(4'000'000);
+  try {
+    (void)project_to_grid(map, {0.0, 1.0});
+    ADD_FAILURE() << "a 5 MB grid was made under a 4 MB limit";
+  } catch (const MemoryLimitError& e) {
+    EXPECT_NE(std::string(e.what()).find("project_to_grid: a grid of 1601 x 1601 cells needs"), std::string::npos)
+        << e.what();
+  }
+  set_memory_limit(saved);
+  EXPECT_EQ(project_to_grid(map, {0.0, 1.0}).width, 1601u);
 }
 
 TEST(NavigationGrid, BadOptionsAreRefusedNamingTheValue) {

@@ -92,7 +92,8 @@ struct NavigationGrid {
 /// The map projected between options.z_min and options.z_max (the rules at
 /// the top of this file). Throws std::invalid_argument for bad options or a
 /// depth above the map's depth_levels, std::out_of_range when the band lies
-/// wholly outside the map (naming both).
+/// wholly outside the map (naming both), MemoryLimitError when the grid's two
+/// bytes a cell exceed memory_limit() (naming the grid's size).
 [[nodiscard]] NavigationGrid project_to_grid(const OccupancyMap& map, const ProjectionOptions& options);
 
 }  // namespace umbra
