@@ -1,5 +1,5 @@
-// umbra: build, inspect, convert, crop, compare, export, draw, view and
-// demonstrate occupancy maps from the command line.
+// umbra: build, inspect, convert, crop, compare, export, draw, view,
+// project to 2D and demonstrate occupancy maps from the command line.
 //
 // Exit codes (commands.hpp, `umbra --help`, README "Errors and limits"): 0
 // success, 1 an input or the system failed (a missing, unreadable or
