@@ -21,8 +21,7 @@
 // Times are the calling thread's CPU time (the machine is shared), the
 // median of --repeat runs (the dense reference runs once).
 //
-//   build-bench/bench/umbra_navigation_benchmark --data ../shared/data \
-//       --datasets 3dtk-5cm,tum-2cm,geb079-8cm --z-min 0.1 --z-max 1.8
+//   ./scripts/bench.sh navigation --datasets 3dtk-5cm,tum-2cm,geb079-8cm --z-min 0.1 --z-max 1.8 --repeat 7
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
