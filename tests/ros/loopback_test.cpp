@@ -52,6 +52,7 @@
 #include <mutex>
 #include <optional>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "map_messages.hpp"
@@ -808,12 +809,21 @@ TEST_F(Loopback, BadParametersStopTheNodeWithAMessage) {
       {"_sensor_model/hit:=0.3", "bad parameter ~sensor_model/{hit,miss,min,max}"},
       {"_image_integrator:=rays", "bad parameter ~image_integrator"},
       {"_image_colors:=true", "bad parameter ~image_colors: true needs ~keep_colors true"},
+      {"_projected_map_rule:=most_free",
+       "bad parameter ~projected_map_rule: unknown projection rule 'most_free' (the rules: all_known, any_free)"},
+      {"_projected_map_depth:=17", "bad parameter ~projected_map_depth: 17 (must be 0 to 16)"},
+      {"_occupancy_min_z:=1.5 _occupancy_max_z:=1.0",
+       "bad parameters ~occupancy_min_z 1.500000 and ~occupancy_max_z 1.000000: the minimum must be below the maximum"},
   };
   int run = 0;
   for (const auto& [argument, expected] : cases) {
     const fs::path log = dir_ / "bad.log";
     // A name of its own: private parameters stay on the master after a node ends.
-    Child server({UMBRA_SERVER_PATH, argument, "__name:=umbra_server_bad_" + std::to_string(run++)}, log);
+    std::vector<std::string> argv{UMBRA_SERVER_PATH};
+    std::istringstream words(argument);  // one or more parameters
+    for (std::string word; words >> word;) argv.push_back(word);
+    argv.push_back("__name:=umbra_server_bad_" + std::to_string(run++));
+    Child server(argv, log);
     const std::optional<int> code = server.exit_code(kStartLimit);
     ASSERT_TRUE(code.has_value()) << argument << ": umbra_server kept running";
     EXPECT_EQ(*code, 1) << argument;
