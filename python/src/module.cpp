@@ -20,5 +20,6 @@ PYBIND11_MODULE(_umbra, m) {
   bind_io(m, map);
   bind_depth(m, map);
   bind_sim(m);
+  bind_field(m);
   add_text_signatures(m);
 }

@@ -19,6 +19,7 @@
 #include <unordered_set>
 
 #include "field/brick_sites.hpp"
+#include "field/brick_table.hpp"
 #include "field/distance_transform.hpp"
 #include "map/map_access.hpp"
 #include "map/read_gate.hpp"
@@ -46,7 +47,7 @@ void DistanceFieldOptions::validate() const {
 
 namespace {
 
-/// Most bricks a field without a box may hold before it asks for one (~20 GB).
+/// Most bricks a field may hold before it asks for a box (or a smaller one).
 constexpr std::size_t kMaxKnownBricks = std::size_t{1} << 23;
 
 struct FieldBrick {
@@ -54,11 +55,25 @@ struct FieldBrick {
   BrickOffsets offsets;
 };
 
-using BrickMap = std::unordered_map<std::uint64_t, std::unique_ptr<FieldBrick>>;
+using BrickMap = detail::BrickTable<FieldBrick>;
 
 std::string point_text(Vec3d p) {
   return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ", " + std::to_string(p.z) + ")";
 }
+
+/// A brick whose every cell is unknown with no occupied voxel within
+/// max_distance: not stored, a query there answers so (see the header).
+bool trivial(const BrickOffsets& offsets) {
+  for (int i = 0; i < detail::kBrickVolume; ++i) {
+    const SiteOffset o = offsets[std::size_t(i)].occupied;
+    const SiteOffset u = offsets[std::size_t(i)].unknown;
+    if (!o.none() || u.x != 0 || u.y != 0 || u.z != 0) return false;
+  }
+  return true;
+}
+
+const BrickBits kAllUnknown = BrickBits::all_unknown();
+const BrickBits kNoSites{};
 
 }  // namespace
 
@@ -71,7 +86,6 @@ struct DistanceField::State {
   Grid grid;
   FieldLayout layout;
   std::optional<CellBox> box_cells;
-  BrickBits absent;  // what a brick not stored holds: all unknown (no box) or nothing (outside the box)
   BrickMap bricks;
   std::shared_ptr<detail::ChangeJournal> journal;
   std::uint64_t version = 0;
@@ -83,13 +97,32 @@ struct DistanceField::State {
   void set_box(const std::optional<Aabb>& box);
   void rebuild();
   void update();
-  /// Recomputes the offsets of `targets` into `staged` (bricks whose sites
-  /// are already staged keep them; others copy them from the live bricks).
-  void compute(const std::unordered_set<std::uint64_t>& targets, BrickMap& staged,
-               const std::unordered_map<std::uint64_t, BrickBits>& new_sites, bool consult_live) const;
+
+  /// The result of compute(): bricks to store and bricks to drop (trivial).
+  struct Computed {
+    std::vector<std::pair<std::uint64_t, std::unique_ptr<FieldBrick>>> store;
+    std::vector<std::uint64_t> drop;
+  };
+  /// Recomputes `targets` from `new_sites`, then (with consult_live) the
+  /// live bricks, then what a brick not stored holds.
+  [[nodiscard]] Computed compute(const std::vector<std::uint64_t>& targets,
+                                 const std::unordered_map<std::uint64_t, BrickBits>& new_sites,
+                                 bool consult_live) const;
+
+  /// What a brick that is not stored holds: unknown everywhere (known space
+  /// far away, or a trivial brick), or no sites at all outside the box.
+  [[nodiscard]] const BrickBits& default_sites(BrickIndex b) const {
+    if (!box_cells) return kAllUnknown;
+    const std::uint32_t v[3] = {b.x, b.y, b.z};
+    for (int a = 0; a < 3; ++a) {
+      const std::uint32_t first = v[a] * kBrickCells, last = first + kBrickCells - 1;
+      if (first < box_cells->min[std::size_t(a)] || last > box_cells->max[std::size_t(a)]) return kNoSites;
+    }
+    return kAllUnknown;
+  }
   [[nodiscard]] const BrickBits& sites_of(std::uint64_t brick) const {
-    const auto it = bricks.find(brick);
-    return it == bricks.end() ? absent : it->second->bits;
+    const FieldBrick* stored = bricks.find(brick);
+    return stored != nullptr ? stored->bits : default_sites(BrickIndex::unpack(brick));
   }
   [[nodiscard]] bool in_map(std::int64_t x, std::int64_t y, std::int64_t z) const {
     const std::int64_t n = layout.bricks_per_axis();
@@ -106,7 +139,7 @@ struct DistanceField::State {
       }
     }
   }
-  /// The bricks of the box, or nothing without one.
+  /// The bricks meeting the box.
   template <typename Visit>
   void for_each_box_brick(Visit&& visit) const {
     for (std::uint32_t z = box_cells->min[2] / 8; z <= box_cells->max[2] / 8; ++z) {
@@ -115,7 +148,7 @@ struct DistanceField::State {
       }
     }
   }
-  [[nodiscard]] bool brick_in_box(BrickIndex b) const {
+  [[nodiscard]] bool brick_meets_box(BrickIndex b) const {
     if (!box_cells) return true;
     const std::uint32_t v[3] = {b.x, b.y, b.z};
     for (int a = 0; a < 3; ++a) {
@@ -123,14 +156,33 @@ struct DistanceField::State {
     }
     return true;
   }
+  /// Swaps the computed bricks in, with readers kept out.
+  void publish(Computed& computed, const std::vector<std::uint64_t>& removed, std::size_t recomputed,
+               std::size_t reread) {
+    detail::ClosedGate closed(gate);
+    for (auto& [key, brick] : computed.store) bricks.insert_or_assign(key, std::move(brick));
+    for (const std::uint64_t key : computed.drop) bricks.erase(key);
+    for (const std::uint64_t key : removed) bricks.erase(key);
+    bricks_recomputed = recomputed;
+    bricks_reread = reread;
+  }
 
-  DistanceSample sample(Vec3d point, std::uint64_t& cached_key, const FieldBrick*& cached) const;
+  /// The brick and cell of a point; throws std::out_of_range outside the map or the box.
+  struct Located {
+    std::uint64_t brick = 0;
+    int cell = 0;
+  };
+  [[nodiscard]] Located locate(Vec3d point) const;
+  [[nodiscard]] DistanceSample answer(const FieldBrick* brick, int cell) const;
+  [[nodiscard]] DistanceSample sample(Vec3d point) const {
+    const Located at = locate(point);
+    return answer(bricks.find(at.brick), at.cell);
+  }
 };
 
 void DistanceField::State::set_box(const std::optional<Aabb>& box) {
   options.box = box;
   box_cells.reset();
-  absent = BrickBits::all_unknown();
   if (!box) return;
   box->validate();
   const std::optional<Key> low = grid.key_checked(box->min);
@@ -152,19 +204,20 @@ void DistanceField::State::set_box(const std::optional<Aabb>& box) {
                                 " bricks of 8^3 cells, more than the limit of " + std::to_string(kMaxKnownBricks));
   }
   box_cells = cells;
-  absent = BrickBits{};
 }
 
-void DistanceField::State::compute(const std::unordered_set<std::uint64_t>& targets, BrickMap& staged,
-                                   const std::unordered_map<std::uint64_t, BrickBits>& new_sites,
-                                   bool consult_live) const {
+DistanceField::State::Computed DistanceField::State::compute(
+    const std::vector<std::uint64_t>& targets, const std::unordered_map<std::uint64_t, BrickBits>& new_sites,
+    bool consult_live) const {
   const auto sites = [&](BrickIndex b) -> const BrickBits* {
     const std::uint64_t key = b.packed();
     if (const auto it = new_sites.find(key); it != new_sites.end()) return &it->second;
-    if (!consult_live) return nullptr;
-    if (const auto it = bricks.find(key); it != bricks.end()) return &it->second->bits;
-    return nullptr;
+    if (consult_live) {
+      if (const FieldBrick* stored = bricks.find(key)) return &stored->bits;
+    }
+    return &default_sites(b);
   };
+  const std::unordered_set<std::uint64_t> wanted(targets.begin(), targets.end());
   std::unordered_set<std::uint64_t> chunks;
   for (const std::uint64_t key : targets) {
     const BrickIndex b = BrickIndex::unpack(key);
@@ -172,23 +225,27 @@ void DistanceField::State::compute(const std::unordered_set<std::uint64_t>& targ
                              b.z / kChunkBricks * kChunkBricks}
                       .packed());
   }
+  Computed out;
   detail::ChunkTransform transform(layout);
   for (const std::uint64_t chunk : chunks) {
     transform.run(
-        BrickIndex::unpack(chunk), sites, absent, [&](BrickIndex b) { return targets.contains(b.packed()); },
+        BrickIndex::unpack(chunk), sites, kAllUnknown, [&](BrickIndex b) { return wanted.contains(b.packed()); },
         [&](BrickIndex b, const BrickOffsets& offsets) {
+          if (trivial(offsets)) {
+            out.drop.push_back(b.packed());
+            return;
+          }
           auto brick = std::make_unique<FieldBrick>();
-          const BrickBits* bits = sites(b);
-          brick->bits = bits != nullptr ? *bits : absent;
+          brick->bits = *sites(b);
           brick->offsets = offsets;
-          staged[b.packed()] = std::move(brick);
+          out.store.emplace_back(b.packed(), std::move(brick));
         });
   }
+  return out;
 }
 
 void DistanceField::State::rebuild() {
   std::unordered_map<std::uint64_t, BrickBits> new_sites;
-  std::unordered_set<std::uint64_t> targets;
   detail::MapAccess::read(map, [&](const OccupancyTree& tree) {
     std::shared_ptr<detail::ChangeJournal> current = detail::MapAccess::journal(map);
     if (current != journal) {
@@ -205,24 +262,26 @@ void DistanceField::State::rebuild() {
       });
     }
   });
+  std::unordered_set<std::uint64_t> targets;
   if (box_cells) {
     for (const auto& [key, bits] : new_sites) targets.insert(key);
   } else {
-    // Without a box, the bricks within reach of known space are kept (the
-    // rest are unknown with no occupied voxel within max_distance).
+    // Without a box, the bricks within reach of known space (the rest are
+    // unknown with no occupied voxel within max_distance).
     for (const auto& [key, bits] : new_sites) {
       if (!bits.known) continue;
       for_each_neighbour(BrickIndex::unpack(key), layout.brick_reach(),
                          [&](BrickIndex n) { targets.insert(n.packed()); });
     }
   }
-  BrickMap staged;
-  compute(targets, staged, new_sites, /*consult_live=*/false);  // the live bricks are all replaced
-  const std::size_t reread = new_sites.size();
+  const std::vector<std::uint64_t> target_list(targets.begin(), targets.end());
+  Computed computed = compute(target_list, new_sites, /*consult_live=*/false);  // every live brick is replaced
+  BrickMap fresh;
+  for (auto& [key, brick] : computed.store) fresh.insert_or_assign(key, std::move(brick));
   detail::ClosedGate closed(gate);
-  bricks.swap(staged);
-  bricks_recomputed = targets.size();
-  bricks_reread = reread;
+  bricks.swap(fresh);
+  bricks_recomputed = target_list.size();
+  bricks_reread = new_sites.size();
 }
 
 void DistanceField::State::update() {
@@ -250,8 +309,8 @@ void DistanceField::State::update() {
       for (std::uint32_t z = lo.z; z <= hi.z; ++z) {
         for (std::uint32_t y = lo.y; y <= hi.y; ++y) {
           for (std::uint32_t x = lo.x; x <= hi.x; ++x) {
-            const BrickIndex b{x, y, z};
-            if (!new_sites.contains(b.packed())) new_sites.emplace(b.packed(), detail::read_brick(tree, layout, b, box_cells));
+            const std::uint64_t b = BrickIndex{x, y, z}.packed();
+            if (!new_sites.contains(b)) new_sites.emplace(b, detail::read_brick(tree, layout, BrickIndex{x, y, z}, box_cells));
           }
         }
       }
@@ -262,61 +321,56 @@ void DistanceField::State::update() {
     return;
   }
   const std::size_t reread = new_sites.size();
-  // Which bricks changed their sites, and (without a box) which became
-  // known or unknown, so that the set of kept bricks follows.
+  // Only the bricks whose sites changed matter; the cells within reach of
+  // them are recomputed.
   std::vector<BrickIndex> changed;
-  std::vector<BrickIndex> became_unknown;
-  std::unordered_set<std::uint64_t> added;
   for (auto it = new_sites.begin(); it != new_sites.end();) {
-    const BrickBits& before = sites_of(it->first);
-    if (it->second == before) {
+    if (it->second == sites_of(it->first)) {
       it = new_sites.erase(it);
-      continue;
+    } else {
+      changed.push_back(BrickIndex::unpack(it->first));
+      ++it;
     }
-    const BrickIndex b = BrickIndex::unpack(it->first);
-    changed.push_back(b);
-    if (!box_cells) {
-      const bool was_known = before.known;
-      if (it->second.known && !was_known) {
-        for_each_neighbour(b, layout.brick_reach(), [&](BrickIndex n) {
-          if (!bricks.contains(n.packed())) added.insert(n.packed());
-        });
-      }
-      if (!it->second.known && was_known) became_unknown.push_back(b);
-    }
-    ++it;
   }
   const auto known_after = [&](std::uint64_t key) {
     if (const auto it = new_sites.find(key); it != new_sites.end()) return it->second.known;
     return sites_of(key).known;
   };
-  std::unordered_set<std::uint64_t> removed;
-  for (const BrickIndex b : became_unknown) {
-    for_each_neighbour(b, layout.brick_reach(), [&](BrickIndex n) {
-      if (!bricks.contains(n.packed()) && !added.contains(n.packed())) return;
-      bool near_known = false;
-      for_each_neighbour(n, layout.brick_reach(), [&](BrickIndex m) { near_known = near_known || known_after(m.packed()); });
-      if (!near_known) removed.insert(n.packed());
-    });
-  }
-  for (const std::uint64_t key : removed) added.erase(key);
-  std::unordered_set<std::uint64_t> targets = added;
+  // Which bricks to recompute: those within reach of a change that the
+  // field keeps (in the box; without one, stored already or within reach
+  // of known space now: a brick not stored is trivial, and only a change
+  // holding known space can make it otherwise).
+  std::unordered_set<std::uint64_t> targets;
+  std::vector<std::uint64_t> removed;
+  const int reach = layout.brick_reach();
   for (const BrickIndex b : changed) {
-    for_each_neighbour(b, layout.brick_reach(), [&](BrickIndex n) {
+    const bool known = known_after(b.packed());
+    for_each_neighbour(b, reach, [&](BrickIndex n) {
       const std::uint64_t key = n.packed();
-      if ((bricks.contains(key) || added.contains(key)) && !removed.contains(key) && brick_in_box(n)) targets.insert(key);
+      if (box_cells ? brick_meets_box(n) : (known || bricks.contains(key))) targets.insert(key);
     });
   }
-  BrickMap staged;
-  compute(targets, staged, new_sites, /*consult_live=*/true);
-  detail::ClosedGate closed(gate);
-  for (auto& [key, brick] : staged) bricks[key] = std::move(brick);
-  for (const std::uint64_t key : removed) bricks.erase(key);
-  bricks_recomputed = targets.size();
-  bricks_reread = reread;
+  if (!box_cells) {
+    // A stored brick with no known space within reach any more goes.
+    for (const BrickIndex b : changed) {
+      if (known_after(b.packed()) || !sites_of(b.packed()).known) continue;  // only bricks that became unknown
+      for_each_neighbour(b, reach, [&](BrickIndex n) {
+        if (!targets.contains(n.packed())) return;
+        bool near_known = false;
+        for_each_neighbour(n, reach, [&](BrickIndex m) { near_known = near_known || known_after(m.packed()); });
+        if (!near_known) {
+          targets.erase(n.packed());
+          removed.push_back(n.packed());
+        }
+      });
+    }
+  }
+  const std::vector<std::uint64_t> target_list(targets.begin(), targets.end());
+  Computed computed = compute(target_list, new_sites, /*consult_live=*/true);
+  publish(computed, removed, target_list.size(), reread);
 }
 
-DistanceSample DistanceField::State::sample(Vec3d point, std::uint64_t& cached_key, const FieldBrick*& cached) const {
+DistanceField::State::Located DistanceField::State::locate(Vec3d point) const {
   const std::optional<Key> key = grid.key_checked(point);
   if (!key) {
     throw std::out_of_range("distance field: the point " + point_text(point) + " is outside the map, which spans [" +
@@ -329,33 +383,30 @@ DistanceSample DistanceField::State::sample(Vec3d point, std::uint64_t& cached_k
     throw std::out_of_range("distance field: the point " + point_text(point) + " is outside the field's box " +
                             point_text(options.box->min) + " - " + point_text(options.box->max));
   }
-  const std::uint64_t brick_key = BrickIndex{cx >> 3, cy >> 3, cz >> 3}.packed();
-  if (brick_key != cached_key) {
-    const auto it = bricks.find(brick_key);
-    cached = it == bricks.end() ? nullptr : it->second.get();
-    cached_key = brick_key;
-  }
+  return {BrickIndex{cx >> 3, cy >> 3, cz >> 3}.packed(), detail::cell_in_brick(cx, cy, cz)};
+}
+
+DistanceSample DistanceField::State::answer(const FieldBrick* brick, int cell) const {
   DistanceSample out;
-  if (cached == nullptr) {  // unknown, and no occupied voxel within max_distance (see the header)
+  if (brick == nullptr) {  // unknown, and no occupied voxel within max_distance (see the header)
     out.occupied = layout.max_distance();
     out.unknown = 0.0;
     return out;
   }
-  const int cell = detail::cell_in_brick(cx, cy, cz);
-  const SiteOffset occupied = cached->offsets.occupied[std::size_t(cell)];
-  const SiteOffset unknown = cached->offsets.unknown[std::size_t(cell)];
-  out.occupied = layout.metres(occupied);
-  out.unknown = layout.metres(unknown);
+  const detail::CellSites sites = brick->offsets[std::size_t(cell)];
+  out.occupied = layout.metres(sites.occupied);
+  out.unknown = layout.metres(sites.unknown);
   const SiteOffset nearest =
-      occupied.none() ? unknown
-                      : (unknown.none() ? occupied
-                                        : (layout.squared(occupied) <= layout.squared(unknown) ? occupied : unknown));
+      sites.occupied.none()
+          ? sites.unknown
+          : (sites.unknown.none() || layout.squared(sites.occupied) <= layout.squared(sites.unknown) ? sites.occupied
+                                                                                                   : sites.unknown);
   if (!nearest.none() && layout.squared(nearest) > 0) {
     // Away from the site: minus the offset's direction, each axis by its gap.
     const std::int8_t d[3] = {nearest.x, nearest.y, nearest.z};
     double v[3];
     for (int a = 0; a < 3; ++a) {
-      const double gap = std::sqrt(double(layout.squared_gap(d[a])));
+      const double gap = layout.gap(d[a]);
       v[a] = d[a] > 0 ? -gap : (d[a] < 0 ? gap : 0.0);
     }
     const double norm = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
@@ -414,14 +465,17 @@ double DistanceField::distance(Vec3d point) const { return distance_and_gradient
 
 DistanceSample DistanceField::distance_and_gradient(Vec3d point) const {
   detail::ReadLock lock(state_->gate);
-  std::uint64_t cached_key = ~std::uint64_t{0};
-  const FieldBrick* cached = nullptr;
-  return state_->sample(point, cached_key, cached);
+  return state_->sample(point);
 }
 
 namespace {
-constexpr std::size_t kBatchChunk = 4096;
+constexpr std::size_t kBatchChunk = 1024;
 
+/// Answers a batch a chunk at a time, in three passes so that the memory
+/// accesses of many points overlap (a query is two cache misses: the table
+/// slot, then the cell): locate every point and prefetch its table slot,
+/// find every brick and prefetch its cell, then answer. A bad point stops
+/// the batch there, its error naming its index.
 template <typename Out, typename Convert>
 void batch(const DistanceField::State& s, const detail::ReadGate& gate, std::span<const Vec3d> points,
            std::span<Out> out, Convert convert) {
@@ -429,18 +483,31 @@ void batch(const DistanceField::State& s, const detail::ReadGate& gate, std::spa
     throw std::invalid_argument("distance field: " + std::to_string(points.size()) + " points but room for " +
                                 std::to_string(out.size()) + " answers");
   }
+  std::vector<DistanceField::State::Located> located(std::min(points.size(), kBatchChunk));
+  std::vector<const FieldBrick*> found(located.size());
   for (std::size_t begin = 0; begin < points.size(); begin += kBatchChunk) {
-    const std::size_t end = std::min(points.size(), begin + kBatchChunk);
-    detail::ReadLock lock(gate);
-    std::uint64_t cached_key = ~std::uint64_t{0};
-    const FieldBrick* cached = nullptr;
-    for (std::size_t i = begin; i < end; ++i) {
-      try {
-        out[i] = convert(s.sample(points[i], cached_key, cached));
-      } catch (const std::out_of_range& e) {
-        throw std::out_of_range("point " + std::to_string(i) + ": " + e.what());
+    const std::size_t count = std::min(points.size() - begin, kBatchChunk);
+    std::size_t good = count;
+    std::string problem;
+    {
+      detail::ReadLock lock(gate);  // the box may change between chunks
+      for (std::size_t i = 0; i < count; ++i) {
+        try {
+          located[i] = s.locate(points[begin + i]);
+        } catch (const std::out_of_range& e) {
+          good = i;
+          problem = "point " + std::to_string(begin + i) + ": " + e.what();
+          break;
+        }
       }
+      for (std::size_t i = 0; i < good; ++i) s.bricks.prefetch(located[i].brick);
+      for (std::size_t i = 0; i < good; ++i) {
+        found[i] = s.bricks.find(located[i].brick);
+        if (found[i] != nullptr) __builtin_prefetch(&found[i]->offsets[std::size_t(located[i].cell)]);
+      }
+      for (std::size_t i = 0; i < good; ++i) out[begin + i] = convert(s.answer(found[i], located[i].cell));
     }
+    if (good < count) throw std::out_of_range(problem);
   }
 }
 }  // namespace
@@ -458,9 +525,7 @@ DistanceFieldStats DistanceField::stats() const {
   const State& s = *state_;
   DistanceFieldStats out;
   out.bricks = s.bricks.size();
-  // A brick, its hash node (key, pointer, next pointer, cached hash) and bucket.
-  out.memory_bytes = sizeof(State) + s.bricks.size() * (sizeof(FieldBrick) + 4 * sizeof(void*)) +
-                     s.bricks.bucket_count() * sizeof(void*);
+  out.memory_bytes = sizeof(State) + s.bricks.memory_bytes();
   out.bricks_recomputed = s.bricks_recomputed;
   out.bricks_reread = s.bricks_reread;
   return out;

@@ -151,8 +151,7 @@ void ChunkTransform::run(BrickIndex first, SiteLookup sites, const BrickBits& ab
           const std::size_t y = by * kBrickCells + std::size_t((i >> 3) & 7);
           const std::size_t z = bz * kBrickCells + std::size_t(i >> 6);
           const std::size_t at = (z * kChunkCells + y) * kChunkCells + x;
-          offsets.occupied[std::size_t(i)] = result_[0][at];
-          offsets.unknown[std::size_t(i)] = result_[1][at];
+          offsets[std::size_t(i)] = {result_[0][at], result_[1][at]};
         }
         write(brick, offsets);
       }

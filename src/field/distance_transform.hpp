@@ -28,11 +28,13 @@ namespace umbra::detail {
 inline constexpr int kChunkBricks = 4;  // per axis
 inline constexpr int kChunkCells = kChunkBricks * kBrickCells;
 
-/// The output of one brick.
-struct BrickOffsets {
-  std::array<SiteOffset, kBrickVolume> occupied;
-  std::array<SiteOffset, kBrickVolume> unknown;
+/// A cell's nearest sites, side by side so that a query reads one cache line.
+struct CellSites {
+  SiteOffset occupied;
+  SiteOffset unknown;
 };
+/// The output of one brick, by cell_in_brick().
+using BrickOffsets = std::array<CellSites, kBrickVolume>;
 
 /// Sites of any brick: nullptr means the field holds nothing there
 /// (absent_sites tells what it has then).

@@ -59,6 +59,7 @@ class FieldLayout {
     for (int n = 0; n <= window_; ++n) {
       const std::uint64_t twice_gap = n == 0 ? 0 : std::uint64_t(n - 1) * e2 + 1;
       squared_gap_[std::size_t(n)] = std::uint32_t(twice_gap * twice_gap);
+      gap_.push_back(double(twice_gap));
     }
   }
 
@@ -75,6 +76,8 @@ class FieldLayout {
   [[nodiscard]] int brick_reach() const { return (window_ + kBrickCells - 1) / kBrickCells; }
   /// (2 gap)^2 for an offset of n cells along one axis, n <= window().
   [[nodiscard]] std::uint32_t squared_gap(int n) const { return squared_gap_[std::size_t(n < 0 ? -n : n)]; }
+  /// Twice the gap of an offset of n cells, in voxels (see the file comment).
+  [[nodiscard]] double gap(int n) const { return gap_[std::size_t(n < 0 ? -n : n)]; }
   /// S of an offset (see the file comment).
   [[nodiscard]] std::uint32_t squared(SiteOffset o) const {
     return squared_gap(o.x) + squared_gap(o.y) + squared_gap(o.z);
@@ -96,6 +99,7 @@ class FieldLayout {
   int window_ = 0;
   double cap_squared_ = 0.0;
   std::vector<std::uint32_t> squared_gap_;
+  std::vector<double> gap_;
 };
 
 }  // namespace umbra::detail

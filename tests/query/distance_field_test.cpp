@@ -15,6 +15,7 @@
 #include <tuple>
 #include <vector>
 
+#include "field/brick_table.hpp"
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/query/distance_field.hpp"
 
@@ -180,10 +181,11 @@ TEST(DistanceField, MatchesBruteForceInsideABox) {
   const OccupancyMap map = random_map(8, true);
   DistanceFieldOptions options;
   options.max_distance = 0.55;
-  options.box = Aabb{{-0.9, -0.5, -0.75}, {0.7, 1.1, 0.3}};
+  // Reaching far beyond the known space: bricks there are all unknown.
+  options.box = Aabb{{-0.9, -0.5, -0.75}, {2.9, 1.1, 0.3}};
   const DistanceField field(map, options);
   expect_field_matches(map, field, 200, 400, "box");
-  EXPECT_THROW((void)field.distance({1.5, 0.0, 0.0}), std::out_of_range);
+  EXPECT_THROW((void)field.distance({3.5, 0.0, 0.0}), std::out_of_range);
 }
 
 TEST(DistanceField, SphereIsFreeIffRadiusBelowDistance) {
@@ -299,7 +301,7 @@ TEST(DistanceField, UpdatedAfterEveryScanAsBruteForce) {
       map.set_auto_prune(prune);
       DistanceFieldOptions options;
       options.max_distance = 0.45;
-      if (boxed) options.box = Aabb{{-1.3, -1.0, -0.8}, {0.9, 1.3, 1.2}};
+      if (boxed) options.box = Aabb{{-1.3, -1.0, -0.8}, {2.5, 1.3, 1.2}};
       DistanceField field(map, options);
       std::mt19937 rng(600);
       std::uniform_real_distribution<float> origin(-0.5f, 0.5f);
@@ -335,6 +337,31 @@ TEST(DistanceField, UpdateRecomputesOnlyNearChanges) {
   EXPECT_GT(field.stats().bricks_recomputed, 0u);
   field.update();  // nothing new
   EXPECT_EQ(field.stats().bricks_recomputed, 0u);
+}
+
+TEST(DistanceField, BrickTableActsAsAMap) {
+  detail::BrickTable<int> table;
+  std::map<std::uint64_t, int> reference;
+  std::mt19937_64 rng(900);
+  for (int step = 0; step < 20000; ++step) {
+    const std::uint64_t key = rng() % 3000;  // collisions and reuse
+    if (rng() % 3 == 0) {
+      table.erase(key);
+      reference.erase(key);
+    } else {
+      table.insert_or_assign(key, std::make_unique<int>(step));
+      reference[key] = step;
+    }
+  }
+  ASSERT_EQ(table.size(), reference.size());
+  for (std::uint64_t key = 0; key < 3000; ++key) {
+    const int* found = table.find(key);
+    const auto it = reference.find(key);
+    ASSERT_EQ(found != nullptr, it != reference.end()) << key;
+    if (found != nullptr) {
+      ASSERT_EQ(*found, it->second);
+    }
+  }
 }
 
 }  // namespace
