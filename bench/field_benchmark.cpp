@@ -31,6 +31,7 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <dynamicEDT3D/dynamicEDTOctomap.h>
@@ -151,7 +152,9 @@ struct Row {
   double resolution = 0;
   long long box_cells = 0;
   double umbra_build = 0, edt_build = 0;
-  std::vector<double> umbra_updates, edt_updates;
+  std::vector<double> umbra_updates, edt_updates, umbra_parallel_updates;
+  double umbra_parallel_build = 0;
+  unsigned threads = 1;
   double umbra_query_ns = 0, umbra_query_single_ns = 0, edt_query_ns = 0;
   std::size_t umbra_bytes = 0, umbra_rss = 0, edt_bytes = 0, edt_rss = 0;
   std::size_t umbra_known_bytes = 0;
@@ -241,11 +244,22 @@ Row run(const std::string& name, const Options& options) {
     row.umbra_known_bytes = whole.memory_bytes();
   }
 
+  // The same field built and updated by all hardware threads.
+  umbra::DistanceFieldOptions parallel_options = field_options;
+  parallel_options.threads = 0;
+  start = Clock::now();
+  umbra::DistanceField parallel(*map, parallel_options);
+  row.umbra_parallel_build = seconds_since(start);
+  row.threads = std::thread::hardware_concurrency();
+
   for (std::size_t i = 1; i < scans.size(); ++i) {
     insert_scan(scans[i]);
     start = Clock::now();
     field->update();
     row.umbra_updates.push_back(seconds_since(start));
+    start = Clock::now();
+    parallel.update();
+    row.umbra_parallel_updates.push_back(seconds_since(start));
     start = Clock::now();
     edt->update();
     row.edt_updates.push_back(seconds_since(start));
@@ -350,21 +364,28 @@ int main(int argc, char** argv) {
     }
   }
   std::vector<Row> rows;
-  for (const std::string& name : options.datasets) rows.push_back(run(name, options));
+  for (const std::string& name : options.datasets) {
+    rows.push_back(run(name, options));
+    std::fflush(stdout);
+  }
   std::printf("\n| dataset | box cells | build umbra / dynamicEDT3D (s) | update per scan umbra / dynamicEDT3D (ms) | "
               "speed-up | query umbra batch / single / dynamicEDT3D (ns) | memory umbra / dynamicEDT3D (MB) | "
-              "umbra without box: build (s), memory (MB) |\n|---|---|---|---|---|---|---|---|\n");
+              "umbra without box: build (s), memory (MB) | umbra on all threads: build (s), update (ms) |\n"
+              "|---|---|---|---|---|---|---|---|---|\n");
   for (const Row& r : rows) {
     const double uu = r.umbra_updates.empty() ? 0 : 1e3 * sum(r.umbra_updates) / double(r.umbra_updates.size());
     const double eu = r.edt_updates.empty() ? 0 : 1e3 * sum(r.edt_updates) / double(r.edt_updates.size());
     std::printf("| %s (%.2f m) | %lld | %.3f / %.3f | %s | %s | %.1f / %.1f / %.1f | %.1f (rss %.1f) / %.1f (rss %.1f) "
-                "| %.3f, %.1f |\n",
+                "| %.3f, %.1f | %u threads: %.3f, %.1f |\n",
                 r.dataset.c_str(), r.resolution, r.box_cells, r.umbra_build, r.edt_build,
                 r.umbra_updates.empty() ? "-" : (std::to_string(uu).substr(0, 7) + " / " + std::to_string(eu).substr(0, 7)).c_str(),
                 r.umbra_updates.empty() ? "-" : (std::to_string(eu / uu).substr(0, 5) + "x").c_str(), r.umbra_query_ns,
                 r.umbra_query_single_ns, r.edt_query_ns, double(r.umbra_bytes) / 1e6, double(r.umbra_rss) / 1e6,
                 double(r.edt_bytes) / 1e6, double(r.edt_rss) / 1e6, r.umbra_known_build,
-                double(r.umbra_known_bytes) / 1e6);
+                double(r.umbra_known_bytes) / 1e6, r.threads, r.umbra_parallel_build,
+                r.umbra_parallel_updates.empty()
+                    ? 0.0
+                    : 1e3 * sum(r.umbra_parallel_updates) / double(r.umbra_parallel_updates.size()));
   }
   return 0;
 }

@@ -20,6 +20,7 @@
 
 #include "field/brick_sites.hpp"
 #include "field/brick_table.hpp"
+#include "core/thread_pool.hpp"
 #include "field/distance_transform.hpp"
 #include "map/map_access.hpp"
 #include "map/read_gate.hpp"
@@ -33,7 +34,6 @@ using detail::BrickOffsets;
 using detail::CellBox;
 using detail::FieldLayout;
 using detail::kBrickCells;
-using detail::kChunkBricks;
 using detail::SiteOffset;
 
 void DistanceFieldOptions::validate() const {
@@ -42,6 +42,10 @@ void DistanceFieldOptions::validate() const {
                                 std::to_string(max_distance));
   }
   if (depth < 0) throw std::invalid_argument("distance field: depth must be >= 0, got " + std::to_string(depth));
+  if (threads > ThreadPool::max_threads()) {
+    throw std::invalid_argument("distance field: threads " + std::to_string(threads) + " is more than " +
+                                std::to_string(ThreadPool::max_threads()));
+  }
   if (box) box->validate();
 }
 
@@ -93,6 +97,7 @@ struct DistanceField::State {
   std::size_t bricks_reread = 0;
   std::mutex writer;
   detail::ReadGate gate;
+  std::unique_ptr<ThreadPool> pool;  // options.threads != 1
 
   void set_box(const std::optional<Aabb>& box);
   void rebuild();
@@ -218,18 +223,22 @@ DistanceField::State::Computed DistanceField::State::compute(
     return &default_sites(b);
   };
   const std::unordered_set<std::uint64_t> wanted(targets.begin(), targets.end());
-  std::unordered_set<std::uint64_t> chunks;
+  const std::uint32_t n = std::uint32_t(detail::chunk_bricks(layout.window()));
+  std::unordered_set<std::uint64_t> chunk_set;
   for (const std::uint64_t key : targets) {
     const BrickIndex b = BrickIndex::unpack(key);
-    chunks.insert(BrickIndex{b.x / kChunkBricks * kChunkBricks, b.y / kChunkBricks * kChunkBricks,
-                             b.z / kChunkBricks * kChunkBricks}
-                      .packed());
+    chunk_set.insert(BrickIndex{b.x / n * n, b.y / n * n, b.z / n * n}.packed());
   }
-  Computed out;
-  detail::ChunkTransform transform(layout);
-  for (const std::uint64_t chunk : chunks) {
-    transform.run(
-        BrickIndex::unpack(chunk), sites, kAllUnknown, [&](BrickIndex b) { return wanted.contains(b.packed()); },
+  const std::vector<std::uint64_t> chunks(chunk_set.begin(), chunk_set.end());
+  // One transform and one result per worker; chunks are independent.
+  const unsigned workers = pool ? pool->size() : 1;
+  std::vector<std::unique_ptr<detail::ChunkTransform>> transforms(workers);
+  std::vector<Computed> parts(workers);
+  const auto work = [&](std::size_t task, unsigned worker) {
+    if (!transforms[worker]) transforms[worker] = std::make_unique<detail::ChunkTransform>(layout);
+    Computed& out = parts[worker];
+    transforms[worker]->run(
+        BrickIndex::unpack(chunks[task]), sites, [&](BrickIndex b) { return wanted.contains(b.packed()); },
         [&](BrickIndex b, const BrickOffsets& offsets) {
           if (trivial(offsets)) {
             out.drop.push_back(b.packed());
@@ -240,6 +249,16 @@ DistanceField::State::Computed DistanceField::State::compute(
           brick->offsets = offsets;
           out.store.emplace_back(b.packed(), std::move(brick));
         });
+  };
+  if (pool && chunks.size() > 1) {
+    pool->run(chunks.size(), work);
+  } else {
+    for (std::size_t i = 0; i < chunks.size(); ++i) work(i, 0);
+  }
+  Computed out = std::move(parts[0]);
+  for (unsigned i = 1; i < workers; ++i) {
+    for (auto& entry : parts[i].store) out.store.push_back(std::move(entry));
+    out.drop.insert(out.drop.end(), parts[i].drop.begin(), parts[i].drop.end());
   }
   return out;
 }
@@ -424,6 +443,7 @@ DistanceField::DistanceField(const OccupancyMap& map, const DistanceFieldOptions
                                 std::to_string(map.depth_levels() - 3) + ")");
   }
   state_ = std::make_unique<State>(map, options);
+  if (options.threads != 1) state_->pool = std::make_unique<ThreadPool>(options.threads);
   if (state_->layout.window() > 120) {
     throw std::invalid_argument("distance field: max_distance " + std::to_string(options.max_distance) +
                                 " m spans " + std::to_string(state_->layout.window()) +

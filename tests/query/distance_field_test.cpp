@@ -177,6 +177,15 @@ TEST(DistanceField, MatchesBruteForceAtSeveralDepths) {
   }
 }
 
+TEST(DistanceField, MatchesBruteForceWithAWideWindow) {
+  // 1.7 m at 10 cm: a window of 17 cells, chunks of 5 bricks.
+  const OccupancyMap map = random_map(13, true);
+  DistanceFieldOptions options;
+  options.max_distance = 1.7;
+  const DistanceField field(map, options);
+  expect_field_matches(map, field, 150, 60, "wide window");
+}
+
 TEST(DistanceField, MatchesBruteForceInsideABox) {
   const OccupancyMap map = random_map(8, true);
   DistanceFieldOptions options;
@@ -301,6 +310,7 @@ TEST(DistanceField, UpdatedAfterEveryScanAsBruteForce) {
       map.set_auto_prune(prune);
       DistanceFieldOptions options;
       options.max_distance = 0.45;
+      options.threads = boxed ? 3 : 1;  // chunks in parallel give the same field
       if (boxed) options.box = Aabb{{-1.3, -1.0, -0.8}, {2.5, 1.3, 1.2}};
       DistanceField field(map, options);
       std::mt19937 rng(600);

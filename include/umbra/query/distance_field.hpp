@@ -60,6 +60,9 @@ struct DistanceFieldOptions {
   int depth = 0;
   /// Keep the field inside this box only (nothing: the whole known space).
   std::optional<Aabb> box;
+  /// Threads that build and update the field (chunks of bricks in
+  /// parallel); 0: all hardware threads. Queries always run on the caller.
+  unsigned threads = 1;
 
   /// Throws std::invalid_argument naming the bad value.
   void validate() const;
