@@ -31,18 +31,21 @@ void bind_field(py::module_& m) {
   py::class_<DistanceField>(m, "DistanceField",
                             "Distances from any point to the nearest occupied and the nearest unknown voxel of a map, "
                             "capped at max_distance, with the gradient; kept up to date by update() after scans.")
-      .def(py::init([](const OccupancyMap& map, double max_distance, int depth, const std::optional<Aabb>& box) {
+      .def(py::init([](const OccupancyMap& map, double max_distance, int depth, const std::optional<Aabb>& box,
+                       unsigned threads) {
              DistanceFieldOptions options;
              options.max_distance = max_distance;
              options.depth = depth;
              options.box = box;
+             options.threads = threads;
              py::gil_scoped_release released;
              return std::make_unique<DistanceField>(map, options);
            }),
            py::arg("map"), py::kw_only(), py::arg("max_distance") = 1.0, py::arg("depth") = 0,
-           py::arg("box") = py::none(), py::keep_alive<1, 2>(),
+           py::arg("box") = py::none(), py::arg("threads") = 1, py::keep_alive<1, 2>(),
            "Builds the field of `map` (kept alive by the field): cells of depth `depth`, distances capped at "
-           "max_distance metres, inside `box` (an Aabb) or, without one, over the whole known space.")
+           "max_distance metres, inside `box` (an Aabb) or, without one, over the whole known space; built and "
+           "updated by `threads` threads (0: all).")
       .def("update", &DistanceField::update, py::call_guard<py::gil_scoped_release>(),
            "Brings the field up to date with the map, recomputing only near what changed since the last update.")
       .def("rebuild", &DistanceField::rebuild, py::call_guard<py::gil_scoped_release>(), "Recomputes everything.")

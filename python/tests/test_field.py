@@ -58,7 +58,7 @@ def test_rows_and_shapes():
 
 def test_update_after_scans_equals_rebuild_while_another_thread_queries():
     m = umbra.OccupancyMap(0.1)
-    field = umbra.DistanceField(m, max_distance=0.4, box=umbra.Aabb((-1.5, -1.5, -1.5), (1.5, 1.5, 1.5)))
+    field = umbra.DistanceField(m, max_distance=0.4, box=umbra.Aabb((-1.5, -1.5, -1.5), (1.5, 1.5, 1.5)), threads=2)
     rng = np.random.default_rng(5)
     probe = rng.uniform(-1.4, 1.4, size=(5000, 3))
     stop = threading.Event()

@@ -568,9 +568,15 @@ class DistanceField:
     """Distances from any point to the nearest occupied and the nearest unknown voxel of a map, capped at max_distance, with the gradient; kept up to date by update() after scans."""
 
     def __init__(
-        self, map: OccupancyMap, *, max_distance: float = 1.0, depth: int = 0, box: Optional[Aabb] = None
+        self,
+        map: OccupancyMap,
+        *,
+        max_distance: float = 1.0,
+        depth: int = 0,
+        box: Optional[Aabb] = None,
+        threads: int = 1,
     ) -> None:
-        """Builds the field of `map` (kept alive by the field): cells of depth `depth`, distances capped at max_distance metres, inside `box` (an Aabb) or, without one, over the whole known space."""
+        """Builds the field of `map` (kept alive by the field): cells of depth `depth`, distances capped at max_distance metres, inside `box` (an Aabb) or, without one, over the whole known space; built and updated by `threads` threads (0: all)."""
     def update(self) -> None:
         """Brings the field up to date with the map, recomputing only near what changed since the last update."""
     def rebuild(self) -> None:
