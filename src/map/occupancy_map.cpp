@@ -319,7 +319,8 @@ NodeCounts OccupancyMap::node_counts() const {
 }
 
 std::size_t OccupancyMap::memory_bytes() const {
-  const std::size_t tree_bytes = reading(*state_, [&] { return state_->tree.memory_bytes(); });
+  const std::size_t tree_bytes =
+      reading(*state_, [&] { return state_->tree.memory_bytes() + state_->journal->memory_bytes(); });
   return sizeof(*this) + sizeof(detail::MapState) - sizeof(state_->tree) - sizeof(state_->integrator) + tree_bytes +
          state_->integrator_bytes.load(std::memory_order_relaxed);
 }
