@@ -12,7 +12,7 @@
 #include "integrate/end_voxels.hpp"
 #include "integrate/projective_tracer.hpp"
 #include "integrate/ray_order.hpp"
-#include "integrate/ray_walker.hpp"
+#include "ray/ray_direction.hpp"
 
 namespace umbra {
 

@@ -19,9 +19,9 @@
 
 #include "map/map_access.hpp"
 #include "query/blocking_lookup.hpp"
-#include "query/exact_dda.hpp"
 #include "query/geometry.hpp"
 #include "query/query_walk.hpp"
+#include "ray/exact_dda.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {

@@ -19,11 +19,11 @@
 #include <string>
 
 #include "core/assert.hpp"
-#include "integrate/ray_walker.hpp"
 #include "map/map_access.hpp"
 #include "query/blocking_lookup.hpp"
-#include "query/exact_dda.hpp"
 #include "query/query_walk.hpp"
+#include "ray/exact_dda.hpp"
+#include "ray/ray_direction.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {

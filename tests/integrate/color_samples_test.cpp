@@ -12,7 +12,7 @@
 
 #include "core/thread_pool.hpp"
 #include "integrate/color_samples.hpp"
-#include "integrate/ray_walker.hpp"
+#include "ray/ray_direction.hpp"
 
 namespace umbra {
 namespace {
