@@ -16,9 +16,6 @@
 
 namespace umbra {
 
-unsigned hardware_threads() { return ThreadPool::hardware_threads(); }
-unsigned max_threads() { return ThreadPool::max_threads(); }
-
 IntegratorKind parse_integrator_kind(const std::string& name) {
   if (name == "simple") return IntegratorKind::simple;
   if (name == "discrete") return IntegratorKind::discrete;

@@ -13,7 +13,7 @@
 #include <optional>
 
 #include "integrate/integrator.hpp"
-#include "map/read_gate.hpp"
+#include "core/read_gate.hpp"
 #include "tree/occupancy_tree.hpp"
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/log_odds.hpp"

@@ -1,0 +1,27 @@
+// check_collision: whether a shape is free in a tree (the algorithm behind
+// OccupancyMap::is_free; src/query/collision.cpp says how it descends).
+// The caller holds the tree for reading.
+#pragma once
+
+#include "tree/occupancy_tree.hpp"
+#include "umbra/core/aabb.hpp"
+#include "umbra/core/grid.hpp"
+#include "umbra/query/collision.hpp"
+#include "umbra/query/shapes.hpp"
+
+namespace umbra::detail {
+
+/// Whether no voxel of the shape blocks in `tree` (a map with grid `grid`),
+/// and if one does, a blocking node; throws as OccupancyMap::is_free.
+CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Aabb& box,
+                                const CollisionOptions& options);
+CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Sphere& sphere,
+                                const CollisionOptions& options);
+CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const OrientedBox& box,
+                                const CollisionOptions& options);
+CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Capsule& capsule,
+                                const CollisionOptions& options);
+CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Segment& segment,
+                                const CollisionOptions& options);
+
+}  // namespace umbra::detail
