@@ -26,6 +26,14 @@ void validate(const GainOptions& options, int depth_levels) {
   }
 }
 
+/// One collision check, holding the map for reading.
+template <CollisionShape Shape>
+CollisionResult check_one(const OccupancyMap& map, const Grid& grid, const Shape& shape,
+                          const CollisionOptions& options) {
+  return detail::MapAccess::read(
+      map, [&](const OccupancyTree& tree) { return detail::check_collision(tree, grid, shape, options); });
+}
+
 }  // namespace
 
 // --- predicate queries ----------------------------------------------------------------
@@ -50,24 +58,19 @@ std::size_t OccupancyMap::count(const Predicate& predicate, int depth) const {
 // --- collision checks and ray casts ------------------------------------------------------
 
 CollisionResult OccupancyMap::is_free(const Aabb& box, const CollisionOptions& options) const {
-  return detail::MapAccess::read(
-      *this, [&](const OccupancyTree& tree) { return detail::check_collision(tree, grid_, box, options); });
+  return check_one(*this, grid_, box, options);
 }
 CollisionResult OccupancyMap::is_free(const Sphere& sphere, const CollisionOptions& options) const {
-  return detail::MapAccess::read(
-      *this, [&](const OccupancyTree& tree) { return detail::check_collision(tree, grid_, sphere, options); });
+  return check_one(*this, grid_, sphere, options);
 }
 CollisionResult OccupancyMap::is_free(const OrientedBox& box, const CollisionOptions& options) const {
-  return detail::MapAccess::read(
-      *this, [&](const OccupancyTree& tree) { return detail::check_collision(tree, grid_, box, options); });
+  return check_one(*this, grid_, box, options);
 }
 CollisionResult OccupancyMap::is_free(const Capsule& capsule, const CollisionOptions& options) const {
-  return detail::MapAccess::read(
-      *this, [&](const OccupancyTree& tree) { return detail::check_collision(tree, grid_, capsule, options); });
+  return check_one(*this, grid_, capsule, options);
 }
 CollisionResult OccupancyMap::is_free(const Segment& segment, const CollisionOptions& options) const {
-  return detail::MapAccess::read(
-      *this, [&](const OccupancyTree& tree) { return detail::check_collision(tree, grid_, segment, options); });
+  return check_one(*this, grid_, segment, options);
 }
 
 template <CollisionShape Shape>

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "query/blocking_lookup.hpp"
 #include "query/geometry.hpp"
@@ -198,31 +199,10 @@ SegmentWalk segment_walk(const Grid& grid, const Segment& segment) {
   return {grid, from, from_key, to, to_key};
 }
 
-}  // namespace
-
-namespace detail {
-
-CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Aabb& box,
-                                const CollisionOptions& options) {
-  return check_region(tree, grid, box, options);
-}
-CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Sphere& sphere,
-                                const CollisionOptions& options) {
-  return check_region(tree, grid, sphere, options);
-}
-CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const OrientedBox& box,
-                                const CollisionOptions& options) {
-  return check_region(tree, grid, box, options);
-}
-CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Capsule& capsule,
-                                const CollisionOptions& options) {
-  return check_region(tree, grid, capsule, options);
-}
-
-CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Segment& segment,
-                                const CollisionOptions& options) {
+CollisionResult check_segment(const OccupancyTree& tree, const Grid& grid, const Segment& segment,
+                              const CollisionOptions& options) {
   SegmentWalk walk = segment_walk(grid, segment);
-  const QueryScope scope = scope_of(tree, grid, options.depth);
+  const QueryScope scope = detail::scope_of(tree, grid, options.depth);
   BlockingLookup lookup(scope, rule_of(tree, options));
   CollisionResult result;
   // Stops at the first blocking voxel; jumps over each node found to hold
@@ -231,12 +211,32 @@ CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, con
     NodeRef blocking{};
     if (lookup.blocks(walk.code(), &blocking)) {
       result.free = false;
-      result.blocking = make_node(tree, grid, blocking, walk.code());
+      result.blocking = detail::make_node(tree, grid, blocking, walk.code());
       break;
     }
   }
   return result;
 }
+
+}  // namespace
+
+namespace detail {
+
+template <CollisionShape Shape>
+CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Shape& shape,
+                                const CollisionOptions& options) {
+  if constexpr (std::is_same_v<Shape, Segment>) {
+    return check_segment(tree, grid, shape, options);
+  } else {
+    return check_region(tree, grid, shape, options);
+  }
+}
+template CollisionResult check_collision(const OccupancyTree&, const Grid&, const Aabb&, const CollisionOptions&);
+template CollisionResult check_collision(const OccupancyTree&, const Grid&, const Sphere&, const CollisionOptions&);
+template CollisionResult check_collision(const OccupancyTree&, const Grid&, const OrientedBox&,
+                                         const CollisionOptions&);
+template CollisionResult check_collision(const OccupancyTree&, const Grid&, const Capsule&, const CollisionOptions&);
+template CollisionResult check_collision(const OccupancyTree&, const Grid&, const Segment&, const CollisionOptions&);
 
 }  // namespace detail
 }  // namespace umbra

@@ -13,15 +13,9 @@ namespace umbra::detail {
 
 /// Whether no voxel of the shape blocks in `tree` (a map with grid `grid`),
 /// and if one does, a blocking node; throws as OccupancyMap::is_free.
-CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Aabb& box,
-                                const CollisionOptions& options);
-CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Sphere& sphere,
-                                const CollisionOptions& options);
-CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const OrientedBox& box,
-                                const CollisionOptions& options);
-CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Capsule& capsule,
-                                const CollisionOptions& options);
-CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Segment& segment,
+/// Instantiated for every CollisionShape (collision.cpp).
+template <CollisionShape Shape>
+CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Shape& shape,
                                 const CollisionOptions& options);
 
 }  // namespace umbra::detail
