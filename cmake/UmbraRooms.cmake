@@ -25,9 +25,14 @@ set_target_properties(umbra_core PROPERTIES EXPORT_NAME core VERSION ${PROJECT_V
 # headers only (ray) compiles each of its headers alone, in a generated
 # source of its own, so that its boundary holds too.
 #
-#   umbra_add_room(NAME SOURCES a.cpp ... LINKS umbra_room_below ...)
+#   umbra_add_room(NAME SOURCES a.cpp ... LINKS umbra_room_below ... [INTO library])
+# INTO: the installed library that receives the room's objects (umbra_core
+# unless said otherwise; io's rooms go into umbra_io).
 function(umbra_add_room name)
-  cmake_parse_arguments(ROOM "" "" "SOURCES;LINKS" ${ARGN})
+  cmake_parse_arguments(ROOM "" "INTO" "SOURCES;LINKS" ${ARGN})
+  if(NOT ROOM_INTO)
+    set(ROOM_INTO umbra_core)
+  endif()
   set(target umbra_room_${name})
   set(root ${PROJECT_BINARY_DIR}/rooms/${name})
   file(MAKE_DIRECTORY ${root}/umbra)
@@ -48,5 +53,5 @@ function(umbra_add_room name)
   target_include_directories(${target} PUBLIC ${root})
   target_compile_features(${target} PUBLIC cxx_std_20)
   target_link_libraries(${target} PUBLIC ${ROOM_LINKS} PRIVATE umbra_build_settings)
-  target_sources(umbra_core PRIVATE $<TARGET_OBJECTS:${target}>)
+  target_sources(${ROOM_INTO} PRIVATE $<TARGET_OBJECTS:${target}>)
 endfunction()
