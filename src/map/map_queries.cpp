@@ -12,9 +12,11 @@
 #include "map/map_access.hpp"
 #include "query/collision_check.hpp"
 #include "query/gain_counter.hpp"
+#include "query/projection.hpp"
 #include "query/query_walk.hpp"
 #include "query/ray_cast.hpp"
 #include "umbra/map/occupancy_map.hpp"
+#include "umbra/query/navigation_grid.hpp"
 
 namespace umbra {
 namespace {
@@ -141,6 +143,13 @@ std::vector<GainResult> OccupancyMap::information_gain(std::span<const Frustum> 
     pool.run(frustums.size(), answer);
   }
   return results;
+}
+
+// --- the navigation grid ----------------------------------------------------------------
+
+NavigationGrid project_to_grid(const OccupancyMap& map, const ProjectionOptions& options) {
+  return detail::MapAccess::read(
+      map, [&](const OccupancyTree& tree) { return detail::project_tree_to_grid(tree, map.grid(), options); });
 }
 
 }  // namespace umbra
