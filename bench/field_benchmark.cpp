@@ -40,7 +40,7 @@
 #include "bench_data.hpp"
 #include "umbra/io/octomap_files.hpp"
 #include "umbra/map/occupancy_map.hpp"
-#include "umbra/query/distance_field.hpp"
+#include "umbra/field/distance_field.hpp"
 
 namespace {
 

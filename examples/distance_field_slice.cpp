@@ -10,7 +10,7 @@
 
 #include <umbra/io/png_writer.hpp>
 #include <umbra/map/occupancy_map.hpp>
-#include <umbra/query/distance_field.hpp>
+#include <umbra/field/distance_field.hpp>
 #include <umbra/sim/lidar.hpp>
 #include <umbra/sim/scene.hpp>
 

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "umbra/map/occupancy_map.hpp"
-#include "umbra/query/distance_field.hpp"
+#include "umbra/field/distance_field.hpp"
 #include "umbra/query/information_gain.hpp"
 
 namespace umbra::cli {

@@ -14,8 +14,8 @@
 
 #include "bindings.hpp"
 #include "numpy_arrays.hpp"
-#include "umbra/map/depth_image.hpp"
-#include "umbra/map/insert_options.hpp"
+#include "umbra/integrate/depth_image.hpp"
+#include "umbra/integrate/insert_options.hpp"
 
 namespace umbra::python {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "bindings.hpp"
 #include "numpy_arrays.hpp"
-#include "umbra/query/distance_field.hpp"
+#include "umbra/field/distance_field.hpp"
 
 namespace umbra::python {
 namespace {

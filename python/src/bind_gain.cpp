@@ -17,7 +17,7 @@
 
 #include "bindings.hpp"
 #include "numpy_arrays.hpp"
-#include "umbra/map/insert_options.hpp"  // max_threads()
+#include "umbra/integrate/insert_options.hpp"  // max_threads()
 #include "umbra/query/information_gain.hpp"
 #include "umbra/query/shapes.hpp"
 

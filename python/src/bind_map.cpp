@@ -13,7 +13,7 @@
 
 #include "bindings.hpp"
 #include "numpy_arrays.hpp"
-#include "umbra/map/insert_options.hpp"
+#include "umbra/integrate/insert_options.hpp"
 #include "umbra/map/map_statistics.hpp"
 
 namespace umbra::python {

@@ -18,7 +18,7 @@
 #include <pybind11/pybind11.h>
 
 #include "umbra/core/node.hpp"
-#include "umbra/map/insert_options.hpp"
+#include "umbra/integrate/insert_options.hpp"
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/query/predicate.hpp"
 

@@ -34,7 +34,7 @@
 #include "umbra/core/color.hpp"
 #include "umbra/core/pose.hpp"
 #include "umbra/core/vec3.hpp"
-#include "umbra/map/depth_image.hpp"
+#include "umbra/integrate/depth_image.hpp"
 
 namespace umbra::python {
 

@@ -37,7 +37,7 @@
 #include <vector>
 
 #include "umbra/core/color.hpp"
-#include "umbra/map/depth_image.hpp"
+#include "umbra/integrate/depth_image.hpp"
 
 namespace umbra::ros_io {
 

@@ -30,7 +30,7 @@
 
 #include "map_messages.hpp"
 #include "umbra/core/log_odds.hpp"
-#include "umbra/map/insert_options.hpp"
+#include "umbra/integrate/insert_options.hpp"
 #include "umbra/query/navigation_grid.hpp"
 
 namespace umbra::ros_io {

@@ -7,7 +7,12 @@
 #include <algorithm>
 #include <system_error>
 
+#include "umbra/core/threads.hpp"
+
 namespace umbra {
+
+unsigned hardware_threads() { return ThreadPool::hardware_threads(); }
+unsigned max_threads() { return ThreadPool::max_threads(); }
 
 unsigned ThreadPool::hardware_threads() {
   const unsigned n = std::thread::hardware_concurrency();

@@ -1,4 +1,4 @@
-// DistanceField (include/umbra/query/distance_field.hpp): bricks of 8^3
+// DistanceField (include/umbra/field/distance_field.hpp): bricks of 8^3
 // cells in a hash map, each holding its cells' sites (brick_sites.hpp) and
 // the offsets to their nearest occupied and unknown sites
 // (distance_transform.hpp). A query is one hash lookup and two offsets
@@ -8,7 +8,7 @@
 // Building and updating compute aside from the bricks readers use and swap
 // the results in with the field's gate closed (the map's ReadGate), so a
 // reader sees whole updates only.
-#include "umbra/query/distance_field.hpp"
+#include "umbra/field/distance_field.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -23,7 +23,7 @@
 #include "core/thread_pool.hpp"
 #include "field/distance_transform.hpp"
 #include "map/map_access.hpp"
-#include "map/read_gate.hpp"
+#include "core/read_gate.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {

@@ -9,7 +9,7 @@
 #include "core/assert.hpp"
 #include "core/radix_sort.hpp"
 #include "core/voxel_codes.hpp"
-#include "integrate/ray_walker.hpp"
+#include "ray/ray_direction.hpp"
 
 namespace umbra {
 namespace {

@@ -22,7 +22,7 @@
 #include "integrate/ray_tracer.hpp"
 #include "tree/occupancy_tree.hpp"
 #include "umbra/core/grid.hpp"
-#include "umbra/map/insert_options.hpp"
+#include "umbra/integrate/insert_options.hpp"
 
 namespace umbra {
 

@@ -5,7 +5,7 @@
 
 #include "core/radix_sort.hpp"
 #include "core/voxel_codes.hpp"
-#include "umbra/map/insert_options.hpp"
+#include "umbra/integrate/insert_options.hpp"
 
 namespace umbra {
 

@@ -12,12 +12,9 @@
 #include "integrate/end_voxels.hpp"
 #include "integrate/projective_tracer.hpp"
 #include "integrate/ray_order.hpp"
-#include "integrate/ray_walker.hpp"
+#include "ray/ray_direction.hpp"
 
 namespace umbra {
-
-unsigned hardware_threads() { return ThreadPool::hardware_threads(); }
-unsigned max_threads() { return ThreadPool::max_threads(); }
 
 IntegratorKind parse_integrator_kind(const std::string& name) {
   if (name == "simple") return IntegratorKind::simple;

@@ -59,8 +59,8 @@
 #include "integrate/projective_frame.hpp"
 #include "integrate/ray_tracer.hpp"
 #include "tree/occupancy_tree.hpp"
-#include "umbra/map/depth_image.hpp"
-#include "umbra/map/insert_options.hpp"
+#include "umbra/integrate/depth_image.hpp"
+#include "umbra/integrate/insert_options.hpp"
 
 namespace umbra {
 

@@ -104,7 +104,7 @@
 #include "umbra/core/grid.hpp"
 #include "umbra/core/pose.hpp"
 #include "umbra/core/vec3.hpp"
-#include "umbra/map/depth_image.hpp"
+#include "umbra/integrate/depth_image.hpp"
 #include "integrate/depth_pyramid.hpp"
 #include "integrate/ray_tracer.hpp"
 

@@ -6,7 +6,7 @@
 #include "core/radix_sort.hpp"
 
 #include "integrate/integrator.hpp"
-#include "integrate/ray_walker.hpp"
+#include "ray/voxel_walk.hpp"
 
 namespace umbra {
 

@@ -39,7 +39,7 @@
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/grid.hpp"
 #include "umbra/core/vec3.hpp"
-#include "integrate/node_walker.hpp"
+#include "ray/node_walk.hpp"
 #include "tree/occupancy_tree.hpp"
 #include "tree/update_batch.hpp"
 

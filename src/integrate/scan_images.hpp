@@ -40,7 +40,7 @@
 #include <span>
 
 #include "umbra/core/vec3.hpp"
-#include "umbra/map/insert_options.hpp"
+#include "umbra/integrate/insert_options.hpp"
 #include "integrate/projective_frame.hpp"
 
 namespace umbra {

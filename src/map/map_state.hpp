@@ -14,8 +14,8 @@
 #include <optional>
 
 #include "integrate/integrator.hpp"
+#include "core/read_gate.hpp"
 #include "map/change_journal.hpp"
-#include "map/read_gate.hpp"
 #include "tree/occupancy_tree.hpp"
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/log_odds.hpp"

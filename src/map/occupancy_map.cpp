@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "map/make_node.hpp"
+#include "tree/make_node.hpp"
 #include "map/map_state.hpp"
 
 namespace umbra {

@@ -1,4 +1,5 @@
-// Collision checks of regions and segments (OccupancyMap::is_free).
+// Collision checks of regions and segments on a tree (the algorithms behind
+// OccupancyMap::is_free, which holds the map for reading around them).
 //
 // A region (box, sphere, oriented box, capsule) is checked by one descent
 // that only follows nodes holding something blocking (BlockingRule) and
@@ -12,17 +13,19 @@
 //
 // A segment is its ray walk (shapes.hpp) looked up with BlockingLookup, in
 // walk order, so the blocking node reported is the first along it.
+#include "query/collision_check.hpp"
+
 #include <algorithm>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
-#include "map/map_access.hpp"
 #include "query/blocking_lookup.hpp"
-#include "query/exact_dda.hpp"
 #include "query/geometry.hpp"
 #include "query/query_walk.hpp"
-#include "umbra/map/occupancy_map.hpp"
+#include "ray/exact_dda.hpp"
+#include "tree/make_node.hpp"
 
 namespace umbra {
 namespace {
@@ -177,13 +180,12 @@ BlockingRule rule_of(const OccupancyTree& tree, const CollisionOptions& options)
 }
 
 template <typename Shape>
-CollisionResult check_region(const OccupancyMap& map, const Shape& shape, const CollisionOptions& options) {
+CollisionResult check_region(const OccupancyTree& tree, const Grid& grid, const Shape& shape,
+                             const CollisionOptions& options) {
   shape.validate();
-  const KeyBounds bounds = key_bounds(map.grid(), bounds_of(shape), name_of(shape));
-  return detail::MapAccess::read(map, [&](const OccupancyTree& tree) {
-    const QueryScope scope = detail::scope_of(map, options.depth);
-    return RegionCheck<Shape>(scope, rule_of(tree, options), shape, bounds).run();
-  });
+  const KeyBounds bounds = key_bounds(grid, bounds_of(shape), name_of(shape));
+  const QueryScope scope = detail::scope_of(tree, grid, options.depth);
+  return RegionCheck<Shape>(scope, rule_of(tree, options), shape, bounds).run();
 }
 
 /// A segment's walk; throws for a bad segment or one reaching outside the map.
@@ -197,81 +199,44 @@ SegmentWalk segment_walk(const Grid& grid, const Segment& segment) {
   return {grid, from, from_key, to, to_key};
 }
 
-CollisionResult check_segment(const OccupancyMap& map, const Segment& segment, const CollisionOptions& options) {
-  SegmentWalk walk = segment_walk(map.grid(), segment);
-  return detail::MapAccess::read(map, [&](const OccupancyTree& tree) {
-    const QueryScope scope = detail::scope_of(map, options.depth);
-    BlockingLookup lookup(scope, rule_of(tree, options));
-    CollisionResult result;
-    // Stops at the first blocking voxel; jumps over each node found to hold
-    // nothing blocking (from 2^3 voxels up).
-    for (; !walk.done(); walk.next(lookup.clear_depth())) {
-      NodeRef blocking{};
-      if (lookup.blocks(walk.code(), &blocking)) {
-        result.free = false;
-        result.blocking = detail::make_node(tree, map.grid(), blocking, walk.code());
-        break;
-      }
+CollisionResult check_segment(const OccupancyTree& tree, const Grid& grid, const Segment& segment,
+                              const CollisionOptions& options) {
+  SegmentWalk walk = segment_walk(grid, segment);
+  const QueryScope scope = detail::scope_of(tree, grid, options.depth);
+  BlockingLookup lookup(scope, rule_of(tree, options));
+  CollisionResult result;
+  // Stops at the first blocking voxel; jumps over each node found to hold
+  // nothing blocking (from 2^3 voxels up).
+  for (; !walk.done(); walk.next(lookup.clear_depth())) {
+    NodeRef blocking{};
+    if (lookup.blocks(walk.code(), &blocking)) {
+      result.free = false;
+      result.blocking = detail::make_node(tree, grid, blocking, walk.code());
+      break;
     }
-    return result;
-  });
-}
-
-/// Many checks, holding the map for reading a chunk at a time (a writer
-/// waits for one chunk, not for the whole batch).
-template <typename Shape, typename Check>
-void check_many(const OccupancyMap& map, std::span<const Shape> shapes, std::span<std::uint8_t> free,
-                const Check& check) {
-  if (free.size() != shapes.size()) {
-    throw std::invalid_argument("is_free: " + std::to_string(shapes.size()) + " shapes but room for " +
-                                std::to_string(free.size()) + " answers");
   }
-  constexpr std::size_t kChunk = 256;
-  for (std::size_t begin = 0; begin < shapes.size(); begin += kChunk) {
-    const std::size_t end = std::min(shapes.size(), begin + kChunk);
-    detail::MapAccess::read(map, [&](const OccupancyTree&) {
-      for (std::size_t i = begin; i < end; ++i) free[i] = check(shapes[i]).free ? 1 : 0;
-    });
-  }
+  return result;
 }
 
 }  // namespace
 
-CollisionResult OccupancyMap::is_free(const Aabb& box, const CollisionOptions& options) const {
-  return check_region(*this, box, options);
-}
-CollisionResult OccupancyMap::is_free(const Sphere& sphere, const CollisionOptions& options) const {
-  return check_region(*this, sphere, options);
-}
-CollisionResult OccupancyMap::is_free(const OrientedBox& box, const CollisionOptions& options) const {
-  return check_region(*this, box, options);
-}
-CollisionResult OccupancyMap::is_free(const Capsule& capsule, const CollisionOptions& options) const {
-  return check_region(*this, capsule, options);
-}
-CollisionResult OccupancyMap::is_free(const Segment& segment, const CollisionOptions& options) const {
-  return check_segment(*this, segment, options);
-}
+namespace detail {
 
-void OccupancyMap::is_free(std::span<const Aabb> boxes, std::span<std::uint8_t> free,
-                           const CollisionOptions& options) const {
-  check_many(*this, boxes, free, [&](const Aabb& b) { return check_region(*this, b, options); });
+template <CollisionShape Shape>
+CollisionResult check_collision(const OccupancyTree& tree, const Grid& grid, const Shape& shape,
+                                const CollisionOptions& options) {
+  if constexpr (std::is_same_v<Shape, Segment>) {
+    return check_segment(tree, grid, shape, options);
+  } else {
+    return check_region(tree, grid, shape, options);
+  }
 }
-void OccupancyMap::is_free(std::span<const Sphere> spheres, std::span<std::uint8_t> free,
-                           const CollisionOptions& options) const {
-  check_many(*this, spheres, free, [&](const Sphere& s) { return check_region(*this, s, options); });
-}
-void OccupancyMap::is_free(std::span<const OrientedBox> boxes, std::span<std::uint8_t> free,
-                           const CollisionOptions& options) const {
-  check_many(*this, boxes, free, [&](const OrientedBox& b) { return check_region(*this, b, options); });
-}
-void OccupancyMap::is_free(std::span<const Capsule> capsules, std::span<std::uint8_t> free,
-                           const CollisionOptions& options) const {
-  check_many(*this, capsules, free, [&](const Capsule& c) { return check_region(*this, c, options); });
-}
-void OccupancyMap::is_free(std::span<const Segment> segments, std::span<std::uint8_t> free,
-                           const CollisionOptions& options) const {
-  check_many(*this, segments, free, [&](const Segment& s) { return check_segment(*this, s, options); });
-}
+template CollisionResult check_collision(const OccupancyTree&, const Grid&, const Aabb&, const CollisionOptions&);
+template CollisionResult check_collision(const OccupancyTree&, const Grid&, const Sphere&, const CollisionOptions&);
+template CollisionResult check_collision(const OccupancyTree&, const Grid&, const OrientedBox&,
+                                         const CollisionOptions&);
+template CollisionResult check_collision(const OccupancyTree&, const Grid&, const Capsule&, const CollisionOptions&);
+template CollisionResult check_collision(const OccupancyTree&, const Grid&, const Segment&, const CollisionOptions&);
 
+}  // namespace detail
 }  // namespace umbra

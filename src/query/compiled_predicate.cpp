@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "integrate/ray_walker.hpp"
+#include "ray/voxel_walk.hpp"
 
 namespace umbra::detail {
 

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "core/memory_budget.hpp"
-#include "integrate/ray_walker.hpp"
+#include "ray/voxel_walk.hpp"
 
 namespace umbra::detail {
 namespace {

@@ -1,5 +1,6 @@
-// project_to_grid (umbra/query/navigation_grid.hpp): two walks over the
-// octree nodes that meet the band.
+// project_tree_to_grid, the algorithm behind project_to_grid
+// (umbra/query/navigation_grid.hpp; src/map/map_queries.cpp holds the map
+// for reading around it): two walks over the octree nodes that meet the band.
 //
 // Every node tells, from its summary alone, which of the three states its
 // voxels take: occupied (value above the occupied threshold), free
@@ -16,7 +17,7 @@
 // be opened unless one of the first two holds: its states may come from
 // voxels outside the band. A node of depth 1 is opened inline (its eight
 // voxels classified in a loop, no call each).
-#include "umbra/query/navigation_grid.hpp"
+#include "query/projection.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -25,7 +26,6 @@
 #include <string>
 
 #include "core/memory_budget.hpp"
-#include "map/map_access.hpp"
 #include "query/node_context.hpp"
 #include "tree/occupancy_tree.hpp"
 
@@ -196,9 +196,10 @@ GridCell cell_value(std::uint8_t states, ProjectionRule rule) {
 
 }  // namespace
 
-NavigationGrid project_to_grid(const OccupancyMap& map, const ProjectionOptions& options) {
+namespace detail {
+
+NavigationGrid project_tree_to_grid(const OccupancyTree& tree, const Grid& grid, const ProjectionOptions& options) {
   options.validate();
-  const Grid& grid = map.grid();
   if (options.depth > grid.depth_levels()) {
     throw std::invalid_argument("depth must be at most the map's depth_levels " +
                                 std::to_string(grid.depth_levels()) + ", got " + std::to_string(options.depth));
@@ -219,20 +220,16 @@ NavigationGrid project_to_grid(const OccupancyMap& map, const ProjectionOptions&
   result.resolution = grid.node_size(options.depth);
   CellBlock extent{};
   std::vector<std::uint8_t> states;
-  const bool known = detail::MapAccess::read(map, [&](const OccupancyTree& tree) {
-    Projection projection(tree, options.depth, band_lo, band_hi);
-    if (!projection.find_extent(extent)) return false;
-    // Two bytes a cell (the states, then the values): a band known over a
-    // large area at a fine depth is refused before it is allocated.
-    const std::uint64_t cells = std::uint64_t{extent.x1 - extent.x0 + 1} * (extent.y1 - extent.y0 + 1);
-    detail::require_memory("project_to_grid",
-                           "a grid of " + std::to_string(extent.x1 - extent.x0 + 1) + " x " +
-                               std::to_string(extent.y1 - extent.y0 + 1) + " cells",
-                           2 * cells);
-    states = projection.collect_states(extent);
-    return true;
-  });
-  if (!known) return result;
+  Projection projection(tree, options.depth, band_lo, band_hi);
+  if (!projection.find_extent(extent)) return result;
+  // Two bytes a cell (the states, then the values): a band known over a
+  // large area at a fine depth is refused before it is allocated.
+  const std::uint64_t cells = std::uint64_t{extent.x1 - extent.x0 + 1} * (extent.y1 - extent.y0 + 1);
+  require_memory("project_to_grid",
+                 "a grid of " + std::to_string(extent.x1 - extent.x0 + 1) + " x " +
+                     std::to_string(extent.y1 - extent.y0 + 1) + " cells",
+                 2 * cells);
+  states = projection.collect_states(extent);
   result.width = extent.x1 - extent.x0 + 1;
   result.height = extent.y1 - extent.y0 + 1;
   const Vec3d corner = grid.min_corner(Key{extent.x0 << options.depth, extent.y0 << options.depth, 0});
@@ -244,4 +241,5 @@ NavigationGrid project_to_grid(const OccupancyMap& map, const ProjectionOptions&
   return result;
 }
 
+}  // namespace detail
 }  // namespace umbra

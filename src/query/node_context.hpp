@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-#include "map/make_node.hpp"
+#include "tree/make_node.hpp"
 #include "tree/occupancy_tree.hpp"
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/grid.hpp"

@@ -5,17 +5,16 @@
 #include <stdexcept>
 #include <string>
 
-#include "map/map_access.hpp"
 #include "query/geometry.hpp"
 
 namespace umbra::detail {
 
-QueryScope scope_of(const OccupancyMap& map, int depth) {
-  if (depth < 0 || depth > map.depth_levels()) {
+QueryScope scope_of(const OccupancyTree& tree, const Grid& grid, int depth) {
+  if (depth < 0 || depth > grid.depth_levels()) {
     throw std::out_of_range("query depth " + std::to_string(depth) + " is outside [0, " +
-                            std::to_string(map.depth_levels()) + "]");
+                            std::to_string(grid.depth_levels()) + "]");
   }
-  return {&MapAccess::tree_unlocked(map), &map.grid(), depth};
+  return {&tree, &grid, depth};
 }
 
 // --- the depth-first walk ---------------------------------------------------------
@@ -48,10 +47,11 @@ const NodeContext* PredicateWalk::next() {
   return nullptr;
 }
 
-QueryWalk::QueryWalk(const OccupancyMap& map, const Predicate& predicate, int depth)
-    : lock_(MapAccess::gate(map)),
+QueryWalk::QueryWalk(const ReadGate& gate, const OccupancyTree& tree, const Grid& grid, const Predicate& predicate,
+                     int depth)
+    : lock_(gate),
       predicate_(predicate),
-      scope_(scope_of(map, depth)),
+      scope_(scope_of(tree, grid, depth)),
       compiled_(predicate_, scope_),
       walk_(scope_, compiled_) {}
 
@@ -73,11 +73,11 @@ std::size_t QueryWalk::count_rest() {
 
 // --- nearest first ------------------------------------------------------------------
 
-NearestWalk::NearestWalk(const OccupancyMap& map, Vec3d point, const Predicate& predicate, int depth,
-                         double max_distance)
-    : lock_(MapAccess::gate(map)),
+NearestWalk::NearestWalk(const ReadGate& gate, const OccupancyTree& tree, const Grid& grid, Vec3d point,
+                         const Predicate& predicate, int depth, double max_distance)
+    : lock_(gate),
       predicate_(predicate),
-      scope_(scope_of(map, depth)),
+      scope_(scope_of(tree, grid, depth)),
       compiled_(predicate_, scope_),
       point_(point) {
   if (!point.is_finite()) throw std::invalid_argument("nearest query: the point is not finite");

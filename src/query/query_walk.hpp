@@ -8,7 +8,8 @@
 // from a point to each node's cube: a child's cube lies inside its
 // parent's, so nodes come out nearest first.
 // Cost: O(visited nodes) with one small allocation per growth of the stack;
-// the walk holds no lock itself (QueryWalk and NearestWalk do).
+// the walk holds no lock itself (QueryWalk and NearestWalk do: they read a
+// tree behind the map's ReadGate, which they are given with it).
 #pragma once
 
 #include <cstddef>
@@ -16,10 +17,9 @@
 #include <queue>
 #include <vector>
 
-#include "map/read_gate.hpp"
+#include "core/read_gate.hpp"
 #include "query/compiled_predicate.hpp"
 #include "query/node_context.hpp"
-#include "umbra/map/occupancy_map.hpp"
 #include "umbra/query/query_range.hpp"
 
 namespace umbra::detail {
@@ -42,10 +42,10 @@ class PredicateWalk {
   NodeContext node_{};
 };
 
-/// A query's state: the map held for reading, the predicate bound to it, the walk.
+/// A query's state: the tree held for reading (through its gate), the predicate bound to it, the walk.
 class QueryWalk {
  public:
-  QueryWalk(const OccupancyMap& map, const Predicate& predicate, int depth);
+  QueryWalk(const ReadGate& gate, const OccupancyTree& tree, const Grid& grid, const Predicate& predicate, int depth);
   bool advance();
   [[nodiscard]] const Node& current() const { return current_; }
   /// The matches left, without building Nodes.
@@ -62,7 +62,8 @@ class QueryWalk {
 
 class NearestWalk {
  public:
-  NearestWalk(const OccupancyMap& map, Vec3d point, const Predicate& predicate, int depth, double max_distance);
+  NearestWalk(const ReadGate& gate, const OccupancyTree& tree, const Grid& grid, Vec3d point,
+              const Predicate& predicate, int depth, double max_distance);
   bool advance();
   [[nodiscard]] const NearNode& current() const { return current_; }
 
@@ -88,7 +89,7 @@ class NearestWalk {
   NearNode current_;
 };
 
-/// The scope of a query of `map` at `depth`; throws std::out_of_range for a bad depth.
-QueryScope scope_of(const OccupancyMap& map, int depth);
+/// The scope of a query of `tree` at `depth`; throws std::out_of_range for a bad depth.
+QueryScope scope_of(const OccupancyTree& tree, const Grid& grid, int depth);
 
 }  // namespace umbra::detail

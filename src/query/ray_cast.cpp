@@ -1,4 +1,5 @@
-// Ray casts (OccupancyMap::cast_ray and cast_ray_octomap).
+// Ray casts on a tree (the algorithms behind OccupancyMap::cast_ray and
+// cast_ray_octomap, which hold the map for reading around them).
 //
 // Both step through the voxels a ray passes exactly as OctoMap's castRay
 // does (float origin and normalised float direction, double tMax/tDelta
@@ -12,6 +13,8 @@
 // voxel); cast_ray_octomap keeps OctoMap's rules: the origin voxel is
 // checked first, the range is the distance to each voxel's centre, an
 // unknown voxel ends an unsuccessful cast unless unknown space is ignored.
+#include "query/ray_cast.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -19,12 +22,11 @@
 #include <string>
 
 #include "core/assert.hpp"
-#include "integrate/ray_walker.hpp"
-#include "map/map_access.hpp"
 #include "query/blocking_lookup.hpp"
-#include "query/exact_dda.hpp"
 #include "query/query_walk.hpp"
-#include "umbra/map/occupancy_map.hpp"
+#include "ray/exact_dda.hpp"
+#include "ray/ray_direction.hpp"
+#include "tree/make_node.hpp"
 
 namespace umbra {
 namespace {
@@ -66,70 +68,70 @@ CastStart prepare(const Grid& grid, Vec3d origin, Vec3d direction) {
 
 }  // namespace
 
-RayHit OccupancyMap::cast_ray(Vec3d origin, Vec3d direction, const RayCastOptions& options) const {
+namespace detail {
+
+RayHit cast_ray(const OccupancyTree& tree, const Grid& grid, Vec3d origin, Vec3d direction,
+                const RayCastOptions& options) {
   if (std::isnan(options.max_range)) throw std::invalid_argument("ray cast: max_range is NaN");
-  const CastStart start = prepare(grid_, origin, direction);
-  return detail::MapAccess::read(*this, [&](const OccupancyTree& tree) {
-    const detail::QueryScope scope = detail::scope_of(*this, options.depth);
-    detail::BlockingLookup lookup(scope, {tree.thresholds(), options.stop_at_unknown});
-    ExactDda stepper(grid_, start.origin, start.origin_key, start.direction, ExactDda::HalfVoxel::kDouble);
-    const bool limited = options.max_range > 0.0;
-    const double limit = limited ? options.max_range : std::numeric_limits<double>::infinity();
-    double entered = 0.0;
-    RayHit hit;
-    for (;;) {
-      if (limited && entered > options.max_range) return hit;
-      const std::uint64_t code = stepper.code();
-      NodeRef node{};
-      if (lookup.blocks(code, &node)) {
-        hit.hit = true;
-        hit.node = detail::make_node(tree, grid_, node, code);
-        hit.distance = entered;
-        hit.point = Vec3d(start.origin) + Vec3d(start.direction) * entered;
-        return hit;
-      }
-      // Inside a node holding nothing that stops the ray (from 2^3 voxels
-      // up), the cast jumps to the first voxel past it.
-      if (lookup.clear_depth() >= 1) {
-        if (stepper.leave_node(lookup.clear_depth(), limit, entered) != ExactDda::Left::kOut) return hit;
-      } else if (!stepper.advance(entered)) {
-        return hit;
-      }
+  const CastStart start = prepare(grid, origin, direction);
+  const QueryScope scope = scope_of(tree, grid, options.depth);
+  BlockingLookup lookup(scope, {tree.thresholds(), options.stop_at_unknown});
+  ExactDda stepper(grid, start.origin, start.origin_key, start.direction, ExactDda::HalfVoxel::kDouble);
+  const bool limited = options.max_range > 0.0;
+  const double limit = limited ? options.max_range : std::numeric_limits<double>::infinity();
+  double entered = 0.0;
+  RayHit hit;
+  for (;;) {
+    if (limited && entered > options.max_range) return hit;
+    const std::uint64_t code = stepper.code();
+    NodeRef node{};
+    if (lookup.blocks(code, &node)) {
+      hit.hit = true;
+      hit.node = make_node(tree, grid, node, code);
+      hit.distance = entered;
+      hit.point = Vec3d(start.origin) + Vec3d(start.direction) * entered;
+      return hit;
     }
-  });
+    // Inside a node holding nothing that stops the ray (from 2^3 voxels
+    // up), the cast jumps to the first voxel past it.
+    if (lookup.clear_depth() >= 1) {
+      if (stepper.leave_node(lookup.clear_depth(), limit, entered) != ExactDda::Left::kOut) return hit;
+    } else if (!stepper.advance(entered)) {
+      return hit;
+    }
+  }
 }
 
-bool OccupancyMap::cast_ray_octomap(Vec3f origin, Vec3f direction, Vec3f& end, bool ignore_unknown,
-                                    double max_range) const {
-  const CastStart start = prepare(grid_, Vec3d(origin), Vec3d(direction));
-  return detail::MapAccess::read(*this, [&](const OccupancyTree& tree) {
-    const LogOddsThresholds& t = tree.thresholds();
-    ExactDda stepper(grid_, start.origin, start.origin_key, start.direction, ExactDda::HalfVoxel::kDouble);
-    const bool limited = max_range > 0.0;
-    const double max_range_squared = max_range * max_range;
-    auto state_of = [&](Key key) { return t.classify(tree.find(morton::encode(key), 0).log_odds); };
-    // The origin's own voxel first.
-    end = grid_.center_f(start.origin_key);
-    const OccupancyState first = state_of(start.origin_key);
-    if (first == OccupancyState::occupied) return true;
-    if (first == OccupancyState::unknown && !ignore_unknown) return false;
-    double entered = 0.0;
-    for (;;) {
-      if (!stepper.advance(entered)) return false;  // OctoMap: "hit bounds", end stays the last voxel
-      end = grid_.center_f(stepper.key());
-      if (limited) {
-        double distance_squared = 0.0;
-        for (int axis = 0; axis < 3; ++axis) {
-          const float d = end[axis] - origin[axis];
-          distance_squared += d * d;  // float product, double sum, as OctoMap
-        }
-        if (distance_squared > max_range_squared) return false;
+bool cast_ray_octomap(const OccupancyTree& tree, const Grid& grid, Vec3f origin, Vec3f direction, Vec3f& end,
+                      bool ignore_unknown, double max_range) {
+  const CastStart start = prepare(grid, Vec3d(origin), Vec3d(direction));
+  const LogOddsThresholds& t = tree.thresholds();
+  ExactDda stepper(grid, start.origin, start.origin_key, start.direction, ExactDda::HalfVoxel::kDouble);
+  const bool limited = max_range > 0.0;
+  const double max_range_squared = max_range * max_range;
+  auto state_of = [&](Key key) { return t.classify(tree.find(morton::encode(key), 0).log_odds); };
+  // The origin's own voxel first.
+  end = grid.center_f(start.origin_key);
+  const OccupancyState first = state_of(start.origin_key);
+  if (first == OccupancyState::occupied) return true;
+  if (first == OccupancyState::unknown && !ignore_unknown) return false;
+  double entered = 0.0;
+  for (;;) {
+    if (!stepper.advance(entered)) return false;  // OctoMap: "hit bounds", end stays the last voxel
+    end = grid.center_f(stepper.key());
+    if (limited) {
+      double distance_squared = 0.0;
+      for (int axis = 0; axis < 3; ++axis) {
+        const float d = end[axis] - origin[axis];
+        distance_squared += d * d;  // float product, double sum, as OctoMap
       }
-      const OccupancyState state = state_of(stepper.key());
-      if (state == OccupancyState::occupied) return true;
-      if (state == OccupancyState::unknown && !ignore_unknown) return false;
+      if (distance_squared > max_range_squared) return false;
     }
-  });
+    const OccupancyState state = state_of(stepper.key());
+    if (state == OccupancyState::occupied) return true;
+    if (state == OccupancyState::unknown && !ignore_unknown) return false;
+  }
 }
 
+}  // namespace detail
 }  // namespace umbra

@@ -13,7 +13,7 @@
 #include "core/thread_pool.hpp"
 #include "core/voxel_codes.hpp"
 #include "integrate/color_samples.hpp"
-#include "integrate/ray_walker.hpp"
+#include "ray/ray_direction.hpp"
 
 namespace umbra {
 namespace {

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "integrate/end_voxels.hpp"
-#include "umbra/map/insert_options.hpp"
+#include "umbra/integrate/insert_options.hpp"
 
 namespace umbra {
 namespace {

@@ -144,7 +144,7 @@ TEST(OctomapDifferential, RaysAlongFacesAndEdgesIntoTheNeighbourVoxelAndHairThin
   // log-odds, and no voxel known to umbra that OctoMap does not know.
   // Rays whose squared length underflows to 0 are left out: liboctomap
   // 1.9.7 crashes on them (it walks until its key buffer overflows; umbra
-  // stops at once, tests/integrate/ray_walker_test.cpp and hostile_rays_test.cpp).
+  // stops at once, tests/ray/voxel_walk_test.cpp and hostile_rays_test.cpp).
   for (const double resolution : {0.1, 0.5}) {
     const auto r = static_cast<float>(resolution);
     const std::vector<float> values = {0.0f,     -0.0f,   r,       -r,      2 * r,   -3 * r,  0.5f * r,

@@ -24,7 +24,7 @@
 #include <gtest/gtest.h>
 
 #include "umbra/map/occupancy_map.hpp"
-#include "umbra/query/distance_field.hpp"
+#include "umbra/field/distance_field.hpp"
 #include "umbra/sim/lidar.hpp"
 #include "umbra/sim/scene.hpp"
 

@@ -16,7 +16,7 @@
 #include "support/cli_commands.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
-#include "umbra/query/distance_field.hpp"
+#include "umbra/field/distance_field.hpp"
 
 namespace umbra {
 namespace {

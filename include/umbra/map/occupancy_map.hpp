@@ -48,8 +48,8 @@
 #include "umbra/core/grid.hpp"
 #include "umbra/core/log_odds.hpp"
 #include "umbra/core/vec3.hpp"
-#include "umbra/map/depth_image.hpp"
-#include "umbra/map/insert_options.hpp"
+#include "umbra/integrate/depth_image.hpp"
+#include "umbra/integrate/insert_options.hpp"
 #include "umbra/query/collision.hpp"
 #include "umbra/query/information_gain.hpp"
 #include "umbra/query/predicate.hpp"
@@ -221,17 +221,11 @@ class OccupancyMap {
   [[nodiscard]] CollisionResult is_free(const OrientedBox& box, const CollisionOptions& options = {}) const;
   [[nodiscard]] CollisionResult is_free(const Capsule& capsule, const CollisionOptions& options = {}) const;
   [[nodiscard]] CollisionResult is_free(const Segment& segment, const CollisionOptions& options = {}) const;
-  /// Many checks at once: free[i] = 1 when shapes[i] is free, else 0 (the
-  /// sizes must match). The map is held for reading a chunk at a time.
-  void is_free(std::span<const Aabb> boxes, std::span<std::uint8_t> free, const CollisionOptions& options = {}) const;
-  void is_free(std::span<const Sphere> spheres, std::span<std::uint8_t> free,
-               const CollisionOptions& options = {}) const;
-  void is_free(std::span<const OrientedBox> boxes, std::span<std::uint8_t> free,
-               const CollisionOptions& options = {}) const;
-  void is_free(std::span<const Capsule> capsules, std::span<std::uint8_t> free,
-               const CollisionOptions& options = {}) const;
-  void is_free(std::span<const Segment> segments, std::span<std::uint8_t> free,
-               const CollisionOptions& options = {}) const;
+  /// Many checks at once, of any CollisionShape: free[i] = 1 when shapes[i]
+  /// is free, else 0 (the sizes must match). The map is held for reading a
+  /// chunk at a time.
+  template <CollisionShape Shape>
+  void is_free(std::span<const Shape> shapes, std::span<std::uint8_t> free, const CollisionOptions& options = {}) const;
   /// The first voxel (or depth-`options.depth` node) along the ray from
   /// `origin` in `direction` that is occupied (or unknown, when asked),
   /// within options.max_range; the voxels are those OctoMap's castRay steps

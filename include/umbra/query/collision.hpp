@@ -10,12 +10,21 @@
 // an obstacle.
 #pragma once
 
+#include <concepts>
 #include <optional>
 
+#include "umbra/core/aabb.hpp"
 #include "umbra/core/node.hpp"
 #include "umbra/core/vec3.hpp"
+#include "umbra/query/shapes.hpp"
 
 namespace umbra {
+
+/// The shapes OccupancyMap::is_free checks, one at a time or a span at once.
+template <typename Shape>
+concept CollisionShape = std::same_as<Shape, Aabb> || std::same_as<Shape, Sphere> ||
+                         std::same_as<Shape, OrientedBox> || std::same_as<Shape, Capsule> ||
+                         std::same_as<Shape, Segment>;
 
 struct CollisionOptions {
   bool unknown_is_free = false;  ///< count unknown voxels as free space

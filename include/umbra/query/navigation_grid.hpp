@@ -41,9 +41,9 @@
 #include <string_view>
 #include <vector>
 
-#include "umbra/map/occupancy_map.hpp"
-
 namespace umbra {
+
+class OccupancyMap;  // umbra/map/occupancy_map.hpp: project_to_grid takes one, defined with the map
 
 /// When a cell whose band holds no occupied voxel is free.
 enum class ProjectionRule {

@@ -1,12 +1,16 @@
-// walk_ray: the voxels a ray passes, exactly as OctoMap's computeRayKeys.
+// walk_ray: the voxels a ray passes, exactly as OctoMap's computeRayKeys,
+// stepped through Morton codes brick by brick for the integrators.
 //
-// A 3D DDA (Amanatides & Woo) from the voxel of `origin` towards the voxel of
-// `end`, visiting every voxel before the end voxel. To visit the same voxels
-// as OctoMap, the arithmetic is OctoMap's to the bit: float direction and
-// length, double tMax/tDelta, ties broken towards the later axis, and the
-// stop when the travelled distance exceeds the ray length (accumulated
-// rounding can make the walk miss the end voxel). That is why this file
-// must not be compiled with floating-point contraction (FMA) enabled.
+// The exact DDA of ray/exact_dda.hpp (its start_axis sets the walk up, and
+// the loop below chooses axes by its next_axis rule, unrolled per axis) from
+// the voxel of `origin` towards the voxel of `end`, visiting every voxel
+// before the end voxel: float direction and length (ray/ray_direction.hpp),
+// double tMax/tDelta, ties broken towards the later axis, and the stop when
+// the travelled distance exceeds the ray length (accumulated rounding can
+// make the walk miss the end voxel). What differs from ExactDda is only how
+// the current voxel is kept: as a brick code and an index (below) instead of
+// a key, the form the update batch takes, with few operations per voxel.
+// This file must not be compiled with floating-point contraction (FMA).
 //
 // walk_ray_skipping is the fast integrator's walk: the same, but at every
 // coarse node it enters it may jump over the whole node.
@@ -34,61 +38,13 @@
 #include <string>
 #include <type_traits>
 
+#include "ray/exact_dda.hpp"
+#include "ray/ray_direction.hpp"
 #include "umbra/core/grid.hpp"
 #include "umbra/core/morton.hpp"
 #include "umbra/core/vec3.hpp"
 
 namespace umbra {
-
-/// Length of a float vector rounded as OctoMap's Vector3::norm(): the squared
-/// sum in float, the square root in double.
-inline double octomap_norm(Vec3f v) {
-  const float squared = v.x * v.x + v.y * v.y + v.z * v.z;
-  return std::sqrt(static_cast<double>(squared));
-}
-
-/// A ray's normalised direction and its length, as OctoMap's computeRayKeys
-/// computes them: the float offset, octomap_norm rounded to float, a float
-/// division per component.
-struct RayDirection {
-  Vec3f unit;
-  float length;
-};
-
-/// The direction and length from `from` to `to` (two points in the map)
-/// that the ray walks use. OctoMap's arithmetic, except where it breaks:
-/// when every component of the offset is below about 2.6e-23 m (the points
-/// straddle the voxel border at coordinate 0 from a hair's breadth, e.g.
-/// (-1e-23, 1e-23, 0) from the origin) the float squared length underflows
-/// to 0, and OctoMap's division by it makes the direction infinite or NaN:
-/// its walk never reaches the end voxel and runs until its key buffer
-/// overflows (liboctomap 1.9.7 crashes). Here such a ray is normalised in
-/// double instead, and walks as OctoMap's arithmetic would with a direction
-/// that did not underflow. Its length is then at most 5e-23 m, far below
-/// the rounding of the voxel borders, so in practice it visits the origin's
-/// voxel and stops (docs/octomap-agreement.md).
-inline RayDirection ray_direction(Vec3f from, Vec3f to) {
-  const Vec3f offset = to - from;
-  const auto length = static_cast<float>(octomap_norm(offset));
-  if (length > 0.0f) return {{offset.x / length, offset.y / length, offset.z / length}, length};
-  const Vec3d exact = Vec3d(to) - Vec3d(from);
-  const double norm = exact.norm();
-  if (!(norm > 0.0)) return {{0.0f, 0.0f, 0.0f}, 0.0f};  // the same point: no direction
-  return {Vec3f(exact / norm), static_cast<float>(norm)};
-}
-
-/// The finest key of a ray's end that a caller gave in double and the walk
-/// uses rounded to float (`rounded`), as OctoMap's rays are; throws
-/// std::out_of_range naming `what` and saying so, since the float value
-/// (-3276.800048828125 for -3276.8) can lie outside the map when the given
-/// one does not.
-inline Key key_of_rounded(const Grid& grid, Vec3f rounded, const char* what) {
-  try {
-    return grid.key(Vec3d(rounded));
-  } catch (const std::out_of_range& e) {
-    throw std::out_of_range(std::string(what) + ", rounded to float as OctoMap's rays are: " + e.what());
-  }
-}
 
 namespace detail {
 
@@ -141,7 +97,6 @@ inline bool start_ray(const Grid& grid, Vec3f origin, Key origin_key, Vec3f end,
   const Vec3f direction = ray_direction.unit;
   ray.length = ray_direction.length;
 
-  const double resolution = grid.resolution();
   ray.key_limit = grid.keys_per_axis();
   // Rounding can carry the walk at most one voxel past the box spanned by
   // the two end voxels; only rays whose box touches the map's edge need the
@@ -156,7 +111,8 @@ inline bool start_ray(const Grid& grid, Vec3f origin, Key origin_key, Vec3f end,
     const float d = direction[axis];
     ray.direction[axis] = d;
     ray.inverse_direction[axis] = 1.0 / double(d);
-    const int step = d > 0.0f ? 1 : (d < 0.0f ? -1 : 0);
+    const DdaAxis dda = start_axis(grid, k0, origin[axis], d, HalfVoxel::kFloat);
+    const int step = dda.step;
     ray.key_step[axis] = step;
     const unsigned index_bits = 9u << axis;  // bits axis and axis + 3
     const std::uint64_t brick_bits = (morton::kAxisBits << axis) & ~kBrickMask;
@@ -165,15 +121,8 @@ inline bool start_ray(const Grid& grid, Vec3f origin, Key origin_key, Vec3f end,
     ray.index_wrap[axis] = step > 0 ? index_bits : 0u;
     ray.brick_fill[axis] = step > 0 ? ~brick_bits : 0;
     ray.brick_add[axis] = step > 0 ? 1 : ~std::uint64_t{0} << 6;  // -64: the brick bits are above bit 5
-    if (step != 0) {
-      double border = grid.axis_center(k0);
-      border += static_cast<float>(step * resolution * 0.5);
-      ray.t_max[axis] = (border - origin[axis]) / d;
-      ray.t_delta[axis] = resolution / std::fabs(d);
-    } else {
-      ray.t_max[axis] = std::numeric_limits<double>::max();
-      ray.t_delta[axis] = std::numeric_limits<double>::max();
-    }
+    ray.t_max[axis] = dda.t_max;
+    ray.t_delta[axis] = dda.t_delta;
   }
   return near_edge;
 }
@@ -322,7 +271,8 @@ void step_ray(const Grid& grid, int depth, RayState& ray, Sink& sink, Skip& skip
              std::min(t_max[(kAxis + 1) % 3], t_max[(kAxis + 2) % 3]) <= length;
     };
     for (;;) {
-      // OctoMap's choice: the smallest t_max, ties going to the later axis.
+      // next_axis (ray/exact_dda.hpp), unrolled so that each axis's step is
+      // its own template instance: the smallest t_max, ties to the later axis.
       bool going;
       if (t_max[0] < t_max[1]) {
         going = t_max[0] < t_max[2] ? advance.template operator()<0>() : advance.template operator()<2>();

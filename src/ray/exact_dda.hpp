@@ -1,22 +1,26 @@
-// ExactDda: OctoMap's voxel-by-voxel ray stepping (computeRayKeys, castRay),
-// with an exact jump out of a whole node.
+// The exact DDA: OctoMap's voxel-by-voxel ray stepping (computeRayKeys,
+// castRay), the one set of rules every exact walk in umbra follows, with an
+// exact jump out of a whole node.
 //
-// The stepping is OctoMap's to the bit: double t_max/t_delta per axis from
-// the origin voxel's border, the axis with the smallest t_max steps, ties
-// going to the later axis. So the walk's events (one per voxel border
-// crossed) come in the order (t value ascending, axis descending), and the
-// t value of an axis's n-th border is t_max plus t_delta added n times, each
-// addition rounded: the repeated sum, not t_max + n * t_delta, which can
-// round differently and turn a tie the other way.
+// The rules are OctoMap's to the bit: double t_max/t_delta per axis from the
+// origin voxel's border (start_axis, below: the one place they are set up;
+// ray/voxel_walk.hpp's brick-stepping walk for the integrators starts from
+// it too), the axis with the smallest t_max steps, ties going to the later
+// axis (next_axis). So the walk's events (one per voxel border crossed) come
+// in the order (t value ascending, axis descending), and the t value of an
+// axis's n-th border is t_max plus t_delta added n times, each addition
+// rounded: the repeated sum, not t_max + n * t_delta, which can round
+// differently and turn a tie the other way.
 //
-// leave_node(depth) uses that to move the walk, in one call, to the voxel
-// it would first enter outside the depth-`depth` node it is in, with the
-// t_max values it would have there: per axis it only adds t_delta the
-// number of times the walk would (a few predictable additions per border),
-// instead of choosing an axis and looking the voxel up at every step. A
-// segment or ray cast inside a node known to hold nothing blocking jumps over
-// it and visits exactly the voxels the plain walk visits outside it
-// (tests/query/exact_dda_test.cpp checks this against a copy of
+// ExactDda steps by integer keys, for the queries: leave_node(depth) uses the
+// rules above to move the walk, in one call, to the voxel it would first
+// enter outside the depth-`depth` node it is in, with the t_max values it
+// would have there: per axis it only adds t_delta the number of times the
+// walk would (a few predictable additions per border), instead of choosing
+// an axis and looking the voxel up at every step. A segment or ray cast
+// inside a node known to hold nothing blocking jumps over it and visits
+// exactly the voxels the plain walk visits outside it
+// (tests/ray/exact_dda_test.cpp checks this against a copy of
 // computeRayKeys, on rays whose crossings tie). SegmentWalk, below, is a
 // segment check's walk built on it.
 //
@@ -29,18 +33,56 @@
 #include <limits>
 
 #include "core/assert.hpp"
-#include "integrate/ray_walker.hpp"  // ray_direction
+#include "ray/ray_direction.hpp"
 #include "umbra/core/grid.hpp"
 #include "umbra/core/morton.hpp"
 #include "umbra/core/vec3.hpp"
 
 namespace umbra::detail {
 
+/// How the half-voxel from the origin voxel's centre to its border is
+/// rounded: computeRayKeys rounds it to float, castRay keeps it double.
+enum class HalfVoxel { kFloat, kDouble };
+
+/// The DDA along one axis at the origin voxel.
+struct DdaAxis {
+  int step;        // -1, 0 or +1 key per voxel border crossed
+  double t_max;    // ray parameter at the next voxel border
+  double t_delta;  // ray parameter per voxel
+};
+
+/// The DDA along one axis at the origin voxel (key `origin_key`, coordinate
+/// `origin` on this axis), heading along the normalised float `direction`
+/// component, as OctoMap sets it up: the border half a voxel from the origin
+/// voxel's centre, the parameters in double. An axis the ray does not move
+/// along never steps (t_max and t_delta the largest double).
+inline DdaAxis start_axis(const Grid& grid, std::uint32_t origin_key, float origin, float direction,
+                          HalfVoxel half_voxel) {
+  DdaAxis axis;
+  axis.step = direction > 0.0f ? 1 : (direction < 0.0f ? -1 : 0);
+  if (axis.step == 0) {
+    axis.t_max = std::numeric_limits<double>::max();
+    axis.t_delta = std::numeric_limits<double>::max();
+    return axis;
+  }
+  double border = grid.axis_center(origin_key);
+  const double half = axis.step * grid.resolution() * 0.5;
+  border += half_voxel == HalfVoxel::kFloat ? double(static_cast<float>(half)) : half;
+  axis.t_max = (border - origin) / direction;
+  axis.t_delta = grid.resolution() / std::fabs(direction);
+  return axis;
+}
+
+/// The axis whose border the walk crosses next: the smallest t_max, ties
+/// going to the later axis (OctoMap's choice).
+inline int next_axis(const double (&t_max)[3]) {
+  if (t_max[0] < t_max[1]) return t_max[0] < t_max[2] ? 0 : 2;
+  return t_max[1] < t_max[2] ? 1 : 2;
+}
+
 class ExactDda {
  public:
-  /// How the half-voxel from the origin voxel's centre to its border is
-  /// rounded: computeRayKeys rounds it to float, castRay keeps it double.
-  enum class HalfVoxel { kFloat, kDouble };
+  using HalfVoxel = detail::HalfVoxel;
 
   ExactDda() = default;
   /// At the voxel of `origin` (key `origin_key`), heading along the
@@ -50,18 +92,10 @@ class ExactDda {
         code_(morton::encode(origin_key)),
         limit_(grid.keys_per_axis()) {
     for (int axis = 0; axis < 3; ++axis) {
-      const float d = direction[axis];
-      step_[axis] = d > 0.0f ? 1 : (d < 0.0f ? -1 : 0);
-      if (step_[axis] != 0) {
-        double border = grid.axis_center(origin_key[axis]);
-        const double half = step_[axis] * grid.resolution() * 0.5;
-        border += half_voxel == HalfVoxel::kFloat ? double(static_cast<float>(half)) : half;
-        t_max_[axis] = (border - origin[axis]) / d;
-        t_delta_[axis] = grid.resolution() / std::fabs(d);
-      } else {
-        t_max_[axis] = std::numeric_limits<double>::max();
-        t_delta_[axis] = std::numeric_limits<double>::max();
-      }
+      const DdaAxis start = start_axis(grid, origin_key[axis], origin[axis], direction[axis], half_voxel);
+      step_[axis] = start.step;
+      t_max_[axis] = start.t_max;
+      t_delta_[axis] = start.t_delta;
     }
   }
 
@@ -76,12 +110,7 @@ class ExactDda {
   /// Into the next voxel; false (staying put) at the map's edge. `entered`
   /// receives the ray parameter at which the ray enters it.
   bool advance(double& entered) {
-    int dim;
-    if (t_max_[0] < t_max_[1]) {
-      dim = t_max_[0] < t_max_[2] ? 0 : 2;
-    } else {
-      dim = t_max_[1] < t_max_[2] ? 1 : 2;
-    }
+    const int dim = next_axis(t_max_);
     const std::int64_t next = key_[dim] + step_[dim];
     // A step of 0 on the chosen axis: no axis is left to move along.
     if (step_[dim] == 0 || next < 0 || next >= limit_) return false;

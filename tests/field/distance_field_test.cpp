@@ -17,7 +17,7 @@
 
 #include "field/brick_table.hpp"
 #include "umbra/map/occupancy_map.hpp"
-#include "umbra/query/distance_field.hpp"
+#include "umbra/field/distance_field.hpp"
 
 namespace umbra {
 namespace {

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "support/dense_grid.hpp"
-#include "integrate/ray_walker.hpp"
+#include "ray/voxel_walk.hpp"
 #include "umbra/core/aabb.hpp"
 
 namespace umbra {

@@ -1,4 +1,4 @@
-#include "map/read_gate.hpp"
+#include "core/read_gate.hpp"
 
 #include <algorithm>
 #include <chrono>

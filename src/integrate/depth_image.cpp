@@ -1,4 +1,4 @@
-#include "umbra/map/depth_image.hpp"
+#include "umbra/integrate/depth_image.hpp"
 
 #include <cmath>
 #include <stdexcept>

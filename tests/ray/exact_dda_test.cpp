@@ -13,7 +13,7 @@
 
 #include <gtest/gtest.h>
 
-#include "query/exact_dda.hpp"
+#include "ray/exact_dda.hpp"
 #include "support/dense_grid.hpp"
 
 namespace umbra {
