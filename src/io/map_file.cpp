@@ -13,7 +13,7 @@
 // write_file_atomically (temporary file, fsync, rename).
 #include "umbra/io/map_file.hpp"
 
-#include "atomic_file.hpp"
+#include "umbra/io/file_saving.hpp"
 #include "io/common/byte_input.hpp"
 #include "io/common/message_text.hpp"
 #include "core/memory_budget.hpp"
@@ -813,7 +813,7 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path, const 
   std::array<std::uint8_t, kChecksumBytes> trailer{};
   put_u32(trailer.data(), crc);
 
-  detail::write_file_atomically(path, {header, structure_frame, values_frame, colors_frame, trailer});
+  write_file_atomically(path, {header, structure_frame, values_frame, colors_frame, trailer}, "map");
 }
 
 MapFileInfo read_map_info(const std::filesystem::path& path) {

@@ -22,7 +22,7 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "atomic_file.hpp"
+#include "umbra/io/file_saving.hpp"
 #include "core/memory_budget.hpp"
 #include "map/map_access.hpp"
 #include "octomap_format.hpp"
@@ -428,7 +428,7 @@ void save_octomap(const OccupancyMap& map, const std::filesystem::path& path, Oc
   const EncodedFile file = encode(map, format, "cannot save '" + path.string() + "'");
   const std::span<const std::uint8_t> header(reinterpret_cast<const std::uint8_t*>(file.header.data()),
                                              file.header.size());
-  detail::write_file_atomically(path, {header, std::span<const std::uint8_t>(file.tree.bytes)});
+  write_file_atomically(path, {header, std::span<const std::uint8_t>(file.tree.bytes)}, "map");
 }
 
 }  // namespace umbra
