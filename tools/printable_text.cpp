@@ -1,6 +1,6 @@
 #include "printable_text.hpp"
 
-#include "io/common/message_text.hpp"
+#include "message_text.hpp"
 
 namespace umbra::cli {
 

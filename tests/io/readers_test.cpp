@@ -36,7 +36,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "../../src/io/lzf.hpp"
+#include "lzf.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/format_error.hpp"
 #include "umbra/io/kitti_sequence.hpp"

@@ -73,6 +73,33 @@ void write_bag(const std::filesystem::path& path, const std::vector<RosScan>& sc
   bag.close();
 }
 
+// Once ros/ registers its reader, open_scan_source reads .bag files with
+// ScanSourceOptions::topics and ::frame: the same scans as open_rosbag.
+TEST(Rosbag, RegisteredReaderIsWhatOpenScanSourceUses) {
+  const std::vector<RosScan> scans = office_scans(2);
+  const auto dir = scratch_dir();
+  write_bag(dir / "office.bag", scans, 1, kCompressions[0].second);
+  ros_io::register_rosbag_format();
+  for (const std::string topic : {"/points", "/other_points"}) {
+    ScanSourceOptions options;
+    options.topics = {topic};
+    options.frame = "map";
+    const auto registered = open_scan_source(dir / "office.bag", options);
+    const auto direct = ros_io::open_rosbag(dir / "office.bag", ros_io::RosbagOptions{{topic}, "map"});
+    Scan a;
+    Scan b;
+    std::size_t count = 0;
+    while (direct->next(b)) {
+      ASSERT_TRUE(registered->next(a));
+      EXPECT_EQ(a.points, b.points);
+      EXPECT_EQ(a.origin, b.origin);
+      ++count;
+    }
+    EXPECT_FALSE(registered->next(a));
+    EXPECT_GT(count, 0u) << topic;
+  }
+}
+
 TEST(Rosbag, ScansEqualTheSimulatorsPoints) {
   const std::vector<RosScan> scans = office_scans(4);
   const OccupancyMap reference = reference_map(scans, 0.1);

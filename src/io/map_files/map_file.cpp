@@ -14,8 +14,8 @@
 #include "umbra/io/map_file.hpp"
 
 #include "umbra/io/file_saving.hpp"
-#include "io/common/byte_input.hpp"
-#include "io/common/message_text.hpp"
+#include "byte_input.hpp"
+#include "message_text.hpp"
 #include "core/memory_budget.hpp"
 #include "map/map_access.hpp"
 

@@ -23,8 +23,8 @@
 #include <string_view>
 #include <vector>
 
-#include "io/common/byte_input.hpp"
-#include "io/common/message_text.hpp"
+#include "byte_input.hpp"
+#include "message_text.hpp"
 #include "umbra/core/pose.hpp"
 #include "umbra/core/vec3.hpp"
 #include "umbra/io/scan_source.hpp"

@@ -15,8 +15,8 @@
 #include <string_view>
 #include <vector>
 
-#include "io/common/byte_input.hpp"
-#include "io/common/message_text.hpp"
+#include "byte_input.hpp"
+#include "message_text.hpp"
 #include "umbra/io/octomap_files.hpp"
 
 namespace umbra::octomap_io {
