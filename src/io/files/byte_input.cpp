@@ -40,24 +40,25 @@ void reject_directory(const std::filesystem::path& path) {
 
 // --- InputFile ---------------------------------------------------------------
 
-InputFile::InputFile(const std::filesystem::path& path, std::string_view format) : name_(path.string()) {
+InputFile::InputFile(const std::filesystem::path& path, std::string_view format, std::string_view kind)
+    : name_(path.string()), named_(kind.empty() ? name_ : std::string(kind) + " '" + name_ + "'") {
   descriptor_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (descriptor_ < 0) throw_io("cannot open", path, errno);
+  if (descriptor_ < 0) throw_io("cannot open", named_, errno);
   struct stat info {};
   if (::fstat(descriptor_, &info) != 0) {
     const int error = errno;
     ::close(descriptor_);
-    throw_io("cannot open", path, error);
+    throw_io("cannot open", named_, error);
   }
   if (S_ISDIR(info.st_mode)) {
     ::close(descriptor_);
-    throw std::runtime_error("cannot open " + name_ + ": it is a directory");
+    throw std::runtime_error("cannot open " + named_ + ": it is a directory");
   }
   if (!S_ISREG(info.st_mode)) {
     ::close(descriptor_);
     std::string reason = "not a regular file";
     if (!format.empty()) reason += " (" + std::string(format) + " files are read with seeks)";
-    throw std::runtime_error("cannot open " + name_ + ": " + reason);
+    throw std::runtime_error("cannot open " + named_ + ": " + reason);
   }
   size_ = static_cast<std::uint64_t>(info.st_size);
 }
@@ -73,7 +74,7 @@ std::size_t InputFile::read_at(std::uint64_t offset, void* out, std::size_t capa
     const ::ssize_t got = ::pread(descriptor_, bytes + done, capacity - done, static_cast<off_t>(offset + done));
     if (got < 0) {
       if (errno == EINTR) continue;
-      throw_io("cannot read", name_, errno);
+      throw_io("cannot read", named_, errno);
     }
     if (got == 0) break;
     done += static_cast<std::size_t>(got);

@@ -39,8 +39,9 @@ class InputFile {
   /// Throws std::runtime_error("cannot open FILE: reason") for a missing file,
   /// a directory or anything else that is not a readable regular file; for
   /// the last, a non-empty `format` adds why: "not a regular file (FORMAT
-  /// files are read with seeks)".
-  explicit InputFile(const std::filesystem::path& path, std::string_view format = {});
+  /// files are read with seeks)". A non-empty `kind` names the file as
+  /// "KIND 'FILE'" in these messages (map files: "cannot open map file 'a.bt': ...").
+  explicit InputFile(const std::filesystem::path& path, std::string_view format = {}, std::string_view kind = {});
   InputFile(const InputFile&) = delete;
   InputFile& operator=(const InputFile&) = delete;
   ~InputFile();
@@ -55,6 +56,7 @@ class InputFile {
 
  private:
   std::string name_;
+  std::string named_;  // name_ as the messages of this class give it
   int descriptor_ = -1;
   std::uint64_t size_ = 0;
 };

@@ -14,8 +14,8 @@ namespace umbra::io_detail {
 
 std::string errno_text(int error) { return std::generic_category().message(error); }
 
-void throw_io(std::string_view what, const std::filesystem::path& path, int error) {
-  throw std::runtime_error(std::string(what) + " " + path.string() + ": " + errno_text(error));
+void throw_io(std::string_view what, std::string_view file, int error) {
+  throw std::runtime_error(std::string(what) + " " + std::string(file) + ": " + errno_text(error));
 }
 
 namespace {

@@ -16,8 +16,8 @@ namespace umbra::io_detail {
 /// The system's text for an errno value, e.g. "No such file or directory".
 std::string errno_text(int error);
 
-/// Throws std::runtime_error("WHAT PATH: reason"), e.g. "cannot read a.bt: Input/output error".
-[[noreturn]] void throw_io(std::string_view what, const std::filesystem::path& path, int error);
+/// Throws std::runtime_error("WHAT FILE: reason"), e.g. "cannot read a.bt: Input/output error".
+[[noreturn]] void throw_io(std::string_view what, std::string_view file, int error);
 
 /// How escape() shows a byte outside printable ASCII (0x20 to 0x7e).
 enum class Unprintable : std::uint8_t {

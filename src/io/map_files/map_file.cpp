@@ -817,7 +817,7 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path, const 
 }
 
 MapFileInfo read_map_info(const std::filesystem::path& path) {
-  const io_detail::InputFile file(path);
+  const io_detail::InputFile file(path, {}, "map file");
   std::array<std::uint8_t, kHeaderBytes> head{};
   const std::size_t n = file.read_at(0, head.data(), head.size());
   return decode_header(path.string(), std::span(head).first(n), file.size());
@@ -825,7 +825,7 @@ MapFileInfo read_map_info(const std::filesystem::path& path) {
 
 OccupancyMap load_map(const std::filesystem::path& path) {
   const std::string name = path.string();
-  const io_detail::InputFile file(path);
+  const io_detail::InputFile file(path, {}, "map file");
 
   // 1. The header, checked against the real file size before anything is allocated.
   std::array<std::uint8_t, kHeaderBytes> head{};

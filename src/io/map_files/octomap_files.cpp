@@ -368,7 +368,7 @@ EncodedFile encode(const OccupancyMap& map, OctoMapFormat format, const std::str
 const char* to_string(OctoMapFormat format) { return format == OctoMapFormat::bt ? "bt" : "ot"; }
 
 OccupancyMap load_octomap(const std::filesystem::path& path, const SensorModel& sensor) {
-  const octomap_io::InputFile file(path);
+  const octomap_io::InputFile file(path, {}, "map file");
   octomap_io::ByteReader in(file, 0);
   return decode(in, path.string(), sensor);
 }
@@ -379,7 +379,7 @@ OccupancyMap decode_octomap(std::span<const std::uint8_t> bytes, const std::stri
 }
 
 OctoMapFileInfo read_octomap_info(const std::filesystem::path& path) {
-  const octomap_io::InputFile file(path);
+  const octomap_io::InputFile file(path, {}, "map file");
   octomap_io::ByteReader in(file, 0);
   const std::string name = path.string();
   const octomap_io::Header header = octomap_io::parse_header(in, name);
