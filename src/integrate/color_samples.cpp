@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/assert.hpp"
 #include "core/radix_sort.hpp"
 #include "core/voxel_codes.hpp"
 #include "integrate/ray_walker.hpp"
@@ -30,17 +31,21 @@ void for_each_part(ThreadPool* pool, std::size_t parts, const Work& work) {
 }
 
 /// The samples of points [begin, end), in scan order.
-std::vector<Sample> samples_of(const Grid& grid, std::span<const Vec3f> points, std::size_t begin, std::size_t end,
-                               const std::optional<KeyBox>& box) {
+std::vector<Sample> samples_of(const Grid& grid, std::span<const Vec3f> points, std::span<const std::uint64_t> known_codes,
+                               std::size_t begin, std::size_t end, const std::optional<KeyBox>& box) {
   std::vector<Sample> samples;
   samples.reserve(end - begin);
   constexpr std::size_t kBlock = 1024;
   std::array<std::uint64_t, kBlock> codes;
   for (std::size_t block = begin; block < end; block += kBlock) {
     const std::size_t size = std::min(kBlock, end - block);
-    voxel_codes(grid, points.subspan(block, size), codes.data());
+    const std::uint64_t* block_codes = known_codes.data() + block;
+    if (known_codes.empty()) {
+      voxel_codes(grid, points.subspan(block, size), codes.data());
+      block_codes = codes.data();
+    }
     for (std::size_t j = 0; j < size; ++j) {
-      const std::uint64_t code = codes[j];
+      const std::uint64_t code = block_codes[j];
       if (code >= kOutsideCode || (box && !box->contains(morton::decode(code)))) continue;
       samples.push_back({code, static_cast<std::uint32_t>(block + j)});
     }
@@ -58,7 +63,9 @@ std::size_t voxel_start(std::span<const Sample> sorted, std::size_t i) {
 
 std::vector<OccupancyTree::ColorSample> color_samples(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
                                                       std::span<const Rgb> colors, const InsertOptions& options,
-                                                      const std::optional<KeyBox>& box, ThreadPool* pool) {
+                                                      const std::optional<KeyBox>& box, ThreadPool* pool,
+                                                      std::span<const std::uint64_t> codes) {
+  UMBRA_ASSERT(codes.empty() || codes.size() == points.size());
   if (points.size() > UINT32_MAX) {
     throw std::invalid_argument("too many points in one scan: " + std::to_string(points.size()));
   }
@@ -67,7 +74,7 @@ std::vector<OccupancyTree::ColorSample> color_samples(const Grid& grid, Vec3f or
   // 1. The samples of contiguous parts of the scan, sorted as one list.
   std::vector<std::vector<Sample>> found(parts);
   for_each_part(pool, parts, [&](std::size_t p) {
-    found[p] = samples_of(grid, points, points.size() * p / parts, points.size() * (p + 1) / parts, box);
+    found[p] = samples_of(grid, points, codes, points.size() * p / parts, points.size() * (p + 1) / parts, box);
   });
   const std::vector<Sample> sorted =
       parallel_radix_sort(found, 3 * grid.depth_levels(), [](const Sample& s) { return s.code; }, pool);

@@ -27,9 +27,11 @@
 namespace umbra {
 
 /// The colour samples of a scan from `origin` (one colour per point), of the
-/// points inside `box` (when given); `pool`: null for one thread.
+/// points inside `box` (when given); `pool`: null for one thread. `codes`:
+/// the points' voxel codes (voxel_codes) when the caller has them, or empty.
 std::vector<OccupancyTree::ColorSample> color_samples(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
                                                       std::span<const Rgb> colors, const InsertOptions& options,
-                                                      const std::optional<KeyBox>& box, ThreadPool* pool);
+                                                      const std::optional<KeyBox>& box, ThreadPool* pool,
+                                                      std::span<const std::uint64_t> codes = {});
 
 }  // namespace umbra

@@ -144,54 +144,6 @@ void add_end_voxel_hits(const Grid& grid, Vec3f origin, std::span<const Vec3f> p
   stats.rays = stats.hits;
 }
 
-/// The same for the points of a depth image (`pixels`: each point's pixel,
-/// rising, in an image `width` pixels wide), each voxel decided once: a
-/// point whose voxel is its left or upper neighbour's is dropped (at 2 cm
-/// a Kinect pixel shares its voxel with both in most of the image), the
-/// rest sorted and made unique, then added in Morton order (the batch's
-/// cached path then serves most of them).
-void add_image_hits(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
-                    std::span<const std::uint32_t> pixels, int width, double max_range, const std::optional<Aabb>& box,
-                    const std::optional<KeyBox>& box_keys, UpdateBatch& batch, InsertStats& stats,
-                    std::vector<std::uint64_t>& candidates, std::vector<std::uint64_t>& row) {
-  constexpr std::size_t kBlock = 1024;
-  std::array<std::uint64_t, kBlock> codes;
-  candidates.clear();
-  row.assign(static_cast<std::size_t>(width), kNonFiniteCode);  // the code last seen in each column
-  std::uint64_t left = kNonFiniteCode;
-  std::uint32_t left_pixel = ~std::uint32_t{0};
-  std::uint32_t row_start = 0;  // first pixel of the current point's row (the pixels rise)
-  for (std::size_t block = 0; block < points.size(); block += kBlock) {
-    const std::size_t size = std::min(kBlock, points.size() - block);
-    voxel_codes(grid, points.subspan(block, size), codes.data());
-    for (std::size_t j = 0; j < size; ++j) {
-      const std::uint64_t code = codes[j];
-      const std::uint32_t pixel = pixels[block + j];
-      while (pixel - row_start >= static_cast<std::uint32_t>(width)) row_start += static_cast<std::uint32_t>(width);
-      const std::size_t column = pixel - row_start;
-      const bool beside = pixel == left_pixel + 1 && column != 0;
-      left_pixel = pixel;
-      if (code >= kOutsideCode) {
-        ++(code == kNonFiniteCode ? stats.non_finite : stats.out_of_bounds);
-        left = code;
-        row[column] = code;
-        continue;
-      }
-      // Any repeat dropped here is one already kept: only the first
-      // occurrence of a code reaches the candidates without a twin before it.
-      if (!(beside && code == left) && code != row[column]) candidates.push_back(code);
-      left = code;
-      row[column] = code;
-    }
-  }
-  radix_sort(candidates, 3 * grid.depth_levels(), [](std::uint64_t code) { return code; });
-  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-  for (const std::uint64_t code : candidates) {
-    if (add_end_voxel_hit(grid, origin, code, max_range, box, box_keys, batch, stats)) ++stats.hits;
-  }
-  stats.rays = stats.hits;
-}
-
 }  // namespace
 
 Integrator::Integrator() = default;
@@ -208,9 +160,7 @@ std::size_t Integrator::memory_bytes() const {
   std::size_t bytes = tracers_.capacity() * sizeof(tracers_[0]);
   if (pool_) bytes += sizeof(ThreadPool) + pool_->size() * sizeof(std::thread);
   for (const auto& tracer : tracers_) bytes += sizeof(RayTracer) + tracer->memory_bytes();
-  return bytes + frame_.memory_bytes() + scan_images_.memory_bytes() + image_points_.capacity() * sizeof(Vec3f) +
-         image_pixels_.capacity() * sizeof(std::uint32_t) +
-         (hit_candidates_.capacity() + hit_row_.capacity()) * sizeof(std::uint64_t);
+  return bytes + frame_.memory_bytes() + scan_images_.memory_bytes() + image_points_.memory_bytes();
 }
 
 InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f origin,
@@ -412,24 +362,21 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
     throw std::invalid_argument("the camera pose must be a rotation and a translation (an orthonormal 3x3 part with "
                                 "determinant 1, all finite)");
   }
-  // The image's points and their pixels, in buffers kept between scans:
-  // fresh ones cost a page fault per 4 KiB on every frame (27 ms of a
-  // Kinect frame's 1 ms on the development machine).
-  std::vector<Vec3f>& points = image_points_;
-  std::vector<std::uint32_t>& pixels = image_pixels_;
-  back_project(image, camera, pose, points, &pixels);
-  std::vector<Rgb> point_colors;
-  if (!colors.empty()) {
-    point_colors.reserve(points.size());
-    for (const std::uint32_t pixel : pixels) point_colors.push_back(colors[pixel]);
-  }
-  const Vec3f origin = pose.translation();
+  const unsigned threads = options.threads == 0 ? ThreadPool::hardware_threads() : options.threads;
+  ensure_workers(threads);
+  ThreadPool* const pool = threads > 1 ? pool_.get() : nullptr;
   // A map of one depth level has no bricks (the projective rule's unit): it
   // takes the image's points as the discrete integrator does.
-  if (options.integrator != IntegratorKind::projective || grid.depth_levels() < 2) {
+  const bool projective = options.integrator == IntegratorKind::projective && grid.depth_levels() >= 2;
+  // The points on every worker; the projective rule's image (its pyramid) meanwhile.
+  image_points_.build(grid, image, camera, pose, colors, pool, [&] {
+    if (projective) frame_.set(image, camera, pose);
+  });
+  const Vec3f origin = pose.translation();
+  if (!projective) {
     InsertOptions point_options = options;
     if (point_options.integrator == IntegratorKind::projective) point_options.integrator = IntegratorKind::discrete;
-    return trace(tree, grid, origin, points, point_colors, point_options, box);
+    return trace(tree, grid, origin, image_points_.points(), image_points_.colors(), point_options, box);
   }
   if (box) box->validate();
   (void)grid.key(Vec3d(origin));  // throws std::out_of_range with the coordinate and the extent
@@ -438,30 +385,39 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
 
   InsertStats stats;
   stats.points = image.pixel_count();
-  stats.non_finite = 0;
-  const unsigned threads = options.threads == 0 ? ThreadPool::hardware_threads() : options.threads;
-  ensure_workers(threads);
+  stats.non_finite = image_points_.non_finite();
+  stats.out_of_bounds = image_points_.out_of_bounds();
   stats.threads = threads > 1 ? pool_->size() : 1;
   for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
-  add_image_hits(grid, origin, points, pixels, image.width(), options.max_range, box, box_keys, tracers_[0]->batch(),
-                 stats, hit_candidates_, hit_row_);
-  frame_.set(image, camera, pose);
-  // A depth image's rays are as dense as its pixels: the rule alone decides
-  // its misses, known obstacles included (projective_frame.hpp).
-  trace_projective_misses(nullptr, grid, options, box_keys, std::span<const ProjectiveFrame>(&frame_, 1), threads);
-  if (!point_colors.empty()) queue_end_voxel_colors(grid, origin, points, point_colors, options, box_keys, threads);
+  // The hits (the discrete integrator's: the voxels holding a point) go into
+  // one worker's batch while the others trace misses. A depth image's rays
+  // are as dense as its pixels: the rule alone decides its misses, known
+  // obstacles included (projective_frame.hpp).
+  const auto add_hits = [&](UpdateBatch& batch) {
+    image_points_.for_each_voxel([&](std::uint64_t code) {
+      if (add_end_voxel_hit(grid, origin, code, options.max_range, box, box_keys, batch, stats)) ++stats.hits;
+    });
+    stats.rays = stats.hits;
+  };
+  trace_projective_misses(nullptr, grid, options, box_keys, std::span<const ProjectiveFrame>(&frame_, 1), threads,
+                          add_hits);
+  if (!colors.empty()) {
+    queue_end_voxel_colors(grid, origin, image_points_.points(), image_points_.colors(), image_points_.codes(), options,
+                           box_keys, threads);
+  }
   pending_threads_ = threads;
   return stats;
 }
 
 void Integrator::queue_end_voxel_colors(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
-                                        std::span<const Rgb> colors, const InsertOptions& options,
-                                        const std::optional<KeyBox>& box_keys, unsigned threads) {
+                                        std::span<const Rgb> colors, std::span<const std::uint64_t> codes,
+                                        const InsertOptions& options, const std::optional<KeyBox>& box_keys,
+                                        unsigned threads) {
   // The projective integrator's hits are the discrete integrator's: so are its colours.
   InsertOptions discrete = options;
   discrete.integrator = IntegratorKind::discrete;
   ThreadPool* const pool = threads > 1 ? pool_.get() : nullptr;
-  pending_colors_ = color_samples(grid, origin, points, colors, discrete, box_keys, pool);
+  pending_colors_ = color_samples(grid, origin, points, colors, discrete, box_keys, pool, codes);
 }
 
 InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
@@ -475,21 +431,27 @@ InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const G
   ensure_workers(threads);
   stats.threads = threads > 1 ? pool_->size() : 1;
   for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
-  add_end_voxel_hits(grid, origin, points, options.max_range, box, box_keys, tracers_[0]->batch(), stats);
+  // The hits go into one worker's batch while the others trace misses.
+  const auto add_hits = [&](UpdateBatch& batch) {
+    add_end_voxel_hits(grid, origin, points, options.max_range, box, box_keys, batch, stats);
+  };
   const ScanResolution resolution = estimate_scan_resolution(origin, points, options.scan_resolution);
   if (resolution.horizontal > 0.0 && resolution.vertical > 0.0) {
     stats.scan_resolution = resolution;
     scan_images_.build(origin, points, resolution);
-    trace_projective_misses(&tree, grid, options, box_keys, scan_images_.faces(), threads);
+    trace_projective_misses(&tree, grid, options, box_keys, scan_images_.faces(), threads, add_hits);
+  } else {
+    add_hits(tracers_[0]->batch());
   }
-  if (!colors.empty()) queue_end_voxel_colors(grid, origin, points, colors, options, box_keys, threads);
+  if (!colors.empty()) queue_end_voxel_colors(grid, origin, points, colors, {}, options, box_keys, threads);
   pending_threads_ = threads;
   return stats;
 }
 
 void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& grid, const InsertOptions& options,
                                          const std::optional<KeyBox>& box_keys,
-                                         std::span<const ProjectiveFrame> frames, unsigned threads) {
+                                         std::span<const ProjectiveFrame> frames, unsigned threads,
+                                         FunctionRef<void(UpdateBatch&)> first) {
   // One rule and tracer per image (the six faces of a scan, or one depth
   // image); a voxel gets a miss when any of them clears it.
   std::vector<ProjectiveRule> rules;
@@ -504,6 +466,7 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
   }
   const int root_depth = grid.depth_levels();
   if (threads == 1) {
+    first(tracers_[0]->batch());
     for (const ProjectiveRule& rule : rules) ProjectiveTracer(rule).trace(0, root_depth, tracers_[0]->batch());
     return;
   }
@@ -524,13 +487,18 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
     }
     if (tasks.size() >= std::size_t{threads} * 16) break;
   }
-  pool_->run(tasks.size(), [&](std::size_t i, unsigned worker) {
-    const Task& task = tasks[i];
+  // `first` is task 0: the pool hands tasks out in order, so it starts first.
+  pool_->run(tasks.size() + 1, [&](std::size_t i, unsigned worker) {
+    if (i == 0) {
+      first(tracers_[worker]->batch());
+      return;
+    }
+    const Task& task = tasks[i - 1];
     ProjectiveTracer(rules[task.image]).trace(task.node.code, task.node.depth, tracers_[worker]->batch());
   });
   UpdateBatch& merged = tracers_[0]->batch();
   for (unsigned w = 1; w < threads; ++w) {
-    merged.merge(tracers_[w]->batch(), /*with_hits=*/false);  // the hits are all in tracers_[0]'s
+    merged.merge(tracers_[w]->batch());
     tracers_[w]->start(grid.depth_levels());
   }
 }

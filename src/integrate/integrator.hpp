@@ -49,10 +49,12 @@
 
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/color.hpp"
+#include "umbra/core/function_ref.hpp"
 #include "umbra/core/grid.hpp"
 #include "umbra/core/log_odds.hpp"
 #include "core/thread_pool.hpp"
 #include "umbra/core/vec3.hpp"
+#include "integrate/image_points.hpp"
 #include "integrate/scan_images.hpp"
 #include "integrate/projective_frame.hpp"
 #include "integrate/ray_tracer.hpp"
@@ -103,17 +105,20 @@ class Integrator {
   /// trace() with the projective integrator: the scan as the six faces of
   /// images around its origin (scan_images.hpp).
   /// Colour samples of the end voxels, as the discrete integrator takes them, for the next apply.
+  /// `codes`: the points' voxel codes, or empty.
   void queue_end_voxel_colors(const Grid& grid, Vec3f origin, std::span<const Vec3f> points, std::span<const Rgb> colors,
-                              const InsertOptions& options, const std::optional<KeyBox>& box_keys, unsigned threads);
+                              std::span<const std::uint64_t> codes, const InsertOptions& options,
+                              const std::optional<KeyBox>& box_keys, unsigned threads);
   InsertStats trace_scan_projective(const OccupancyTree& tree, const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
                                     std::span<const Rgb> colors, const InsertOptions& options,
                                     const std::optional<Aabb>& box);
   /// The projective integrator's misses for `frames`, into the tracers'
   /// batches (merged into tracers_[0]'s); with `tree`, its obstacles are
   /// cleared only where the frames' rays cross them.
+  /// `first` runs before them into one worker's batch (the hits).
   void trace_projective_misses(const OccupancyTree* tree, const Grid& grid, const InsertOptions& options,
                                const std::optional<KeyBox>& box_keys, std::span<const ProjectiveFrame> frames,
-                               unsigned threads);
+                               unsigned threads, FunctionRef<void(UpdateBatch&)> first);
 
   std::unique_ptr<ThreadPool> pool_;
   std::vector<std::unique_ptr<RayTracer>> tracers_;  // one per worker
@@ -124,10 +129,7 @@ class Integrator {
   // image, kept between scans (their buffers are reused).
   ProjectiveFrame frame_;
   ScanImages scan_images_;
-  std::vector<Vec3f> image_points_;
-  std::vector<std::uint32_t> image_pixels_;
-  std::vector<std::uint64_t> hit_candidates_;  // add_image_hits' scratch
-  std::vector<std::uint64_t> hit_row_;
+  ImagePoints image_points_;
 };
 
 }  // namespace umbra

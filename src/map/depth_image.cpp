@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "integrate/image_points.hpp"
+
 namespace umbra {
 
 namespace {
@@ -57,36 +59,12 @@ DepthImage DepthImage::raw(std::span<const std::uint16_t> depth, int width, int 
 void back_project(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose, std::vector<Vec3f>& points,
                   std::vector<std::uint32_t>* pixels) {
   camera.validate();
-  points.clear();
-  if (pixels != nullptr) pixels->clear();
-  const int width = depth.width();
-  const std::size_t count = depth.pixel_count();
-  // Room for every pixel first (the buffers are the caller's, kept from
-  // frame to frame): no growth inside the loop.
-  points.reserve(count);
-  if (pixels != nullptr) pixels->reserve(count);
-  std::vector<double> column_factor(static_cast<std::size_t>(width));
-  for (int u = 0; u < width; ++u) column_factor[static_cast<std::size_t>(u)] = (u - camera.cx) / camera.fx;
-  // One loop per kind of image, so that the pixel loop does not ask which.
-  auto project = [&](auto&& depth_of) {
-    std::size_t index = 0;
-    for (int v = 0; v < depth.height(); ++v) {
-      const double row_factor = (v - camera.cy) / camera.fy;
-      for (int u = 0; u < width; ++u, ++index) {
-        const double z = depth_of(index);
-        if (z == 0.0) continue;
-        points.push_back(pose.apply(column_factor[static_cast<std::size_t>(u)] * z, row_factor * z, z));
-        if (pixels != nullptr) pixels->push_back(static_cast<std::uint32_t>(index));
-      }
-    }
-  };
-  if (depth.is_raw()) {
-    const std::span<const std::uint16_t> raw = depth.raw_depths();
-    const double scale = depth.metres_per_unit();
-    project([&](std::size_t i) { return raw[i] * scale; });
-  } else {
-    project([&](std::size_t i) { return depth.depth(i); });
-  }
+  // Sized first (the buffers are the caller's, kept from frame to frame):
+  // no growth while the rows are projected.
+  const std::size_t count = count_readings(depth, 0, depth.height());
+  points.resize(count);
+  if (pixels != nullptr) pixels->resize(count);
+  back_project_rows(depth, camera, pose, 0, depth.height(), points.data(), pixels != nullptr ? pixels->data() : nullptr);
 }
 
 }  // namespace umbra

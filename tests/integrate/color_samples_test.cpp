@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "core/thread_pool.hpp"
+#include "core/voxel_codes.hpp"
 #include "integrate/color_samples.hpp"
 #include "integrate/ray_walker.hpp"
 
@@ -75,6 +76,8 @@ TEST(ColorSamples, AnyNumberOfThreadsGivesTheReferenceSamples) {
     const auto byte = [&] { return static_cast<std::uint8_t>(rng()); };
     colors.push_back({byte(), byte(), byte()});
   }
+  std::vector<std::uint64_t> codes(points.size());
+  voxel_codes(grid, points, codes.data());
   ThreadPool two(2);
   ThreadPool three(3);
   ThreadPool eight(8);
@@ -91,6 +94,8 @@ TEST(ColorSamples, AnyNumberOfThreadsGivesTheReferenceSamples) {
       for (ThreadPool* pool : {static_cast<ThreadPool*>(nullptr), &two, &three, &eight}) {
         SCOPED_TRACE(pool == nullptr ? 1u : pool->size());
         EXPECT_TRUE(same(color_samples(grid, origin, points, colors, options, in_box, pool), expected));
+        // The same with the codes given (as the projective integrator gives its image's).
+        EXPECT_TRUE(same(color_samples(grid, origin, points, colors, options, in_box, pool, codes), expected));
       }
     }
   }

@@ -1002,7 +1002,7 @@ OccupancyMap large_coloured_map() {
   return map;
 }
 
-TEST(MapFile, SavingWithAnyNumberOfThreadsLoadsBackTheSameMap) {
+TEST(MapFile, SavingWithAnyNumberOfThreadsWritesTheSameBytes) {
   const fs::path dir = test::scratch_dir();
   const OccupancyMap map = large_coloured_map();
   const MapFileInfo one_job = [&] {
@@ -1016,9 +1016,8 @@ TEST(MapFile, SavingWithAnyNumberOfThreadsLoadsBackTheSameMap) {
     const fs::path path = dir / ("t" + std::to_string(threads) + ".umb");
     save_map(map, path, MapSaveOptions{threads});
     expect_same_map(map, load_map(path));
-    // Deterministic: the same setting gives the same bytes.
-    save_map(map, dir / "again.umb", MapSaveOptions{threads});
-    EXPECT_TRUE(read_bytes(path) == read_bytes(dir / "again.umb"));
+    // The same bytes as with one thread: a file does not change with the thread count.
+    EXPECT_TRUE(read_bytes(path) == read_bytes(dir / "t1.umb"));
   }
 }
 

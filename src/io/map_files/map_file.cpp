@@ -772,8 +772,11 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path, const 
   // structure stream stays on the caller's thread. At most 2 each: the walk
   // feeds ~450 MB/s and one worker compresses ~500 MB/s at level 3 (a
   // second one brought nothing measurable on the 3DTK map), so more would idle.
+  // At least 1 even with one thread: zstd's multi-threaded framing gives the
+  // same bytes for any number of workers, its single-threaded one other
+  // bytes, and a file must not change with the thread count.
   const unsigned threads = options.threads == 0 ? hardware_threads() : options.threads;
-  const int workers = static_cast<int>(std::min(threads, 3u)) - 1;
+  const int workers = std::max(1, static_cast<int>(std::min(threads, 3u)) - 1);
   // Encode first: a map that cannot be saved throws before any file exists.
   std::vector<std::uint8_t> structure_frame;
   std::vector<std::uint8_t> values_frame;

@@ -1,0 +1,218 @@
+#include "integrate/image_points.hpp"
+
+#include <algorithm>
+#include <array>
+
+#include "core/radix_sort.hpp"
+#include "core/thread_pool.hpp"
+#include "core/voxel_codes.hpp"
+
+namespace umbra {
+
+namespace {
+
+/// Calls depth_of(index) for each pixel of rows [row_begin, row_end): one
+/// loop per kind of image, so that the pixel loop does not ask which.
+template <typename Work>
+void for_each_depth(const DepthImage& depth, const Work& work) {
+  if (depth.is_raw()) {
+    const std::span<const std::uint16_t> raw = depth.raw_depths();
+    const double scale = depth.metres_per_unit();
+    work([&](std::size_t i) { return raw[i] * scale; });
+  } else {
+    work([&](std::size_t i) { return depth.depth(i); });
+  }
+}
+
+/// Runs work(part) for part in [0, parts), on the pool when there is one.
+template <typename Work>
+void for_each_part(ThreadPool* pool, std::size_t parts, const Work& work) {
+  if (pool == nullptr || parts < 2) {
+    for (std::size_t p = 0; p < parts; ++p) work(p);
+    return;
+  }
+  pool->run(parts, [&](std::size_t p, unsigned) { work(p); });
+}
+
+}  // namespace
+
+std::size_t count_readings(const DepthImage& depth, int row_begin, int row_end) {
+  const std::size_t begin = std::size_t(row_begin) * std::size_t(depth.width());
+  const std::size_t end = std::size_t(row_end) * std::size_t(depth.width());
+  std::size_t count = 0;
+  for_each_depth(depth, [&](auto&& depth_of) {
+    for (std::size_t i = begin; i < end; ++i) count += static_cast<std::size_t>(depth_of(i) != 0.0);
+  });
+  return count;
+}
+
+void back_project_rows(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose, int row_begin,
+                       int row_end, Vec3f* points, std::uint32_t* pixels) {
+  const int width = depth.width();
+  // A row's x factors, (u - cx) / fx, on the stack for the usual widths.
+  std::array<double, 2048> small_factors;
+  std::vector<double> large_factors;
+  double* column_factor = small_factors.data();
+  if (width > static_cast<int>(small_factors.size())) {
+    large_factors.resize(static_cast<std::size_t>(width));
+    column_factor = large_factors.data();
+  }
+  for (int u = 0; u < width; ++u) column_factor[u] = (u - camera.cx) / camera.fx;
+  for_each_depth(depth, [&](auto&& depth_of) {
+    std::size_t index = std::size_t(row_begin) * std::size_t(width);
+    std::size_t out = 0;
+    for (int v = row_begin; v < row_end; ++v) {
+      const double row_factor = (v - camera.cy) / camera.fy;
+      for (int u = 0; u < width; ++u, ++index) {
+        const double z = depth_of(index);
+        if (z == 0.0) continue;
+        points[out] = pose.apply(column_factor[u] * z, row_factor * z, z);
+        if (pixels != nullptr) pixels[out] = static_cast<std::uint32_t>(index);
+        ++out;
+      }
+    }
+  });
+}
+
+void ImagePoints::build(const Grid& grid, const DepthImage& depth, const PinholeCamera& camera, const Pose& pose,
+                        std::span<const Rgb> colors, ThreadPool* pool, FunctionRef<void()> alongside) {
+  const int height = depth.height();
+  // Two bands per worker balance rows of unequal counts; at least 16 rows a band.
+  const int workers = pool != nullptr ? static_cast<int>(pool->size()) : 1;
+  const int band_count = std::max(1, std::min(2 * workers, height / 16));
+  bands_.resize(static_cast<std::size_t>(band_count));
+  for (int b = 0; b < band_count; ++b) {
+    Band& band = bands_[static_cast<std::size_t>(b)];
+    band.row_begin = static_cast<int>(std::int64_t{height} * b / band_count);
+    band.row_end = static_cast<int>(std::int64_t{height} * (b + 1) / band_count);
+  }
+  // 1. Each band's readings, then where its points begin.
+  for_each_part(pool, bands_.size(),
+                [&](std::size_t b) { bands_[b].count = count_readings(depth, bands_[b].row_begin, bands_[b].row_end); });
+  std::size_t total = 0;
+  for (Band& band : bands_) {
+    band.first = total;
+    total += band.count;
+  }
+  // Room for every pixel (as the frames to come may need): resizing to each
+  // frame's count let the capacity grow to twice the largest.
+  points_.reserve(depth.pixel_count());
+  pixels_.reserve(depth.pixel_count());
+  if (!colors.empty()) {
+    codes_.reserve(depth.pixel_count());
+    colors_.reserve(depth.pixel_count());
+  }
+  points_.resize(total);
+  pixels_.resize(total);
+  // The codes are kept for the colours only (2.5 MB for a Kinect frame).
+  codes_.resize(colors.empty() ? 0 : total);
+  colors_.resize(colors.empty() ? 0 : total);
+
+  // 2. The bands' points, codes, colours and candidate voxels, with
+  //    `alongside` as the first task (it starts first).
+  const auto band_work = [&](std::size_t task) {
+    if (task == 0) {
+      alongside();
+      return;
+    }
+    Band& band = bands_[task - 1];
+    back_project_rows(depth, camera, pose, band.row_begin, band.row_end, points_.data() + band.first,
+                      pixels_.data() + band.first);
+    if (!colors.empty()) {
+      for (std::size_t i = band.first; i < band.first + band.count; ++i) colors_[i] = colors[pixels_[i]];
+    }
+    find_voxels(grid, depth.width(), band);
+  };
+  for_each_part(pool, bands_.size() + 1, band_work);
+  non_finite_ = 0;
+  out_of_bounds_ = 0;
+  for (const Band& band : bands_) {
+    non_finite_ += band.non_finite;
+    out_of_bounds_ += band.out_of_bounds;
+  }
+}
+
+void ImagePoints::for_each_voxel(FunctionRef<void(std::uint64_t)> visit) const {
+  if (bands_.size() == 1) {
+    for (const std::uint64_t code : bands_[0].candidates) visit(code);
+    return;
+  }
+  // A merge of the bands' sorted lists through a heap of their heads (a few
+  // dozen bands: a few comparisons per voxel).
+  struct Head {
+    std::uint64_t code;
+    std::size_t band;
+    std::size_t next;  // index of the band's next code
+  };
+  const auto later = [](const Head& a, const Head& b) { return a.code > b.code; };
+  std::vector<Head> heads;
+  heads.reserve(bands_.size());
+  for (std::size_t b = 0; b < bands_.size(); ++b) {
+    if (!bands_[b].candidates.empty()) heads.push_back({bands_[b].candidates[0], b, 1});
+  }
+  std::make_heap(heads.begin(), heads.end(), later);
+  std::uint64_t last = kNonFiniteCode;  // no voxel has this code
+  while (!heads.empty()) {
+    std::pop_heap(heads.begin(), heads.end(), later);
+    Head& head = heads.back();
+    if (head.code != last) visit(head.code);
+    last = head.code;
+    const std::vector<std::uint64_t>& list = bands_[head.band].candidates;
+    if (head.next < list.size()) {
+      head.code = list[head.next++];
+      std::push_heap(heads.begin(), heads.end(), later);
+    } else {
+      heads.pop_back();
+    }
+  }
+}
+
+void ImagePoints::find_voxels(const Grid& grid, int width, Band& band) {
+  band.candidates.clear();
+  band.above.assign(static_cast<std::size_t>(width), kNonFiniteCode);
+  band.non_finite = 0;
+  band.out_of_bounds = 0;
+  const std::span<const Vec3f> points(points_.data() + band.first, band.count);
+  const std::uint32_t* const pixels = pixels_.data() + band.first;
+  std::array<std::uint64_t, 1024> block_codes;  // when the codes are not kept
+  // A voxel holds many neighbouring pixels: a code equal to its left or upper
+  // neighbour's is dropped before sorting (a TUM frame at 2 cm keeps a
+  // tenth). Any repeat dropped is one already kept: only the first
+  // occurrence of a code reaches the candidates without a twin before it.
+  std::uint64_t left = kNonFiniteCode;
+  std::uint32_t left_pixel = ~std::uint32_t{0};
+  std::uint32_t row_start = static_cast<std::uint32_t>(band.row_begin) * static_cast<std::uint32_t>(width);
+  constexpr std::size_t kBlock = block_codes.size();  // codes computed a block at a time stay in cache for the loop
+  for (std::size_t block = 0; block < points.size(); block += kBlock) {
+    const std::size_t size = std::min(kBlock, points.size() - block);
+    std::uint64_t* const codes = codes_.empty() ? block_codes.data() : codes_.data() + band.first + block;
+    voxel_codes(grid, points.subspan(block, size), codes);
+    for (std::size_t j = 0; j < size; ++j) {
+      const std::uint64_t code = codes[j];
+      const std::uint32_t pixel = pixels[block + j];
+      while (pixel - row_start >= static_cast<std::uint32_t>(width)) row_start += static_cast<std::uint32_t>(width);
+      const std::size_t column = pixel - row_start;
+      const bool beside = pixel == left_pixel + 1 && column != 0;
+      left_pixel = pixel;
+      if (code >= kOutsideCode) {
+        ++(code == kNonFiniteCode ? band.non_finite : band.out_of_bounds);
+      } else if (!(beside && code == left) && code != band.above[column]) {
+        band.candidates.push_back(code);
+      }
+      left = code;
+      band.above[column] = code;
+    }
+  }
+  radix_sort(band.candidates, 3 * grid.depth_levels(), [](std::uint64_t code) { return code; });
+  band.candidates.erase(std::unique(band.candidates.begin(), band.candidates.end()), band.candidates.end());
+}
+
+std::size_t ImagePoints::memory_bytes() const {
+  std::size_t bytes = points_.capacity() * sizeof(Vec3f) + pixels_.capacity() * sizeof(std::uint32_t) +
+                      colors_.capacity() * sizeof(Rgb) + codes_.capacity() * sizeof(std::uint64_t) +
+                      bands_.capacity() * sizeof(Band);
+  for (const Band& band : bands_) bytes += (band.candidates.capacity() + band.above.capacity()) * sizeof(std::uint64_t);
+  return bytes;
+}
+
+}  // namespace umbra

@@ -1,0 +1,96 @@
+// ImagePoints: a depth image's points, their voxels and the voxels they hit,
+// found in bands of rows on every worker.
+//
+// A depth image's points are needed by every integrator (as a point cloud)
+// and by the projective integrator for its hits (the voxels holding a
+// point, each once) and colours. Done on one thread this front end was a
+// third of a TUM frame's insertion at 2 cm and capped two threads at 1.2x
+// one on a 16-core machine, so the image is cut into bands of rows, each
+// band back-projected, its points' voxel codes computed and its candidate
+// hit voxels gathered on its own worker, written straight into the
+// image-wide arrays (a first pass counts each band's readings), and its
+// voxels sorted there too. The result does not depend on the number of
+// bands: the points come in pixel order, and the voxels are visited in code
+// order, each once.
+//
+// back_project_rows is the one back-projection of the library: the public
+// back_project (umbra/map/depth_image.hpp) calls it for all rows.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "umbra/core/color.hpp"
+#include "umbra/core/function_ref.hpp"
+#include "umbra/core/grid.hpp"
+#include "umbra/core/pose.hpp"
+#include "umbra/core/vec3.hpp"
+#include "umbra/map/depth_image.hpp"
+
+namespace umbra {
+
+class ThreadPool;
+
+/// The pixels of rows [row_begin, row_end) with a reading.
+std::size_t count_readings(const DepthImage& depth, int row_begin, int row_end);
+
+/// The map points of the pixels of rows [row_begin, row_end) with a reading,
+/// in pixel order, written from `points` on (and their pixel indices from
+/// `pixels` on, when not null): z = depth, x = (u - cx) z / fx,
+/// y = (v - cy) z / fy, in double, then pose.apply. `points` has room for
+/// count_readings() of those rows.
+void back_project_rows(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose, int row_begin,
+                       int row_end, Vec3f* points, std::uint32_t* pixels);
+
+class ImagePoints {
+ public:
+  /// Finds the points of `depth` (as back_project gives them), their voxel
+  /// codes, their colours (one per point, from `colors`: empty or one per
+  /// pixel) and the voxels they fall in; on `pool`'s workers when given.
+  /// `alongside` runs on one worker meanwhile (work that needs the image but
+  /// not its points).
+  void build(const Grid& grid, const DepthImage& depth, const PinholeCamera& camera, const Pose& pose,
+             std::span<const Rgb> colors, ThreadPool* pool, FunctionRef<void()> alongside);
+
+  [[nodiscard]] std::span<const Vec3f> points() const { return points_; }
+  [[nodiscard]] std::span<const std::uint32_t> pixels() const { return pixels_; }
+  [[nodiscard]] std::span<const Rgb> colors() const { return colors_; }
+  /// Each point's voxel code (kNonFiniteCode, kOutsideCode: none) when
+  /// colours were given (for their samples), else empty.
+  [[nodiscard]] std::span<const std::uint64_t> codes() const { return codes_; }
+  /// Calls visit(code) for each voxel that holds a point, in increasing
+  /// code order, each once (a merge of the bands' sorted voxels: run it
+  /// alongside other work, it is serial).
+  void for_each_voxel(FunctionRef<void(std::uint64_t)> visit) const;
+  [[nodiscard]] std::size_t non_finite() const { return non_finite_; }
+  [[nodiscard]] std::size_t out_of_bounds() const { return out_of_bounds_; }
+
+  [[nodiscard]] std::size_t memory_bytes() const;
+
+ private:
+  struct Band {
+    int row_begin = 0;
+    int row_end = 0;
+    std::size_t first = 0;  // its first point in points_
+    std::size_t count = 0;
+    std::vector<std::uint64_t> candidates;  // its voxel codes: sorted, each once
+    std::vector<std::uint64_t> above;       // the code last seen in each column
+    std::size_t non_finite = 0;
+    std::size_t out_of_bounds = 0;
+  };
+  void find_voxels(const Grid& grid, int width, Band& band);
+
+  // Kept between images: their buffers are reused (a fresh buffer costs a
+  // page fault per 4 KiB on every frame).
+  std::vector<Vec3f> points_;
+  std::vector<std::uint32_t> pixels_;
+  std::vector<Rgb> colors_;
+  std::vector<std::uint64_t> codes_;
+  std::vector<Band> bands_;
+  std::size_t non_finite_ = 0;
+  std::size_t out_of_bounds_ = 0;
+};
+
+}  // namespace umbra

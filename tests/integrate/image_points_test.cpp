@@ -1,0 +1,110 @@
+// A depth image's points found band by band on several workers are the ones
+// the public back_project gives, in the same order, with their own voxel
+// codes and colours, and the hit voxels are the sorted distinct voxels of
+// those points, whatever the number of workers.
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/thread_pool.hpp"
+#include "core/voxel_codes.hpp"
+#include "integrate/image_points.hpp"
+#include "umbra/core/morton.hpp"
+
+namespace umbra {
+namespace {
+
+struct Frame {
+  int width = 97;  // odd sizes: bands of unequal rows
+  int height = 61;
+  std::vector<float> metres;
+  std::vector<std::uint16_t> raw;
+  std::vector<Rgb> colors;
+};
+
+Frame random_frame(unsigned seed) {
+  Frame f;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> depth(0.3f, 6.0f);
+  const std::size_t n = std::size_t(f.width) * std::size_t(f.height);
+  for (std::size_t i = 0; i < n; ++i) {
+    // A smooth surface (neighbouring pixels share voxels), holes, scattered
+    // readings and a few beyond the map (outside its keys).
+    const double u = double(i % std::size_t(f.width));
+    const double v = double(i / std::size_t(f.width));
+    float z = static_cast<float>(2.0 + 0.5 * std::sin(u / 9.0) + 0.3 * std::cos(v / 7.0));
+    if (rng() % 7 == 0) z = 0.0f;
+    if (rng() % 13 == 0) z = depth(rng);
+    if (rng() % 211 == 0) z = 4000.0f;
+    f.metres.push_back(z);
+    f.raw.push_back(static_cast<std::uint16_t>(std::min(z, 12.0f) * 5000.0f));
+    f.colors.push_back(Rgb{static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(i >> 8), 7});
+  }
+  return f;
+}
+
+TEST(ImagePoints, AnyNumberOfWorkersGivesBackProjectsPointsAndTheirVoxels) {
+  const Grid grid(0.1, 15);  // +- 1638 m: 4000 m lies outside
+  const PinholeCamera camera{60.0, 55.0, 48.3, 30.1};
+  const Pose pose = Pose::from_translation_quaternion(0.5, -1.25, 0.75, 0.5, -0.5, 0.5, -0.5);
+  const Frame f = random_frame(5);
+  for (const bool raw : {false, true}) {
+    const DepthImage image = raw ? DepthImage::raw(f.raw, f.width, f.height, 5000.0)
+                                 : DepthImage::metres(f.metres, f.width, f.height);
+    std::vector<Vec3f> expected_points;
+    std::vector<std::uint32_t> expected_pixels;
+    back_project(image, camera, pose, expected_points, &expected_pixels);
+    ASSERT_GT(expected_points.size(), 1000u);
+    std::vector<std::uint64_t> expected_voxels;
+    std::size_t outside = 0;
+    for (const Vec3f& p : expected_points) {
+      if (const auto key = grid.key_checked(p)) {
+        expected_voxels.push_back(morton::encode(*key));
+      } else {
+        ++outside;
+      }
+    }
+    std::sort(expected_voxels.begin(), expected_voxels.end());
+    expected_voxels.erase(std::unique(expected_voxels.begin(), expected_voxels.end()), expected_voxels.end());
+    if (!raw) ASSERT_GT(outside, 0u);  // raw depths stop at 13 m
+    ASSERT_LT(2 * expected_voxels.size(), expected_points.size());  // voxels shared by pixels
+
+    for (const unsigned threads : {1u, 2u, 3u, 8u}) {
+      SCOPED_TRACE(std::string(raw ? "raw" : "metres") + ", threads " + std::to_string(threads));
+      ThreadPool pool(threads);
+      ImagePoints found;
+      std::atomic<int> alongside_runs{0};
+      found.build(grid, image, camera, pose, f.colors, threads > 1 ? &pool : nullptr, [&] { ++alongside_runs; });
+      EXPECT_EQ(alongside_runs.load(), 1);
+      ASSERT_EQ(found.points().size(), expected_points.size());
+      bool same_points = true;
+      for (std::size_t i = 0; i < expected_points.size(); ++i) {
+        same_points = same_points && found.points()[i] == expected_points[i] && found.pixels()[i] == expected_pixels[i];
+        same_points = same_points && found.colors()[i] == f.colors[expected_pixels[i]];
+        const auto key = grid.key_checked(expected_points[i]);
+        same_points = same_points && found.codes()[i] == (key ? morton::encode(*key) : kOutsideCode);
+      }
+      EXPECT_TRUE(same_points);
+      std::vector<std::uint64_t> voxels;
+      found.for_each_voxel([&](std::uint64_t code) { voxels.push_back(code); });
+      EXPECT_TRUE(voxels == expected_voxels);
+      // Without colours: the same points and voxels, no codes kept.
+      ImagePoints plain;
+      plain.build(grid, image, camera, pose, {}, threads > 1 ? &pool : nullptr, [] {});
+      EXPECT_TRUE(plain.codes().empty() && plain.colors().empty());
+      EXPECT_TRUE(std::equal(plain.points().begin(), plain.points().end(), expected_points.begin(), expected_points.end()));
+      voxels.clear();
+      plain.for_each_voxel([&](std::uint64_t code) { voxels.push_back(code); });
+      EXPECT_TRUE(voxels == expected_voxels);
+      EXPECT_EQ(found.out_of_bounds(), outside);
+      EXPECT_EQ(found.non_finite(), 0u);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace umbra
