@@ -43,7 +43,7 @@ void write_file_atomically(const std::filesystem::path& path,
 /// (an exception while writing) it is removed and `path` is untouched.
 class AtomicFileWriter {
  public:
-  AtomicFileWriter(const std::filesystem::path& path, std::string_view kind = "file");
+  explicit AtomicFileWriter(const std::filesystem::path& path, std::string_view kind = "file");
   AtomicFileWriter(const AtomicFileWriter&) = delete;
   AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
   ~AtomicFileWriter();
