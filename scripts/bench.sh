@@ -10,6 +10,8 @@
 #   scripts/bench.sh build ARGS...      bench/build_benchmark.cpp (the whole
 #                                       `umbra build` process, reading and
 #                                       writing included, against OctoMap)
+#   scripts/bench.sh navigation ARGS... bench/navigation_grid_benchmark.cpp
+#                                       (the 2D navigation grid)
 # ARGS go to the program (--help lists them); results: docs/benchmarks.md.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -17,7 +19,7 @@ root="$(umbra_root)"
 build_dir="${UMBRA_BENCH_BUILD_DIR:-$root/build-bench}"
 
 benchmark=insert
-if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python || "$1" == build ) ]]; then
+if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python || "$1" == build || "$1" == navigation ) ]]; then
   benchmark="$1"
   shift
 fi

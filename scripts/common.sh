@@ -19,12 +19,12 @@ UMBRA_APT_PACKAGES=(
   chromium                                      # the `umbra view` page tested in a headless browser
   # ROS 1 (ros/: umbra_server, `umbra build` of .bag files, their tests; optional, found by CMake):
   ros-core-dev libroscpp-dev libsensor-msgs-dev libtf2-ros-dev librosbag-dev
-  libstd-srvs-dev libvisualization-msgs-dev libtf2-msgs-dev
+  libstd-srvs-dev libvisualization-msgs-dev libtf2-msgs-dev libnav-msgs-dev
   python3-gencpp python3-genmsg python3-empy     # message headers (ros/generate_messages.py)
   python3-genpy                                  # Python modules of octomap_msgs/umbra_msgs (ros/generate_python_messages.py)
   # Python modules of the node's other message types, for rostopic and rosservice (ros-core brings the tools):
-  python3-sensor-msgs python3-geometry-msgs python3-visualization-msgs python3-std-srvs python3-tf2-msgs
-  ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-visualization-msgs ros-tf2-msgs ros-actionlib-msgs ros-std-srvs
+  python3-sensor-msgs python3-geometry-msgs python3-visualization-msgs python3-std-srvs python3-tf2-msgs python3-nav-msgs
+  ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-visualization-msgs ros-tf2-msgs ros-actionlib-msgs ros-std-srvs ros-nav-msgs
 )
 
 # Commands installed only when missing, as COMMAND:PACKAGE: Node.js and npm

@@ -35,5 +35,6 @@ Command add_export_command(CLI::App& app);
 Command add_query_command(CLI::App& app);
 Command add_render_command(CLI::App& app);
 Command add_view_command(CLI::App& app);
+Command add_project_command(CLI::App& app);
 
 }  // namespace umbra::cli

@@ -1,5 +1,5 @@
-// umbra: build, inspect, convert, crop, compare, export, draw, view and
-// demonstrate occupancy maps from the command line.
+// umbra: build, inspect, convert, crop, compare, export, draw, view,
+// project to 2D and demonstrate occupancy maps from the command line.
 //
 // Exit codes (commands.hpp, `umbra --help`, README "Errors and limits"): 0
 // success, 1 an input or the system failed (a missing, unreadable or
@@ -80,6 +80,7 @@ int main(int argc, char** argv) {
   commands.push_back(umbra::cli::add_query_command(app));
   commands.push_back(umbra::cli::add_render_command(app));
   commands.push_back(umbra::cli::add_view_command(app));
+  commands.push_back(umbra::cli::add_project_command(app));
 
   // CLI11 would say "A subcommand is required" for a misspelt one.
   if (argc >= 2 && argv[1][0] != '-' && !is_command(app, argv[1])) {

@@ -19,6 +19,7 @@ PYBIND11_MODULE(_umbra, m) {
   bind_gain(m, map);
   bind_io(m, map);
   bind_depth(m, map);
+  bind_navigation(m, map);
   bind_sim(m);
   add_text_signatures(m);
 }

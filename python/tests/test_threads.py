@@ -40,6 +40,7 @@ def test_queries_from_threads_during_insertion():
         "gains": (lambda m: m.information_gains(origins[:4], [0, 90, 180, 270], 0, 100, 60, 0.0, 4.0), True),
         "count": (lambda m: m.count(pred.occupied() & pred.leaf()), False),
         "nodes": (lambda m: m.query(pred.leaf() & pred.intersects(umbra.Sphere((4, 6, 1.2), 1.5)))["log_odds"], False),
+        "projection": (lambda m: m.project(0.15, 1.25, rule="any_free").cells, False),
     }
 
     # The answers after 0, 1, ..., 10 whole scans.

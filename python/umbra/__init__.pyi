@@ -295,6 +295,29 @@ class GainResult:
     def entropy_bits(self) -> float:
         """Sum of the binary entropy of their occupancy, bits (unknown_voxels with the default thresholds)."""
 
+class NavigationGrid:
+    """A map projected between two heights (OccupancyMap.project): a 2D grid of cells."""
+    @property
+    def cells(self) -> NDArray[np.int8]:
+        """The cells, an int8 array (height, width): -1 unknown, 0 free, 100 occupied; cells[j, i] is column i (x) of row j (y), row 0 the lowest y (nav_msgs/OccupancyGrid's layout). Read-only."""
+    @property
+    def resolution(self) -> float:
+        """Edge of a cell, metres."""
+    @property
+    def depth(self) -> int:
+        """The map depth whose node columns are the cells."""
+    @property
+    def origin(self) -> Tuple[float, float]:
+        """(x, y) of the lower-left corner of cell [0, 0], metres."""
+    @property
+    def width(self) -> int:
+        """Cells along x."""
+    @property
+    def height(self) -> int:
+        """Cells along y."""
+    def save(self, path: PathLike) -> str:
+        """Writes map_server's PGM picture to path (.pgm) and its YAML description beside it (.yaml), both atomically; returns the YAML file's path. ValueError for an empty grid or a path not ending in .pgm, OSError when a file cannot be written."""
+
 class Predicate:
     """Which nodes a query wants; made by the functions of umbra.pred and combined with & (and), | (or) and ~ (not)."""
     def __and__(self, other: Predicate) -> Predicate: ...
@@ -560,6 +583,10 @@ class OccupancyMap:
         threads: int = 0,
     ) -> NDArray[np.void]:
         """information_gain of many poses: a list of Frustums, or origins (N, 3), yaw and pitch (N,) in degrees and hfov, vfov (degrees), min_range, max_range, each (N,) or one number for all. Returns a structured array (N,) of umbra.GAIN_DTYPE (unknown_voxels, volume, entropy_bits). threads: 0 for all cores. A bad pose raises ValueError (IndexError for an origin outside the map) naming its index."""
+
+    # --- the navigation grid
+    def project(self, z_min: float, z_max: float, *, depth: int = 0, rule: str = "all_known") -> NavigationGrid:
+        """The map projected between heights z_min and z_max (metres): a NavigationGrid. A cell (the column of a depth-`depth` node) is occupied if a voxel of its band (the voxel rows from the one holding z_min to the one holding z_max) is occupied; free if every voxel of the band is free (rule 'all_known') or if at least one is (rule 'any_free', octomap_server's); unknown otherwise. The grid spans the cells whose band holds a known voxel (empty when none does). ValueError for z_min >= z_max, a bad depth or rule; IndexError when the band lies outside the map."""
 
 def load(path: PathLike, sensor_model: Optional[SensorModel] = None) -> OccupancyMap:
     """Loads a map from a .umb, .bt or .ot file (by extension). sensor_model applies to OctoMap files only (they store none)."""

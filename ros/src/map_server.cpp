@@ -69,6 +69,7 @@ MapServer::MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, Serve
   occupied_publisher_ = node.advertise<visualization_msgs::MarkerArray>("occupied_cells_vis_array", 1, latch);
   free_publisher_ = node.advertise<visualization_msgs::MarkerArray>("free_cells_vis_array", 1, latch);
   centers_publisher_ = node.advertise<sensor_msgs::PointCloud2>("octomap_point_cloud_centers", 1, latch);
+  projected_publisher_ = node.advertise<nav_msgs::OccupancyGrid>("projected_map", 1, latch);
   binary_service_ = node.advertiseService("octomap_binary", &MapServer::get_binary, this);
   full_service_ = node.advertiseService("octomap_full", &MapServer::get_full, this);
   reset_service_ = private_node.advertiseService("reset", &MapServer::reset, this);
@@ -83,7 +84,8 @@ void MapServer::log_start() const {
            to_string(settings_.insert.integrator), cloud_subscriber_.getTopic().c_str(), image_input_.topics().c_str(),
            settings_.frame.c_str());
   std::string topics = "'" + binary_publisher_.getTopic() + "', '" + full_publisher_.getTopic() + "', '" +
-                       occupied_publisher_.getTopic() + "', '" + centers_publisher_.getTopic() + "'";
+                       occupied_publisher_.getTopic() + "', '" + centers_publisher_.getTopic() + "', '" +
+                       projected_publisher_.getTopic() + "'";
   if (settings_.cells.free_cells) topics += ", '" + free_publisher_.getTopic() + "'";
   ROS_INFO("umbra_server: publishing %s; services '%s', '%s', '%s', '%s', '%s'", topics.c_str(),
            binary_service_.getService().c_str(), full_service_.getService().c_str(), reset_service_.getService().c_str(),
@@ -247,6 +249,11 @@ void MapServer::publish_all(const ros::Time& stamp) {
     if (wanted(occupied_publisher_)) occupied_publisher_.publish(cells.occupied);
     if (wanted(centers_publisher_)) centers_publisher_.publish(cells.centers);
     if (free_cells) free_publisher_.publish(cells.free);
+  }
+  if (wanted(projected_publisher_)) {
+    const ProjectionOptions band = projection_for(map_, settings_.cells.min_z, settings_.cells.max_z,
+                                                  settings_.projected_map_depth, settings_.projected_map_rule);
+    projected_publisher_.publish(occupancy_grid_message(project_to_grid(map_, band), settings_.frame, stamp));
   }
 }
 

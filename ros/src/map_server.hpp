@@ -18,6 +18,9 @@
 //   occupied_cells_vis_array   visualization_msgs/MarkerArray
 //   free_cells_vis_array       (with ~publish_free_space)
 //   octomap_point_cloud_centers  sensor_msgs/PointCloud2
+//   projected_map    nav_msgs/OccupancyGrid: the band between occupancy_min_z
+//                    and occupancy_max_z projected to 2D (projected_map.hpp),
+//                    the whole band again after every scan
 // latched (~latch, default true) or only while someone subscribes.
 // Services: octomap_binary and octomap_full (octomap_msgs/GetOctomap),
 // ~reset (std_srvs/Empty: forget everything), ~clear_bbx
@@ -30,7 +33,8 @@
 // uses ~threads cores inside umbra.
 //
 // Cost per cloud or image: the insertion, then one pass over the map per published
-// message kind (as octomap_server). Clearing a box sets each known voxel in
+// message kind (as octomap_server; the projected map walks only the nodes in
+// its band, and decides whole blocks of cells from coarse nodes). Clearing a box sets each known voxel in
 // it that is not already at the clamping minimum, one by one (boxes of more
 // than 2^26 such voxels are refused with an error).
 #pragma once
@@ -52,6 +56,7 @@
 #include "cloud_wait_monitor.hpp"
 #include "depth_image_input.hpp"
 #include "image_message.hpp"
+#include "projected_map.hpp"
 #include "server_settings.hpp"
 #include "umbra/io/scan_source.hpp"
 #include "umbra/map/occupancy_map.hpp"
@@ -105,6 +110,7 @@ class MapServer {
   ros::Publisher occupied_publisher_;
   ros::Publisher free_publisher_;
   ros::Publisher centers_publisher_;
+  ros::Publisher projected_publisher_;
   ros::ServiceServer binary_service_;
   ros::ServiceServer full_service_;
   ros::ServiceServer reset_service_;

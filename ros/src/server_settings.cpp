@@ -63,6 +63,18 @@ ServerSettings read_settings(const ros::NodeHandle& node) {
   s.pointcloud_max_z = param(node, "pointcloud_max_z", s.pointcloud_max_z);
   s.cells.min_z = param(node, "occupancy_min_z", s.cells.min_z);
   s.cells.max_z = param(node, "occupancy_max_z", s.cells.max_z);
+  if (!(s.cells.min_z < s.cells.max_z)) {
+    throw std::invalid_argument("bad parameters ~occupancy_min_z " + std::to_string(s.cells.min_z) +
+                                " and ~occupancy_max_z " + std::to_string(s.cells.max_z) +
+                                ": the minimum must be below the maximum");
+  }
+  const std::string rule = param<std::string>(node, "projected_map_rule", std::string(to_string(s.projected_map_rule)));
+  check("~projected_map_rule", [&] { s.projected_map_rule = parse_projection_rule(rule); });
+  s.projected_map_depth = param(node, "projected_map_depth", s.projected_map_depth);
+  if (s.projected_map_depth < 0 || s.projected_map_depth > 16) {
+    throw std::invalid_argument("bad parameter ~projected_map_depth: " + std::to_string(s.projected_map_depth) +
+                                " (must be 0 to 16)");
+  }
   s.cells.height_map = param(node, "height_map", s.cells.height_map);
   s.cells.color_factor = param(node, "color_factor", s.cells.color_factor);
   s.cells.color = color_param(node, "color", rgba(0, 0, 1, 1));
@@ -102,7 +114,8 @@ ServerSettings read_settings(const ros::NodeHandle& node) {
   };
   ignored_if("filter_ground", "umbra_server does not segment the ground; every point is inserted");
   ignored_if("filter_speckles", "umbra_server publishes every occupied cell");
-  ignored_if("incremental_2D_projection", "umbra_server publishes no projected 2D map");
+  ignored_if("incremental_2D_projection",
+             "umbra_server projects the whole band after every scan (the same grid, from the octree's nodes)");
   if (node.hasParam("base_frame_id")) s.ignored.push_back("base_frame_id: only used by filter_ground, which umbra_server lacks");
   if (node.hasParam("ground_filter")) s.ignored.push_back("ground_filter/*: umbra_server does not segment the ground");
   return s;

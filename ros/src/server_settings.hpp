@@ -7,8 +7,9 @@
 // occupancy_{min,max}_z, height_map, color_factor, color/{r,g,b,a},
 // color_free/{r,g,b,a}, publish_free_space, latch, compress_map. Those it
 // does not implement (filter_ground, filter_speckles, ground_filter/*,
-// base_frame_id, incremental_2D_projection, the projected 2D map) are
-// reported by name when set, never silently ignored.
+// base_frame_id) are reported by name when set, never silently ignored;
+// incremental_2D_projection is reported too (umbra_server projects the
+// whole band after every scan: the same grid).
 //
 // umbra's own: integrator (simple | discrete | fast | projective),
 // clear_depth, fine_steps, surface_margin, scan_resolution/{horizontal,
@@ -16,7 +17,9 @@
 // rgb; then the full map is a ColorOcTree); for depth images (the topics
 // depth/image and depth/camera_info): image_integrator (projective by
 // default: free space from the image itself), image_max_range (default:
-// sensor_model/max_range), image_colors (colour the voxels from rgb/image).
+// sensor_model/max_range), image_colors (colour the voxels from rgb/image);
+// for the projected map: projected_map_rule (any_free, octomap_server's, by
+// default; or all_known) and projected_map_depth (0: cells of one voxel).
 #pragma once
 
 #include <ros/node_handle.h>
@@ -28,6 +31,7 @@
 #include "map_messages.hpp"
 #include "umbra/core/log_odds.hpp"
 #include "umbra/map/insert_options.hpp"
+#include "umbra/query/navigation_grid.hpp"
 
 namespace umbra::ros_io {
 
@@ -39,6 +43,9 @@ struct ServerSettings {
   double pointcloud_min_z = -std::numeric_limits<double>::infinity();
   double pointcloud_max_z = std::numeric_limits<double>::infinity();
   CellStyle cells;
+  /// projected_map: cells of depth-`projected_map_depth` columns, band occupancy_{min,max}_z (navigation_grid.hpp).
+  ProjectionRule projected_map_rule = ProjectionRule::any_free;
+  int projected_map_depth = 0;
   bool latch = true;
   bool compress_map = true;  ///< prune after every cloud (umbra's automatic pruning)
   bool color = false;  ///< keep_colors

@@ -389,35 +389,35 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   stats.out_of_bounds = image_points_.out_of_bounds();
   stats.threads = threads > 1 ? pool_->size() : 1;
   for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
-  // The hits (the discrete integrator's: the voxels holding a point) go into
-  // one worker's batch while the others trace misses. A depth image's rays
-  // are as dense as its pixels: the rule alone decides its misses, known
-  // obstacles included (projective_frame.hpp).
-  const auto add_hits = [&](UpdateBatch& batch) {
-    image_points_.for_each_voxel([&](std::uint64_t code) {
-      if (add_end_voxel_hit(grid, origin, code, options.max_range, box, box_keys, batch, stats)) ++stats.hits;
-    });
-    stats.rays = stats.hits;
+  // The hits (the discrete integrator's: the voxels holding a point) and the
+  // colour samples are side jobs, each on one worker while the others trace
+  // misses (serial, but off the critical path). A depth image's rays are as
+  // dense as its pixels: the rule alone decides its misses, known obstacles
+  // included (projective_frame.hpp).
+  const auto side_job = [&](std::size_t job, UpdateBatch& batch) {
+    if (job == 0) {
+      image_points_.for_each_voxel([&](std::uint64_t code) {
+        if (add_end_voxel_hit(grid, origin, code, options.max_range, box, box_keys, batch, stats)) ++stats.hits;
+      });
+      stats.rays = stats.hits;
+    } else {
+      queue_end_voxel_colors(grid, origin, image_points_.points(), image_points_.colors(), image_points_.codes(),
+                             options, box_keys);
+    }
   };
   trace_projective_misses(nullptr, grid, options, box_keys, std::span<const ProjectiveFrame>(&frame_, 1), threads,
-                          add_hits);
-  if (!colors.empty()) {
-    queue_end_voxel_colors(grid, origin, image_points_.points(), image_points_.colors(), image_points_.codes(), options,
-                           box_keys, threads);
-  }
+                          colors.empty() ? 1 : 2, side_job);
   pending_threads_ = threads;
   return stats;
 }
 
 void Integrator::queue_end_voxel_colors(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
                                         std::span<const Rgb> colors, std::span<const std::uint64_t> codes,
-                                        const InsertOptions& options, const std::optional<KeyBox>& box_keys,
-                                        unsigned threads) {
+                                        const InsertOptions& options, const std::optional<KeyBox>& box_keys) {
   // The projective integrator's hits are the discrete integrator's: so are its colours.
   InsertOptions discrete = options;
   discrete.integrator = IntegratorKind::discrete;
-  ThreadPool* const pool = threads > 1 ? pool_.get() : nullptr;
-  pending_colors_ = color_samples(grid, origin, points, colors, discrete, box_keys, pool, codes);
+  pending_colors_ = color_samples(grid, origin, points, colors, discrete, box_keys, nullptr, codes);
 }
 
 InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
@@ -431,19 +431,24 @@ InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const G
   ensure_workers(threads);
   stats.threads = threads > 1 ? pool_->size() : 1;
   for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
-  // The hits go into one worker's batch while the others trace misses.
-  const auto add_hits = [&](UpdateBatch& batch) {
-    add_end_voxel_hits(grid, origin, points, options.max_range, box, box_keys, batch, stats);
+  // The hits and the colour samples are side jobs, each on one worker while
+  // the others trace misses.
+  const auto side_job = [&](std::size_t job, UpdateBatch& batch) {
+    if (job == 0) {
+      add_end_voxel_hits(grid, origin, points, options.max_range, box, box_keys, batch, stats);
+    } else {
+      queue_end_voxel_colors(grid, origin, points, colors, {}, options, box_keys);
+    }
   };
+  const std::size_t side_jobs = colors.empty() ? 1 : 2;
   const ScanResolution resolution = estimate_scan_resolution(origin, points, options.scan_resolution);
   if (resolution.horizontal > 0.0 && resolution.vertical > 0.0) {
     stats.scan_resolution = resolution;
     scan_images_.build(origin, points, resolution);
-    trace_projective_misses(&tree, grid, options, box_keys, scan_images_.faces(), threads, add_hits);
+    trace_projective_misses(&tree, grid, options, box_keys, scan_images_.faces(), threads, side_jobs, side_job);
   } else {
-    add_hits(tracers_[0]->batch());
+    for (std::size_t job = 0; job < side_jobs; ++job) side_job(job, tracers_[0]->batch());
   }
-  if (!colors.empty()) queue_end_voxel_colors(grid, origin, points, colors, {}, options, box_keys, threads);
   pending_threads_ = threads;
   return stats;
 }
@@ -451,7 +456,7 @@ InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const G
 void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& grid, const InsertOptions& options,
                                          const std::optional<KeyBox>& box_keys,
                                          std::span<const ProjectiveFrame> frames, unsigned threads,
-                                         FunctionRef<void(UpdateBatch&)> first) {
+                                         std::size_t side_jobs, FunctionRef<void(std::size_t, UpdateBatch&)> side_job) {
   // One rule and tracer per image (the six faces of a scan, or one depth
   // image); a voxel gets a miss when any of them clears it.
   std::vector<ProjectiveRule> rules;
@@ -466,7 +471,7 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
   }
   const int root_depth = grid.depth_levels();
   if (threads == 1) {
-    first(tracers_[0]->batch());
+    for (std::size_t job = 0; job < side_jobs; ++job) side_job(job, tracers_[0]->batch());
     for (const ProjectiveRule& rule : rules) ProjectiveTracer(rule).trace(0, root_depth, tracers_[0]->batch());
     return;
   }
@@ -487,13 +492,13 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
     }
     if (tasks.size() >= std::size_t{threads} * 16) break;
   }
-  // `first` is task 0: the pool hands tasks out in order, so it starts first.
-  pool_->run(tasks.size() + 1, [&](std::size_t i, unsigned worker) {
-    if (i == 0) {
-      first(tracers_[worker]->batch());
+  // The side jobs are the first tasks: the pool hands tasks out in order, so they start first.
+  pool_->run(side_jobs + tasks.size(), [&](std::size_t i, unsigned worker) {
+    if (i < side_jobs) {
+      side_job(i, tracers_[worker]->batch());
       return;
     }
-    const Task& task = tasks[i - 1];
+    const Task& task = tasks[i - side_jobs];
     ProjectiveTracer(rules[task.image]).trace(task.node.code, task.node.depth, tracers_[worker]->batch());
   });
   UpdateBatch& merged = tracers_[0]->batch();

@@ -102,23 +102,26 @@ class Integrator {
 
  private:
   void ensure_workers(unsigned threads);
-  /// trace() with the projective integrator: the scan as the six faces of
-  /// images around its origin (scan_images.hpp).
-  /// Colour samples of the end voxels, as the discrete integrator takes them, for the next apply.
-  /// `codes`: the points' voxel codes, or empty.
+  /// Colour samples of the end voxels, as the discrete integrator takes
+  /// them, for the next apply (on this thread). `codes`: the points' voxel
+  /// codes, or empty.
   void queue_end_voxel_colors(const Grid& grid, Vec3f origin, std::span<const Vec3f> points, std::span<const Rgb> colors,
                               std::span<const std::uint64_t> codes, const InsertOptions& options,
-                              const std::optional<KeyBox>& box_keys, unsigned threads);
+                              const std::optional<KeyBox>& box_keys);
+  /// trace() with the projective integrator: the scan as the six faces of
+  /// images around its origin (scan_images.hpp).
   InsertStats trace_scan_projective(const OccupancyTree& tree, const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
                                     std::span<const Rgb> colors, const InsertOptions& options,
                                     const std::optional<Aabb>& box);
   /// The projective integrator's misses for `frames`, into the tracers'
   /// batches (merged into tracers_[0]'s); with `tree`, its obstacles are
-  /// cleared only where the frames' rays cross them.
-  /// `first` runs before them into one worker's batch (the hits).
+  /// cleared only where the frames' rays cross them. side_job(0 ..
+  /// side_jobs - 1, a batch) run first, each on one worker while the others
+  /// trace (the hits, into that worker's batch, and the colours).
   void trace_projective_misses(const OccupancyTree* tree, const Grid& grid, const InsertOptions& options,
                                const std::optional<KeyBox>& box_keys, std::span<const ProjectiveFrame> frames,
-                               unsigned threads, FunctionRef<void(UpdateBatch&)> first);
+                               unsigned threads, std::size_t side_jobs,
+                               FunctionRef<void(std::size_t, UpdateBatch&)> side_job);
 
   std::unique_ptr<ThreadPool> pool_;
   std::vector<std::unique_ptr<RayTracer>> tracers_;  // one per worker

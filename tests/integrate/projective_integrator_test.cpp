@@ -331,21 +331,54 @@ TEST(ProjectiveIntegrator, SameMapForAnyThreadCount) {
     scan_origins.push_back(Vec3f{0.3f * i, 0.1f * i, 0.05f});
     scans.push_back(random_room_scan(rng, scan_origins.back()));
   }
-  std::vector<std::vector<std::tuple<std::uint64_t, int, float>>> results;
-  for (const unsigned threads : {1u, 2u, 3u, 16u}) {
-    OccupancyMap map(0.02);
-    InsertOptions options;
-    options.integrator = IntegratorKind::projective;
-    options.max_range = 6.0;
-    options.threads = threads;
-    for (std::size_t i = 0; i < 4; ++i) {
-      map.insert_depth_image(frames[i].view(), frames[i].camera, frames[i].pose, {}, options);
+  // With colour too: its samples are a side job of one worker (several
+  // points per voxel, blended in point order).
+  std::vector<std::vector<Rgb>> frame_colors(frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    for (std::size_t p = 0; p < frames[i].view().pixel_count(); ++p) {
+      frame_colors[i].push_back(Rgb{static_cast<std::uint8_t>(p * 7), static_cast<std::uint8_t>(p >> 3),
+                                    static_cast<std::uint8_t>(i * 40)});
     }
-    for (std::size_t i = 0; i < scans.size(); ++i) map.insert_point_cloud(scan_origins[i], scans[i], options);
-    ASSERT_TRUE(test::check_invariants(map).empty());
-    results.push_back(leaves_of(test::tree_of(map)));
   }
-  for (std::size_t i = 1; i < results.size(); ++i) EXPECT_EQ(results[i], results[0]) << "run " << i;
+  std::vector<std::vector<Rgb>> scan_colors(scans.size());
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    for (std::size_t p = 0; p < scans[i].size(); ++p) scan_colors[i].push_back(Rgb{static_cast<std::uint8_t>(p), 9, 9});
+  }
+  using Leaf = std::tuple<std::uint64_t, int, float, std::uint8_t, std::uint8_t, std::uint8_t>;
+  for (const bool with_color : {false, true}) {
+    SCOPED_TRACE(with_color ? "with colour" : "without colour");
+    std::vector<std::vector<Leaf>> results;
+    for (const unsigned threads : {1u, 2u, 3u, 16u}) {
+      MapConfig config;
+      config.resolution = 0.02;
+      config.color = with_color;
+      OccupancyMap map(config);
+      InsertOptions options;
+      options.integrator = IntegratorKind::projective;
+      options.max_range = 6.0;
+      options.threads = threads;
+      for (std::size_t i = 0; i < 4; ++i) {
+        map.insert_depth_image(frames[i].view(), frames[i].camera, frames[i].pose,
+                               with_color ? std::span<const Rgb>(frame_colors[i]) : std::span<const Rgb>(), options);
+      }
+      for (std::size_t i = 0; i < scans.size(); ++i) {
+        if (with_color) {
+          map.insert_point_cloud(scan_origins[i], scans[i], scan_colors[i], options);
+        } else {
+          map.insert_point_cloud(scan_origins[i], scans[i], options);
+        }
+      }
+      ASSERT_TRUE(test::check_invariants(map).empty());
+      const OccupancyTree& tree = test::tree_of(map);
+      std::vector<Leaf> leaves;
+      tree.for_each_leaf([&](NodeRef node, std::uint64_t code) {
+        const Rgb c = with_color ? tree.color(node).value_or(Rgb{}) : Rgb{};
+        leaves.emplace_back(code, node.depth, tree.log_odds(node), c.r, c.g, c.b);
+      });
+      results.push_back(std::move(leaves));
+    }
+    for (std::size_t i = 1; i < results.size(); ++i) EXPECT_EQ(results[i], results[0]) << "run " << i;
+  }
 }
 
 /// The simple integrator's map and the projective one's of the same frames,

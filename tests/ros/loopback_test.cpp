@@ -29,6 +29,7 @@
 #include <unistd.h>
 
 #include <octomap_msgs/BoundingBoxQuery.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <octomap_msgs/Octomap.h>
 #include <ros/ros.h>
 #include <rosbag/bag.h>
@@ -51,9 +52,11 @@
 #include <mutex>
 #include <optional>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "map_messages.hpp"
+#include "umbra/query/navigation_grid.hpp"
 #include "ros_test_support.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
@@ -552,6 +555,69 @@ TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
   EXPECT_TRUE(binary_.get()->data.empty());
 }
 
+// projected_map (nav_msgs/OccupancyGrid) after every scan equals the offline projection (project_to_grid, itself
+// checked against brute force in tests/query/) of the library's map of the same scans, over the band
+// ~occupancy_min_z .. ~occupancy_max_z; and with unbounded heights (octomap_server's defaults) the whole map.
+TEST_F(Loopback, ProjectedMapEqualsTheOfflineProjectionAfterEveryScan) {
+  const double resolution = 0.1;
+  const std::vector<RosScan> scans = office_scans(4);
+  struct Run {
+    std::vector<std::string> params;
+    ProjectionOptions options;  ///< what the parameters mean (unbounded: the map's extent, 3276.8 m at 0.1 m)
+  };
+  const std::vector<Run> runs = {
+      {{"_occupancy_min_z:=0.15", "_occupancy_max_z:=1.25", "_projected_map_rule:=all_known"},
+       {0.15, 1.25, 0, ProjectionRule::all_known}},
+      {{"_occupancy_min_z:=0.15", "_occupancy_max_z:=1.25", "_projected_map_depth:=1"},
+       {0.15, 1.25, 1, ProjectionRule::any_free}},
+      {{}, {-3276.8, 3276.8, 0, ProjectionRule::any_free}},  // octomap_server's defaults
+  };
+  for (const Run& run : runs) {
+    const ProjectionOptions& options = run.options;
+    SCOPED_TRACE("z " + std::to_string(options.z_min) + " .. " + std::to_string(options.z_max) + " depth " +
+                 std::to_string(options.depth) + " rule " + std::string(to_string(options.rule)));
+    Latest<nav_msgs::OccupancyGrid> projected;
+    ros::Subscriber projected_sub = node_->subscribe<nav_msgs::OccupancyGrid>(
+        "/projected_map", 5, [&](const nav_msgs::OccupancyGrid::ConstPtr& m) { projected.take(m); });
+    ASSERT_NO_FATAL_FAILURE(start_server(resolution, run.params));
+    std::array<std::size_t, 3> kinds{};  // occupied, free, unknown cells compared, over all scans
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      const ros::Time stamp(3000.0 + 0.1 * static_cast<double>(i));
+      tf2_msgs::TFMessage tf;
+      tf.transforms.push_back(to_transform(scans[i], "map", "lidar", stamp));
+      tf_pub_.publish(tf);
+      cloud_pub_.publish(to_cloud(scans[i], "lidar", stamp));
+      ASSERT_TRUE(wait_for([&] { const auto m = projected.get(); return m && m->header.stamp == stamp; },
+                           kMessageLimit))
+          << "no projected map for scan " << i << ":\n" << log_text(dir_ / "umbra_server.log");
+      const auto got = projected.get();
+      const std::vector<RosScan> so_far(scans.begin(), scans.begin() + static_cast<std::ptrdiff_t>(i) + 1);
+      const NavigationGrid want = project_to_grid(reference_map(so_far, resolution), options);
+      ASSERT_FALSE(want.empty());
+      EXPECT_EQ(got->header.frame_id, "map");
+      EXPECT_EQ(got->info.resolution, static_cast<float>(want.resolution));
+      EXPECT_EQ(got->info.origin.position.x, want.origin_x);
+      EXPECT_EQ(got->info.origin.position.y, want.origin_y);
+      EXPECT_EQ(got->info.origin.orientation.w, 1.0);
+      ASSERT_EQ(got->info.width, want.width) << "scan " << i;
+      ASSERT_EQ(got->info.height, want.height) << "scan " << i;
+      ASSERT_EQ(got->data.size(), want.cells.size());
+      std::size_t differ = 0;
+      for (std::size_t k = 0; k < want.cells.size(); ++k) {
+        differ += got->data[k] != static_cast<std::int8_t>(want.cells[k]) ? 1 : 0;
+        ++kinds[want.cells[k] == GridCell::occupied ? 0 : want.cells[k] == GridCell::free ? 1 : 2];
+      }
+      EXPECT_EQ(differ, 0u) << "cells differ after scan " << i;
+    }
+    // Every value occurred, or the comparison proves little.
+    EXPECT_GT(kinds[0], 10u);
+    EXPECT_GT(kinds[1], 10u);
+    EXPECT_GT(kinds[2], 10u);
+    projected_sub.shutdown();
+    server_.reset();
+  }
+}
+
 // Issue 23, item 7: ROS's command-line tools on the node, as a user types them. rostopic needs Debian's
 // python3-sensor-msgs for the centres; the Octomap topic and the services of octomap_msgs and umbra_msgs need the
 // Python modules and package folders the build generates (build/ros/messages, ros/generate_python_messages.py).
@@ -659,7 +725,8 @@ TEST_F(Loopback, CloudsWithoutTransformAreNamedInAWarning) {
             "frame into 'map'");
   EXPECT_EQ(line_of("umbra_server: publishing"),
             "umbra_server: publishing '/octomap_binary', '/octomap_full', '/occupied_cells_vis_array', "
-            "'/octomap_point_cloud_centers'; services '/octomap_binary', '/octomap_full', '/umbra_server/reset', "
+            "'/octomap_point_cloud_centers', '/projected_map'; services '/octomap_binary', '/octomap_full', "
+            "'/umbra_server/reset', "
             "'/umbra_server/clear_bbx', '/umbra_server/check_collision'");
 
   // TF knows map -> lidar, not the frame of the cloud.
@@ -742,12 +809,21 @@ TEST_F(Loopback, BadParametersStopTheNodeWithAMessage) {
       {"_sensor_model/hit:=0.3", "bad parameter ~sensor_model/{hit,miss,min,max}"},
       {"_image_integrator:=rays", "bad parameter ~image_integrator"},
       {"_image_colors:=true", "bad parameter ~image_colors: true needs ~keep_colors true"},
+      {"_projected_map_rule:=most_free",
+       "bad parameter ~projected_map_rule: unknown projection rule 'most_free' (the rules: all_known, any_free)"},
+      {"_projected_map_depth:=17", "bad parameter ~projected_map_depth: 17 (must be 0 to 16)"},
+      {"_occupancy_min_z:=1.5 _occupancy_max_z:=1.0",
+       "bad parameters ~occupancy_min_z 1.500000 and ~occupancy_max_z 1.000000: the minimum must be below the maximum"},
   };
   int run = 0;
   for (const auto& [argument, expected] : cases) {
     const fs::path log = dir_ / "bad.log";
     // A name of its own: private parameters stay on the master after a node ends.
-    Child server({UMBRA_SERVER_PATH, argument, "__name:=umbra_server_bad_" + std::to_string(run++)}, log);
+    std::vector<std::string> argv{UMBRA_SERVER_PATH};
+    std::istringstream words(argument);  // one or more parameters
+    for (std::string word; words >> word;) argv.push_back(word);
+    argv.push_back("__name:=umbra_server_bad_" + std::to_string(run++));
+    Child server(argv, log);
     const std::optional<int> code = server.exit_code(kStartLimit);
     ASSERT_TRUE(code.has_value()) << argument << ": umbra_server kept running";
     EXPECT_EQ(*code, 1) << argument;
