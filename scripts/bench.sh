@@ -12,6 +12,8 @@
 #                                       writing included, against OctoMap)
 #   scripts/bench.sh navigation ARGS... bench/navigation_grid_benchmark.cpp
 #                                       (the 2D navigation grid)
+#   scripts/bench.sh field ARGS...      bench/field_benchmark.cpp (the
+#                                       distance field against dynamicEDT3D)
 # ARGS go to the program (--help lists them); results: docs/benchmarks.md.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -19,7 +21,7 @@ root="$(umbra_root)"
 build_dir="${UMBRA_BENCH_BUILD_DIR:-$root/build-bench}"
 
 benchmark=insert
-if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python || "$1" == build || "$1" == navigation ) ]]; then
+if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python || "$1" == build || "$1" == navigation || "$1" == field ) ]]; then
   benchmark="$1"
   shift
 fi

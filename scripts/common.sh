@@ -10,6 +10,7 @@ UMBRA_APT_PACKAGES=(
   libcli11-dev                                  # the umbra program
   libgtest-dev libgmock-dev                     # tests
   liboctomap-dev                                # differential tests and benchmarks only
+  libdynamicedt3d-dev                           # bench/field: OctoMap's distance field, compared with umbra's
   clang                                         # fuzz targets (optional label)
   bzip2 python3                                 # test helpers
   python3-dev python3-pybind11 pybind11-dev     # the Python module umbra (python/)

@@ -8,6 +8,7 @@
 //   raycast   x y z dx dy dz max_range      -> "1 cx cy cz" (first occupied voxel's centre) or 0
 //   gain      x y z yaw_deg pitch_deg        -> "unknown_voxels volume_m3" seen from that pose
 //             (--hfov, --vfov, --min-range, --max-range, --method exact|fast)
+//   distance  x y z --max-distance D         -> "d_occupied d_unknown gx gy gz" (distance_field.hpp)
 //   nodes     (no input) --state S [--box ..|--sphere ..] [--count] -> "x y z size state" per node
 //
 // Lines are answered as they arrive, in bounded memory: the lines the input
@@ -56,6 +57,8 @@ struct QueryOptions {
   double min_range = 0.0;
   double max_range = 6.5;
   std::string method = "exact";
+  // distance
+  double max_distance = 1.0;
   // nodes
   std::string state;
   std::vector<double> box;
@@ -189,6 +192,9 @@ void answer_and_print(const OccupancyMap& map, LineQuery kind, const LineQuerySe
       ++totals.bad;
     } else if (kind == LineQuery::gain) {
       std::printf("%llu %.10g\n", static_cast<unsigned long long>(a.gain.unknown_voxels), a.gain.volume);
+    } else if (kind == LineQuery::distance) {
+      std::printf("%.10g %.10g %.10g %.10g %.10g\n", a.sample.occupied, a.sample.unknown, a.sample.gradient.x,
+                  a.sample.gradient.y, a.sample.gradient.z);
     } else if (kind == LineQuery::raycast && a.yes) {
       std::printf("1 %.10g %.10g %.10g\n", a.point.x, a.point.y, a.point.z);
     } else {
@@ -234,6 +240,20 @@ int run_query(const QueryOptions& options) {
   settings.min_range = options.min_range;
   settings.max_range = options.max_range;
   settings.method = options.method == "fast" ? GainMethod::fast : GainMethod::exact;
+  std::unique_ptr<DistanceField> field;
+  if (*kind == LineQuery::distance) {
+    // The whole known space, built once before the lines are read (not timed).
+    DistanceFieldOptions field_options;
+    field_options.max_distance = options.max_distance;
+    field_options.depth = options.depth;
+    try {
+      field = std::make_unique<DistanceField>(map, field_options);
+    } catch (const std::invalid_argument& e) {
+      std::fprintf(stderr, "umbra: query distance: %s\n", e.what());
+      return 2;
+    }
+    settings.field = field.get();
+  }
 
   std::unique_ptr<DescriptorInput> input;
   try {
@@ -290,12 +310,12 @@ std::string query_help_footer() {
 Command add_query_command(CLI::App& app) {
   auto options = std::make_shared<QueryOptions>();
   CLI::App* command = app.add_subcommand(
-      "query", "Answer collision, line, ray-cast, information-gain and node queries about a map, one per input line");
+      "query", "Answer collision, line, ray-cast, information-gain, distance and node queries about a map, one per input line");
   command->add_option("map", options->map_path, "map file (.umb, or OctoMap's .bt / .ot)")
       ->required();  // a missing file is an input failure (exit code 1), named when it is loaded
-  command->add_option("kind", options->kind, "sphere | box | line | raycast | gain | nodes")
+  command->add_option("kind", options->kind, "sphere | box | line | raycast | gain | distance | nodes")
       ->required()
-      ->check(CLI::IsMember({"sphere", "box", "line", "raycast", "gain", "nodes"}));
+      ->check(CLI::IsMember({"sphere", "box", "line", "raycast", "gain", "distance", "nodes"}));
   command->add_option("--input", options->input,
                       "file of queries, one per line; - for standard input (the default when it is a pipe or a file)");
   command->add_option("--unknown", options->unknown, "unknown space blocks (default) or counts as free")
@@ -312,6 +332,9 @@ Command add_query_command(CLI::App& app) {
   command->add_option("--max-range", options->max_range, "gain: far range (m)")->check(CLI::PositiveNumber);
   command->add_option("--method", options->method, "gain: exact, or fast (a few per cent off, faster)")
       ->check(CLI::IsMember({"exact", "fast"}));
+  command->add_option("--max-distance", options->max_distance,
+                      "distance: distances are capped here (m); the field's cost grows with it")
+      ->check(number_in(1e-9, 1e6, "the maximum distance in metres"));
   command->add_option("--state", options->state, "nodes: only occupied, free or unknown ones")
       ->check(CLI::IsMember({"occupied", "free", "unknown"}));
   command->add_option("--box", options->box, "nodes: only those meeting minx,miny,minz,maxx,maxy,maxz")

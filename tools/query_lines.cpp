@@ -18,7 +18,7 @@ namespace umbra::cli {
 
 std::optional<LineQuery> line_query_named(std::string_view name) {
   for (const LineQuery kind :
-       {LineQuery::sphere, LineQuery::box, LineQuery::line, LineQuery::raycast, LineQuery::gain}) {
+       {LineQuery::sphere, LineQuery::box, LineQuery::line, LineQuery::raycast, LineQuery::gain, LineQuery::distance}) {
     if (name == to_string(kind)) return kind;
   }
   return std::nullopt;
@@ -31,6 +31,7 @@ const char* to_string(LineQuery kind) {
     case LineQuery::line: return "line";
     case LineQuery::raycast: return "raycast";
     case LineQuery::gain: return "gain";
+    case LineQuery::distance: return "distance";
   }
   return "?";
 }
@@ -42,6 +43,7 @@ std::size_t numbers_of(LineQuery kind) {
     case LineQuery::line: return 6;
     case LineQuery::raycast: return 7;
     case LineQuery::gain: return 5;
+    case LineQuery::distance: return 3;
   }
   return 0;
 }
@@ -53,6 +55,7 @@ const char* layout_of(LineQuery kind) {
     case LineQuery::line: return "x1 y1 z1 x2 y2 z2";
     case LineQuery::raycast: return "x y z dx dy dz max_range";
     case LineQuery::gain: return "x y z yaw_deg pitch_deg";
+    case LineQuery::distance: return "x y z";
   }
   return "?";
 }
@@ -64,6 +67,9 @@ const char* answer_of(LineQuery kind) {
     case LineQuery::line: return "1 if a voxel along the segment blocks (--radius R: in the capsule around it), else 0";
     case LineQuery::raycast: return "'1 cx cy cz', the centre of the first occupied voxel within max_range, or 0";
     case LineQuery::gain: return "'unknown_voxels volume_m3': the unknown space a sensor at that pose would see";
+    case LineQuery::distance:
+      return "'d_occupied d_unknown gx gy gz': metres to the nearest occupied and unknown voxel (capped at "
+             "--max-distance) and the unit gradient away from the nearest blocking one";
   }
   return "?";
 }
@@ -189,6 +195,10 @@ QueryAnswer answer_query_line(const OccupancyMap& map, LineQuery kind, std::span
         a.gain = map.information_gain(view, gain_options);
         break;
       }
+      case LineQuery::distance:
+        if (settings.field == nullptr) throw std::logic_error("answer_query_line: distance needs settings.field");
+        a.sample = settings.field->distance_and_gradient({v[0], v[1], v[2]});
+        break;
     }
     a.ok = true;
   } catch (const std::invalid_argument& e) {

@@ -17,14 +17,15 @@
 #include <vector>
 
 #include "umbra/map/occupancy_map.hpp"
+#include "umbra/query/distance_field.hpp"
 #include "umbra/query/information_gain.hpp"
 
 namespace umbra::cli {
 
 /// The kinds of query that read lines, with their layout.
-enum class LineQuery { sphere, box, line, raycast, gain };
+enum class LineQuery { sphere, box, line, raycast, gain, distance };
 
-/// "sphere", "box", "line", "raycast" or "gain"; nullopt for anything else.
+/// "sphere", "box", "line", "raycast", "gain" or "distance"; nullopt for anything else.
 std::optional<LineQuery> line_query_named(std::string_view name);
 const char* to_string(LineQuery kind);
 /// How many numbers a line of this kind holds, and their names ("x y z r").
@@ -33,8 +34,8 @@ const char* layout_of(LineQuery kind);
 /// What the answer line to one input line holds, in words (`umbra query --help`).
 const char* answer_of(LineQuery kind);
 /// Every kind that reads lines, in the order the help lists them.
-inline constexpr LineQuery kLineQueries[] = {LineQuery::sphere, LineQuery::box, LineQuery::line, LineQuery::raycast,
-                                             LineQuery::gain};
+inline constexpr LineQuery kLineQueries[] = {LineQuery::sphere, LineQuery::box,  LineQuery::line,
+                                             LineQuery::raycast, LineQuery::gain, LineQuery::distance};
 
 /// The numbers of one line (blank and '#' lines are not passed here):
 /// separated by spaces, tabs or commas, each finite, exactly numbers_of(kind)
@@ -94,6 +95,7 @@ struct QueryAnswer {
   bool yes = false;
   Vec3d point;
   GainResult gain{};
+  DistanceSample sample;  ///< distance
   std::string problem;
 };
 
@@ -108,6 +110,8 @@ struct LineQuerySettings {
   double min_range = 0.0;
   double max_range = 6.5;
   GainMethod method = GainMethod::exact;
+  /// distance: the field to ask (made from the map with --max-distance and --depth).
+  const DistanceField* field = nullptr;
 };
 
 /// Answers one line's values (numbers_of(kind) of them, as parse_query_line

@@ -21,5 +21,6 @@ PYBIND11_MODULE(_umbra, m) {
   bind_depth(m, map);
   bind_navigation(m, map);
   bind_sim(m);
+  bind_field(m);
   add_text_signatures(m);
 }

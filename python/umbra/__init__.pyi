@@ -591,6 +591,38 @@ class OccupancyMap:
 def load(path: PathLike, sensor_model: Optional[SensorModel] = None) -> OccupancyMap:
     """Loads a map from a .umb, .bt or .ot file (by extension). sensor_model applies to OctoMap files only (they store none)."""
 
+class DistanceField:
+    """Distances from any point to the nearest occupied and the nearest unknown voxel of a map, capped at max_distance, with the gradient; kept up to date by update() after scans."""
+
+    def __init__(
+        self,
+        map: OccupancyMap,
+        *,
+        max_distance: float = 1.0,
+        depth: int = 0,
+        box: Optional[Aabb] = None,
+        threads: int = 1,
+    ) -> None:
+        """Builds the field of `map` (kept alive by the field): cells of depth `depth`, distances capped at max_distance metres, inside `box` (an Aabb) or, without one, over the whole known space; built and updated by `threads` threads (0: all)."""
+    def update(self) -> None:
+        """Brings the field up to date with the map, recomputing only near what changed since the last update."""
+    def rebuild(self) -> None:
+        """Recomputes everything."""
+    def set_box(self, box: Optional[Aabb]) -> None:
+        """Moves the box (an Aabb, or None: the whole known space) and rebuilds."""
+    @property
+    def max_distance(self) -> float:
+        """Metres; distances are capped here."""
+    @property
+    def depth(self) -> int:
+        """Depth of the cells (0: finest voxels)."""
+    def memory_bytes(self) -> int:
+        """Bytes the field holds."""
+    def distance(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Distance to the nearest blocking (occupied or unknown) voxel of each point (..., 3): an array (...). A point outside the map (or the box) raises IndexError naming its index."""
+    def distance_and_gradient(self, points: ArrayLike) -> NDArray[np.float64]:
+        """For each point (..., 3) the row (d_occupied, d_unknown, gx, gy, gz): metres to the nearest occupied and unknown voxel (capped at max_distance) and the unit vector away from the nearest blocking one: an array (..., 5)."""
+
 class DepthCamera:
     """A pinhole depth camera: pixel (u, v) with raw depth d lies at z = d / depth_scale metres, x = (u - cx) z / fx, y = (v - cy) z / fy. Defaults: the TUM fr2 Kinect."""
     def __init__(

@@ -519,6 +519,8 @@ void Integrator::apply(OccupancyTree& tree, const SensorModel& sensor) {
   std::vector<OccupancyTree::ColorSample>().swap(pending_colors_);
 }
 
+const UpdateBatch& Integrator::pending_batch() const { return tracers_[0]->batch(); }
+
 void Integrator::discard() {
   pending_threads_ = 0;  // the next trace() empties the batches
   std::vector<OccupancyTree::ColorSample>().swap(pending_colors_);

@@ -94,6 +94,8 @@ class Integrator {
   /// Writes the pending update of the last trace() into `tree` (the same
   /// tree, unchanged since) and forgets it.
   void apply(OccupancyTree& tree, const SensorModel& sensor);
+  /// The update apply() will write (between trace() and apply()).
+  [[nodiscard]] const UpdateBatch& pending_batch() const;
   /// Forgets the pending update (after a failed trace).
   void discard();
 

@@ -34,7 +34,11 @@ class MapAccess {
     TreeBuilder builder(map.state_->tree);
     std::forward<Build>(build)(builder);
     builder.finish();
+    map.state_->journal->record_everything();
   }
+
+  /// The map's change journal (distance fields subscribe to it).
+  static std::shared_ptr<ChangeJournal> journal(const OccupancyMap& map) { return map.state_->journal; }
 
   /// The gate, for a range that holds the map for reading across calls.
   static const ReadGate& gate(const OccupancyMap& map) { return map.state_->gate; }

@@ -9,10 +9,12 @@
 
 #include <atomic>
 #include <cstddef>
+#include <memory>
 #include <mutex>
 #include <optional>
 
 #include "integrate/integrator.hpp"
+#include "map/change_journal.hpp"
 #include "map/read_gate.hpp"
 #include "tree/occupancy_tree.hpp"
 #include "umbra/core/aabb.hpp"
@@ -34,6 +36,9 @@ struct MapState {
   /// while readers run (tracing), so readers see only this copy.
   std::atomic<std::size_t> integrator_bytes{0};
   std::optional<Aabb> bounding_box;
+  /// What changed, for distance fields (change_journal.hpp); shared so that
+  /// a field outliving this state (the map was assigned) still holds it.
+  std::shared_ptr<ChangeJournal> journal = std::make_shared<ChangeJournal>();
   std::mutex writer;
   ReadGate gate;
 };

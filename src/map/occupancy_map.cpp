@@ -112,6 +112,7 @@ void OccupancyMap::set_sensor_model(const SensorModel& sensor) {
   exclusively(*state_, [&] {
     state_->sensor = sensor;
     state_->tree.set_range(LogOddsRange::from(sensor));
+    state_->journal->record_everything();  // clamping may change states
   });
 }
 
@@ -124,6 +125,7 @@ void OccupancyMap::set_thresholds(const Thresholds& thresholds) {
   exclusively(*state_, [&] {
     state_->thresholds = thresholds;
     state_->tree.set_thresholds(LogOddsThresholds::from(thresholds));
+    state_->journal->record_everything();
   });
 }
 
@@ -131,12 +133,18 @@ void OccupancyMap::set_thresholds(const Thresholds& thresholds) {
 
 void OccupancyMap::update_hit(Vec3d coordinate) {
   const Key k = grid_.key(coordinate);
-  exclusively(*state_, [&] { state_->tree.update(morton::encode(k), state_->sensor.hit_log_odds()); });
+  exclusively(*state_, [&] {
+    state_->tree.update(morton::encode(k), state_->sensor.hit_log_odds());
+    state_->journal->record(morton::encode(k), 0);
+  });
 }
 
 void OccupancyMap::update_miss(Vec3d coordinate) {
   const Key k = grid_.key(coordinate);
-  exclusively(*state_, [&] { state_->tree.update(morton::encode(k), state_->sensor.miss_log_odds()); });
+  exclusively(*state_, [&] {
+    state_->tree.update(morton::encode(k), state_->sensor.miss_log_odds());
+    state_->journal->record(morton::encode(k), 0);
+  });
 }
 
 void OccupancyMap::update_log_odds(Vec3d coordinate, float delta) { update_key_log_odds(grid_.key(coordinate), delta); }
@@ -146,13 +154,19 @@ void OccupancyMap::set_log_odds(Vec3d coordinate, float log_odds) { set_key_log_
 void OccupancyMap::update_key_log_odds(Key key, float delta) {
   require_finite(delta, "log-odds delta");
   check_key(grid_, key);
-  exclusively(*state_, [&] { state_->tree.update(morton::encode(key), delta); });
+  exclusively(*state_, [&] {
+    state_->tree.update(morton::encode(key), delta);
+    state_->journal->record(morton::encode(key), 0);
+  });
 }
 
 void OccupancyMap::set_key_log_odds(Key key, float log_odds) {
   require_finite(log_odds, "log-odds value");
   check_key(grid_, key);
-  exclusively(*state_, [&] { state_->tree.set(morton::encode(key), log_odds); });
+  exclusively(*state_, [&] {
+    state_->tree.set(morton::encode(key), log_odds);
+    state_->journal->record(morton::encode(key), 0);
+  });
 }
 
 // --- colour -------------------------------------------------------------------------
@@ -201,6 +215,7 @@ InsertStats insert_scan(detail::MapState& state, Trace&& trace) {
   {
     const auto start = std::chrono::steady_clock::now();
     detail::ClosedGate closed(state.gate);
+    state.journal->record_batch(state.integrator.pending_batch());
     state.integrator.apply(state.tree, state.sensor);
     stats.exclusive_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
@@ -291,7 +306,10 @@ void OccupancyMap::prune() {
 }
 
 void OccupancyMap::clear() {
-  exclusively(*state_, [&] { state_->tree.clear(); });
+  exclusively(*state_, [&] {
+    state_->tree.clear();
+    state_->journal->record_everything();
+  });
 }
 
 // --- statistics ---------------------------------------------------------------------
@@ -301,7 +319,8 @@ NodeCounts OccupancyMap::node_counts() const {
 }
 
 std::size_t OccupancyMap::memory_bytes() const {
-  const std::size_t tree_bytes = reading(*state_, [&] { return state_->tree.memory_bytes(); });
+  const std::size_t tree_bytes =
+      reading(*state_, [&] { return state_->tree.memory_bytes() + state_->journal->memory_bytes(); });
   return sizeof(*this) + sizeof(detail::MapState) - sizeof(state_->tree) - sizeof(state_->integrator) + tree_bytes +
          state_->integrator_bytes.load(std::memory_order_relaxed);
 }

@@ -24,6 +24,7 @@
 #include <gtest/gtest.h>
 
 #include "umbra/map/occupancy_map.hpp"
+#include "umbra/query/distance_field.hpp"
 #include "umbra/sim/lidar.hpp"
 #include "umbra/sim/scene.hpp"
 
@@ -249,6 +250,68 @@ TEST(Concurrency, ReadersSeeWholeScansWithThreadsColourAndNoPruning) {
   run_contract({IntegratorKind::discrete, 2, false, true}, 8, 2, 1);
   run_contract({IntegratorKind::fast, 2, false, false}, 8, 2, 1);
   run_contract({IntegratorKind::discrete, 1, true, true}, 6, 2, 1);
+}
+
+/// The distance field's contract (distance_field.hpp): a writer inserts a
+/// scan and updates the field while readers ask the field in batches; every
+/// batch answer equals the field of one snapshot between the updates
+/// finished before it and those started after it (never half an update).
+TEST(Concurrency, FieldReadersSeeWholeUpdates) {
+  const std::size_t scan_count = 3;
+  const Scans scans = make_scans(scan_count, 9);
+  InsertOptions options;
+  options.max_range = 12.0;
+  DistanceFieldOptions field_options;
+  field_options.max_distance = 0.3;
+  std::vector<Vec3d> probe;
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> x(0.0, 20.0), y(0.0, 12.0), z(0.0, 3.0);
+  for (int i = 0; i < 300; ++i) probe.push_back({x(rng), y(rng), z(rng)});
+  const auto ask = [&](const DistanceField& field) {
+    std::vector<DistanceSample> samples(probe.size());
+    field.distance_and_gradient(probe, samples);
+    std::vector<double> flat;
+    for (const DistanceSample& s : samples) flat.insert(flat.end(), {s.occupied, s.unknown, s.gradient.x});
+    return flat;
+  };
+  std::vector<std::vector<double>> expected;
+  {
+    OccupancyMap map(0.1, 12);
+    expected.push_back(ask(DistanceField(map, field_options)));
+    for (std::size_t i = 0; i < scan_count; ++i) {
+      map.insert_point_cloud(scans.origins[i], scans.points[i], options);
+      expected.push_back(ask(DistanceField(map, field_options)));
+    }
+  }
+  OccupancyMap map(0.1, 12);
+  DistanceField field(map, field_options);
+  std::atomic<std::size_t> started{0}, finished{0}, answers{0}, failures{0};
+  std::atomic<bool> done{false};
+  std::vector<std::thread> readers;
+  for (int r = 0; r < 2; ++r) {
+    readers.emplace_back([&] {
+      while (!done.load()) {
+        const std::size_t low = finished.load();
+        const std::vector<double> answer = ask(field);
+        const std::size_t high = started.load();
+        bool matched = false;
+        for (std::size_t k = low; k <= high && k < expected.size(); ++k) matched |= expected[k] == answer;
+        failures.fetch_add(matched ? 0 : 1);
+        answers.fetch_add(1);
+      }
+    });
+  }
+  for (std::size_t i = 0; i < scan_count; ++i) {
+    started.store(i + 1);
+    map.insert_point_cloud(scans.origins[i], scans.points[i], options);
+    field.update();
+    finished.store(i + 1);
+  }
+  while (answers.load() < 4) std::this_thread::yield();
+  done.store(true);
+  for (std::thread& t : readers) t.join();
+  EXPECT_EQ(failures.load(), 0u);
+  EXPECT_EQ(ask(field), expected.back());
 }
 
 TEST(Concurrency, ChangingTheMapWhileThisThreadHoldsARangeThrows) {

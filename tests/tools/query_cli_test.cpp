@@ -16,6 +16,7 @@
 #include "support/cli_commands.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
+#include "umbra/query/distance_field.hpp"
 
 namespace umbra {
 namespace {
@@ -186,6 +187,44 @@ TEST_F(QueryCli, GainEqualsTheLibrarysForBothMethodsAndTheGivenFieldOfView) {
   EXPECT_GT(seen, 0u);  // the poses see unknown space at all
   // A field of view that cannot be is a usage error, before any line is read.
   const CliRun bad = run_query(quoted(dir_ / "map.umb") + " gain --input - --hfov 0 < /dev/null", dir_);
+  EXPECT_EQ(bad.exit_code, 2);
+}
+
+TEST_F(QueryCli, DistanceEqualsTheLibrarysField) {
+  std::mt19937 rng(17);
+  const double h = map_->grid().half_extent() * 0.9;
+  std::uniform_real_distribution<double> u(-h, h);
+  std::vector<std::string> lines;
+  std::vector<Vec3d> points;
+  for (int i = 0; i < 40; ++i) {
+    points.push_back({u(rng), u(rng), u(rng)});
+    lines.push_back(text({points.back().x, points.back().y, points.back().z}));
+  }
+  lines.insert(lines.begin() + 5, "1 2");  // a bad line: no answer, reported with its number
+  for (const int depth : {0, 1}) {
+    SCOPED_TRACE("depth " + std::to_string(depth));
+    const CliRun run = run_query(quoted(dir_ / "map.umb") + " distance --max-distance 0.35 --depth " +
+                                     std::to_string(depth) + " --input " + quoted(write_lines(lines)),
+                                 dir_);
+    EXPECT_EQ(run.exit_code, 1);
+    ASSERT_EQ(run.out.size(), points.size());
+    ASSERT_GE(run.err.size(), 2u);
+    EXPECT_NE(run.err.front().find("line 6"), std::string::npos) << run.err.front();
+    DistanceFieldOptions options;
+    options.max_distance = 0.35;
+    options.depth = depth;
+    const DistanceField field(*map_, options);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const DistanceSample s = field.distance_and_gradient(points[i]);
+      char expected[160];
+      std::snprintf(expected, sizeof expected, "%.10g %.10g %.10g %.10g %.10g", s.occupied, s.unknown, s.gradient.x,
+                    s.gradient.y, s.gradient.z);
+      EXPECT_EQ(run.out[i], expected) << "point " << i;
+    }
+    expect_timing(run, "distance", points.size());
+  }
+  // A maximum distance the field cannot hold is a usage error.
+  const CliRun bad = run_query(quoted(dir_ / "map.umb") + " distance --max-distance 1000 --input - < /dev/null", dir_);
   EXPECT_EQ(bad.exit_code, 2);
 }
 

@@ -43,6 +43,7 @@ TEST(QueryLines, KindsAndLayouts) {
   EXPECT_EQ(numbers_of(LineQuery::line), 6u);
   EXPECT_EQ(numbers_of(LineQuery::raycast), 7u);
   EXPECT_EQ(numbers_of(LineQuery::gain), 5u);
+  EXPECT_EQ(numbers_of(LineQuery::distance), 3u);
 }
 
 TEST(QueryLines, GoodLinesGiveTheirValues) {

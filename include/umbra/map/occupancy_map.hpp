@@ -273,7 +273,8 @@ class OccupancyMap {
   // --- statistics ---------------------------------------------------------
   [[nodiscard]] NodeCounts node_counts() const;
   /// Bytes allocated for the map (the tree's capacity, the integrator's
-  /// buffers kept between scans, and this object).
+  /// buffers kept between scans, the change journal kept for distance
+  /// fields, and this object; a DistanceField reports its own).
   [[nodiscard]] std::size_t memory_bytes() const;
 
  private:

@@ -1,0 +1,554 @@
+// DistanceField (include/umbra/query/distance_field.hpp): bricks of 8^3
+// cells in a hash map, each holding its cells' sites (brick_sites.hpp) and
+// the offsets to their nearest occupied and unknown sites
+// (distance_transform.hpp). A query is one hash lookup and two offsets
+// turned into metres; storing offsets rather than distances gives the
+// gradient exactly (the direction from the nearest site) for 6 bytes a cell.
+//
+// Building and updating compute aside from the bricks readers use and swap
+// the results in with the field's gate closed (the map's ReadGate), so a
+// reader sees whole updates only.
+#include "umbra/query/distance_field.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "field/brick_sites.hpp"
+#include "field/brick_table.hpp"
+#include "core/thread_pool.hpp"
+#include "field/distance_transform.hpp"
+#include "map/map_access.hpp"
+#include "map/read_gate.hpp"
+#include "umbra/map/occupancy_map.hpp"
+
+namespace umbra {
+
+using detail::BrickBits;
+using detail::BrickIndex;
+using detail::BrickOffsets;
+using detail::CellBox;
+using detail::FieldLayout;
+using detail::kBrickCells;
+using detail::SiteOffset;
+
+void DistanceFieldOptions::validate() const {
+  if (!(max_distance > 0.0) || !std::isfinite(max_distance)) {
+    throw std::invalid_argument("distance field: max_distance must be positive and finite, got " +
+                                std::to_string(max_distance));
+  }
+  if (depth < 0) throw std::invalid_argument("distance field: depth must be >= 0, got " + std::to_string(depth));
+  if (threads > ThreadPool::max_threads()) {
+    throw std::invalid_argument("distance field: threads " + std::to_string(threads) + " is more than " +
+                                std::to_string(ThreadPool::max_threads()));
+  }
+  if (box) box->validate();
+}
+
+namespace {
+
+/// Most bricks a field may hold before it asks for a box (or a smaller one).
+constexpr std::size_t kMaxKnownBricks = std::size_t{1} << 23;
+
+struct FieldBrick {
+  BrickBits bits;
+  BrickOffsets offsets;
+};
+
+using BrickMap = detail::BrickTable<FieldBrick>;
+
+std::string point_text(Vec3d p) {
+  return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ", " + std::to_string(p.z) + ")";
+}
+
+/// A brick whose every cell is unknown with no occupied voxel within
+/// max_distance: not stored, a query there answers so (see the header).
+bool trivial(const BrickOffsets& offsets) {
+  for (int i = 0; i < detail::kBrickVolume; ++i) {
+    const SiteOffset o = offsets[std::size_t(i)].occupied;
+    const SiteOffset u = offsets[std::size_t(i)].unknown;
+    if (!o.none() || u.x != 0 || u.y != 0 || u.z != 0) return false;
+  }
+  return true;
+}
+
+const BrickBits kAllUnknown = BrickBits::all_unknown();
+const BrickBits kNoSites{};
+
+}  // namespace
+
+struct DistanceField::State {
+  State(const OccupancyMap& m, const DistanceFieldOptions& o)
+      : map(m), options(o), grid(m.grid()), layout(m.resolution(), m.depth_levels(), o.depth, o.max_distance) {}
+
+  const OccupancyMap& map;
+  DistanceFieldOptions options;
+  Grid grid;
+  FieldLayout layout;
+  std::optional<CellBox> box_cells;
+  BrickMap bricks;
+  std::shared_ptr<detail::ChangeJournal> journal;
+  std::uint64_t version = 0;
+  std::size_t bricks_recomputed = 0;
+  std::size_t bricks_reread = 0;
+  std::mutex writer;
+  detail::ReadGate gate;
+  std::unique_ptr<ThreadPool> pool;  // options.threads != 1
+
+  void set_box(const std::optional<Aabb>& box);
+  void rebuild();
+  void update();
+
+  /// The result of compute(): bricks to store and bricks to drop (trivial).
+  struct Computed {
+    std::vector<std::pair<std::uint64_t, std::unique_ptr<FieldBrick>>> store;
+    std::vector<std::uint64_t> drop;
+  };
+  /// Recomputes `targets` from `new_sites`, then (with consult_live) the
+  /// live bricks, then what a brick not stored holds.
+  [[nodiscard]] Computed compute(const std::vector<std::uint64_t>& targets,
+                                 const std::unordered_map<std::uint64_t, BrickBits>& new_sites,
+                                 bool consult_live) const;
+
+  /// What a brick that is not stored holds: unknown everywhere (known space
+  /// far away, or a trivial brick), or no sites at all outside the box.
+  [[nodiscard]] const BrickBits& default_sites(BrickIndex b) const {
+    if (!box_cells) return kAllUnknown;
+    const std::uint32_t v[3] = {b.x, b.y, b.z};
+    for (int a = 0; a < 3; ++a) {
+      const std::uint32_t first = v[a] * kBrickCells, last = first + kBrickCells - 1;
+      if (first < box_cells->min[std::size_t(a)] || last > box_cells->max[std::size_t(a)]) return kNoSites;
+    }
+    return kAllUnknown;
+  }
+  [[nodiscard]] const BrickBits& sites_of(std::uint64_t brick) const {
+    const FieldBrick* stored = bricks.find(brick);
+    return stored != nullptr ? stored->bits : default_sites(BrickIndex::unpack(brick));
+  }
+  [[nodiscard]] bool in_map(std::int64_t x, std::int64_t y, std::int64_t z) const {
+    const std::int64_t n = layout.bricks_per_axis();
+    return x >= 0 && y >= 0 && z >= 0 && x < n && y < n && z < n;
+  }
+  template <typename Visit>
+  void for_each_neighbour(BrickIndex b, int reach, Visit&& visit) const {
+    for (int dz = -reach; dz <= reach; ++dz) {
+      for (int dy = -reach; dy <= reach; ++dy) {
+        for (int dx = -reach; dx <= reach; ++dx) {
+          const std::int64_t x = std::int64_t(b.x) + dx, y = std::int64_t(b.y) + dy, z = std::int64_t(b.z) + dz;
+          if (in_map(x, y, z)) visit(BrickIndex{std::uint32_t(x), std::uint32_t(y), std::uint32_t(z)});
+        }
+      }
+    }
+  }
+  /// The bricks meeting the box.
+  template <typename Visit>
+  void for_each_box_brick(Visit&& visit) const {
+    for (std::uint32_t z = box_cells->min[2] / 8; z <= box_cells->max[2] / 8; ++z) {
+      for (std::uint32_t y = box_cells->min[1] / 8; y <= box_cells->max[1] / 8; ++y) {
+        for (std::uint32_t x = box_cells->min[0] / 8; x <= box_cells->max[0] / 8; ++x) visit(BrickIndex{x, y, z});
+      }
+    }
+  }
+  [[nodiscard]] bool brick_meets_box(BrickIndex b) const {
+    if (!box_cells) return true;
+    const std::uint32_t v[3] = {b.x, b.y, b.z};
+    for (int a = 0; a < 3; ++a) {
+      if (v[a] < box_cells->min[std::size_t(a)] / 8 || v[a] > box_cells->max[std::size_t(a)] / 8) return false;
+    }
+    return true;
+  }
+  /// Swaps the computed bricks in, with readers kept out.
+  void publish(Computed& computed, const std::vector<std::uint64_t>& removed, std::size_t recomputed,
+               std::size_t reread) {
+    detail::ClosedGate closed(gate);
+    for (auto& [key, brick] : computed.store) bricks.insert_or_assign(key, std::move(brick));
+    for (const std::uint64_t key : computed.drop) bricks.erase(key);
+    for (const std::uint64_t key : removed) bricks.erase(key);
+    bricks_recomputed = recomputed;
+    bricks_reread = reread;
+  }
+
+  /// The brick and cell of a point; throws std::out_of_range outside the map or the box.
+  struct Located {
+    std::uint64_t brick = 0;
+    int cell = 0;
+  };
+  [[nodiscard]] Located locate(Vec3d point) const;
+  [[nodiscard]] DistanceSample answer(const FieldBrick* brick, int cell) const;
+  [[nodiscard]] DistanceSample sample(Vec3d point) const {
+    const Located at = locate(point);
+    return answer(bricks.find(at.brick), at.cell);
+  }
+};
+
+void DistanceField::State::set_box(const std::optional<Aabb>& box) {
+  options.box = box;
+  box_cells.reset();
+  if (!box) return;
+  box->validate();
+  const std::optional<Key> low = grid.key_checked(box->min);
+  const std::optional<Key> high = grid.key_checked(box->max);
+  if (!low || !high) {
+    throw std::out_of_range("distance field: the box " + point_text(box->min) + " - " + point_text(box->max) +
+                            " reaches outside the map, which spans [" + std::to_string(-grid.half_extent()) + ", " +
+                            std::to_string(grid.half_extent()) + ") on every axis");
+  }
+  CellBox cells;
+  for (int a = 0; a < 3; ++a) {
+    cells.min[std::size_t(a)] = (*low)[a] >> layout.depth();
+    cells.max[std::size_t(a)] = (*high)[a] >> layout.depth();
+  }
+  const std::uint64_t count = std::uint64_t(cells.max[0] / 8 - cells.min[0] / 8 + 1) *
+                              (cells.max[1] / 8 - cells.min[1] / 8 + 1) * (cells.max[2] / 8 - cells.min[2] / 8 + 1);
+  if (count > kMaxKnownBricks) {
+    throw std::invalid_argument("distance field: the box needs " + std::to_string(count) +
+                                " bricks of 8^3 cells, more than the limit of " + std::to_string(kMaxKnownBricks));
+  }
+  box_cells = cells;
+}
+
+DistanceField::State::Computed DistanceField::State::compute(
+    const std::vector<std::uint64_t>& targets, const std::unordered_map<std::uint64_t, BrickBits>& new_sites,
+    bool consult_live) const {
+  const auto sites = [&](BrickIndex b) -> const BrickBits* {
+    const std::uint64_t key = b.packed();
+    if (const auto it = new_sites.find(key); it != new_sites.end()) return &it->second;
+    if (consult_live) {
+      if (const FieldBrick* stored = bricks.find(key)) return &stored->bits;
+    }
+    return &default_sites(b);
+  };
+  const std::unordered_set<std::uint64_t> wanted(targets.begin(), targets.end());
+  const std::uint32_t n = std::uint32_t(detail::chunk_bricks(layout.window()));
+  std::unordered_set<std::uint64_t> chunk_set;
+  for (const std::uint64_t key : targets) {
+    const BrickIndex b = BrickIndex::unpack(key);
+    chunk_set.insert(BrickIndex{b.x / n * n, b.y / n * n, b.z / n * n}.packed());
+  }
+  const std::vector<std::uint64_t> chunks(chunk_set.begin(), chunk_set.end());
+  // One transform and one result per worker; chunks are independent.
+  const unsigned workers = pool ? pool->size() : 1;
+  std::vector<std::unique_ptr<detail::ChunkTransform>> transforms(workers);
+  std::vector<Computed> parts(workers);
+  const auto work = [&](std::size_t task, unsigned worker) {
+    if (!transforms[worker]) transforms[worker] = std::make_unique<detail::ChunkTransform>(layout);
+    Computed& out = parts[worker];
+    transforms[worker]->run(
+        BrickIndex::unpack(chunks[task]), sites, [&](BrickIndex b) { return wanted.contains(b.packed()); },
+        [&](BrickIndex b, const BrickOffsets& offsets) {
+          if (trivial(offsets)) {
+            out.drop.push_back(b.packed());
+            return;
+          }
+          auto brick = std::make_unique<FieldBrick>();
+          brick->bits = *sites(b);
+          brick->offsets = offsets;
+          out.store.emplace_back(b.packed(), std::move(brick));
+        });
+  };
+  if (pool && chunks.size() > 1) {
+    pool->run(chunks.size(), work);
+  } else {
+    for (std::size_t i = 0; i < chunks.size(); ++i) work(i, 0);
+  }
+  Computed out = std::move(parts[0]);
+  for (unsigned i = 1; i < workers; ++i) {
+    for (auto& entry : parts[i].store) out.store.push_back(std::move(entry));
+    out.drop.insert(out.drop.end(), parts[i].drop.begin(), parts[i].drop.end());
+  }
+  return out;
+}
+
+void DistanceField::State::rebuild() {
+  std::unordered_map<std::uint64_t, BrickBits> new_sites;
+  detail::MapAccess::read(map, [&](const OccupancyTree& tree) {
+    std::shared_ptr<detail::ChangeJournal> current = detail::MapAccess::journal(map);
+    if (current != journal) {
+      if (journal) journal->unsubscribe();
+      current->subscribe();
+      journal = std::move(current);
+    }
+    version = journal->version();
+    if (box_cells) {
+      for_each_box_brick([&](BrickIndex b) { new_sites.emplace(b.packed(), detail::read_brick(tree, layout, b, box_cells)); });
+    } else {
+      detail::for_each_known_brick(tree, layout, kMaxKnownBricks, [&](BrickIndex b) {
+        new_sites.emplace(b.packed(), detail::read_brick(tree, layout, b, std::nullopt));
+      });
+    }
+  });
+  std::unordered_set<std::uint64_t> targets;
+  if (box_cells) {
+    for (const auto& [key, bits] : new_sites) targets.insert(key);
+  } else {
+    // Without a box, the bricks within reach of known space (the rest are
+    // unknown with no occupied voxel within max_distance).
+    for (const auto& [key, bits] : new_sites) {
+      if (!bits.known) continue;
+      for_each_neighbour(BrickIndex::unpack(key), layout.brick_reach(),
+                         [&](BrickIndex n) { targets.insert(n.packed()); });
+    }
+  }
+  const std::vector<std::uint64_t> target_list(targets.begin(), targets.end());
+  Computed computed = compute(target_list, new_sites, /*consult_live=*/false);  // every live brick is replaced
+  BrickMap fresh;
+  for (auto& [key, brick] : computed.store) fresh.insert_or_assign(key, std::move(brick));
+  detail::ClosedGate closed(gate);
+  bricks.swap(fresh);
+  bricks_recomputed = target_list.size();
+  bricks_reread = new_sites.size();
+}
+
+void DistanceField::State::update() {
+  std::vector<detail::ChangeJournal::Entry> entries;
+  std::unordered_map<std::uint64_t, BrickBits> new_sites;
+  bool start_over = false;
+  detail::MapAccess::read(map, [&](const OccupancyTree& tree) {
+    if (detail::MapAccess::journal(map) != journal || !journal->changes_since(version, entries)) {
+      start_over = true;
+      return;
+    }
+    version = journal->version();
+    const int brick_shift = layout.depth() + 3;
+    for (const detail::ChangeJournal::Entry& entry : entries) {
+      const Key key = morton::decode(entry.code);
+      const std::uint32_t last = (std::uint32_t{1} << entry.depth) - 1;
+      BrickIndex lo{key.x >> brick_shift, key.y >> brick_shift, key.z >> brick_shift};
+      BrickIndex hi{(key.x + last) >> brick_shift, (key.y + last) >> brick_shift, (key.z + last) >> brick_shift};
+      if (box_cells) {
+        lo = {std::max(lo.x, box_cells->min[0] / 8), std::max(lo.y, box_cells->min[1] / 8),
+              std::max(lo.z, box_cells->min[2] / 8)};
+        hi = {std::min(hi.x, box_cells->max[0] / 8), std::min(hi.y, box_cells->max[1] / 8),
+              std::min(hi.z, box_cells->max[2] / 8)};
+      }
+      for (std::uint32_t z = lo.z; z <= hi.z; ++z) {
+        for (std::uint32_t y = lo.y; y <= hi.y; ++y) {
+          for (std::uint32_t x = lo.x; x <= hi.x; ++x) {
+            const std::uint64_t b = BrickIndex{x, y, z}.packed();
+            if (!new_sites.contains(b)) new_sites.emplace(b, detail::read_brick(tree, layout, BrickIndex{x, y, z}, box_cells));
+          }
+        }
+      }
+    }
+  });
+  if (start_over) {
+    rebuild();
+    return;
+  }
+  const std::size_t reread = new_sites.size();
+  // Only the bricks whose sites changed matter; the cells within reach of
+  // them are recomputed.
+  std::vector<BrickIndex> changed;
+  for (auto it = new_sites.begin(); it != new_sites.end();) {
+    if (it->second == sites_of(it->first)) {
+      it = new_sites.erase(it);
+    } else {
+      changed.push_back(BrickIndex::unpack(it->first));
+      ++it;
+    }
+  }
+  const auto known_after = [&](std::uint64_t key) {
+    if (const auto it = new_sites.find(key); it != new_sites.end()) return it->second.known;
+    return sites_of(key).known;
+  };
+  // Which bricks to recompute: those within reach of a change that the
+  // field keeps (in the box; without one, stored already or within reach
+  // of known space now: a brick not stored is trivial, and only a change
+  // holding known space can make it otherwise).
+  std::unordered_set<std::uint64_t> targets;
+  std::vector<std::uint64_t> removed;
+  const int reach = layout.brick_reach();
+  for (const BrickIndex b : changed) {
+    const bool known = known_after(b.packed());
+    for_each_neighbour(b, reach, [&](BrickIndex n) {
+      const std::uint64_t key = n.packed();
+      if (box_cells ? brick_meets_box(n) : (known || bricks.contains(key))) targets.insert(key);
+    });
+  }
+  if (!box_cells) {
+    // A stored brick with no known space within reach any more goes.
+    for (const BrickIndex b : changed) {
+      if (known_after(b.packed()) || !sites_of(b.packed()).known) continue;  // only bricks that became unknown
+      for_each_neighbour(b, reach, [&](BrickIndex n) {
+        if (!targets.contains(n.packed())) return;
+        bool near_known = false;
+        for_each_neighbour(n, reach, [&](BrickIndex m) { near_known = near_known || known_after(m.packed()); });
+        if (!near_known) {
+          targets.erase(n.packed());
+          removed.push_back(n.packed());
+        }
+      });
+    }
+  }
+  const std::vector<std::uint64_t> target_list(targets.begin(), targets.end());
+  Computed computed = compute(target_list, new_sites, /*consult_live=*/true);
+  publish(computed, removed, target_list.size(), reread);
+}
+
+DistanceField::State::Located DistanceField::State::locate(Vec3d point) const {
+  const std::optional<Key> key = grid.key_checked(point);
+  if (!key) {
+    throw std::out_of_range("distance field: the point " + point_text(point) + " is outside the map, which spans [" +
+                            std::to_string(-grid.half_extent()) + ", " + std::to_string(grid.half_extent()) +
+                            ") on every axis");
+  }
+  const int k = layout.depth();
+  const std::uint32_t cx = key->x >> k, cy = key->y >> k, cz = key->z >> k;
+  if (box_cells && !box_cells->contains(cx, cy, cz)) {
+    throw std::out_of_range("distance field: the point " + point_text(point) + " is outside the field's box " +
+                            point_text(options.box->min) + " - " + point_text(options.box->max));
+  }
+  return {BrickIndex{cx >> 3, cy >> 3, cz >> 3}.packed(), detail::cell_in_brick(cx, cy, cz)};
+}
+
+DistanceSample DistanceField::State::answer(const FieldBrick* brick, int cell) const {
+  DistanceSample out;
+  if (brick == nullptr) {  // unknown, and no occupied voxel within max_distance (see the header)
+    out.occupied = layout.max_distance();
+    out.unknown = 0.0;
+    return out;
+  }
+  const detail::CellSites sites = brick->offsets[std::size_t(cell)];
+  out.occupied = layout.metres(sites.occupied);
+  out.unknown = layout.metres(sites.unknown);
+  const SiteOffset nearest =
+      sites.occupied.none()
+          ? sites.unknown
+          : (sites.unknown.none() || layout.squared(sites.occupied) <= layout.squared(sites.unknown) ? sites.occupied
+                                                                                                   : sites.unknown);
+  if (!nearest.none() && layout.squared(nearest) > 0) {
+    // Away from the site: minus the offset's direction, each axis by its gap.
+    const std::int8_t d[3] = {nearest.x, nearest.y, nearest.z};
+    double v[3];
+    for (int a = 0; a < 3; ++a) {
+      const double gap = layout.gap(d[a]);
+      v[a] = d[a] > 0 ? -gap : (d[a] < 0 ? gap : 0.0);
+    }
+    const double norm = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    out.gradient = {v[0] / norm, v[1] / norm, v[2] / norm};
+  }
+  return out;
+}
+
+DistanceField::DistanceField(const OccupancyMap& map, const DistanceFieldOptions& options) {
+  options.validate();
+  if (options.depth > map.depth_levels() - 3) {
+    throw std::invalid_argument("distance field: depth " + std::to_string(options.depth) +
+                                " leaves no room for bricks of 8^3 cells in a map of " +
+                                std::to_string(map.depth_levels()) + " depth levels (at most " +
+                                std::to_string(map.depth_levels() - 3) + ")");
+  }
+  state_ = std::make_unique<State>(map, options);
+  if (options.threads != 1) state_->pool = std::make_unique<ThreadPool>(options.threads);
+  if (state_->layout.window() > 120) {
+    throw std::invalid_argument("distance field: max_distance " + std::to_string(options.max_distance) +
+                                " m spans " + std::to_string(state_->layout.window()) +
+                                " cells, more than the 120 a field looks through; use a coarser depth");
+  }
+  state_->set_box(options.box);
+  state_->rebuild();
+}
+
+DistanceField::~DistanceField() {
+  if (state_ && state_->journal) state_->journal->unsubscribe();
+}
+
+void DistanceField::update() {
+  std::lock_guard writer(state_->writer);
+  state_->update();
+}
+
+void DistanceField::set_box(const std::optional<Aabb>& box) {
+  std::lock_guard writer(state_->writer);
+  State& s = *state_;
+  // The box is read by queries: change it with them kept out, then rebuild.
+  {
+    detail::ClosedGate closed(s.gate);
+    s.set_box(box);
+    s.bricks.clear();
+  }
+  s.rebuild();
+}
+
+void DistanceField::rebuild() {
+  std::lock_guard writer(state_->writer);
+  state_->rebuild();
+}
+
+const DistanceFieldOptions& DistanceField::options() const { return state_->options; }
+
+double DistanceField::distance(Vec3d point) const { return distance_and_gradient(point).blocking(); }
+
+DistanceSample DistanceField::distance_and_gradient(Vec3d point) const {
+  detail::ReadLock lock(state_->gate);
+  return state_->sample(point);
+}
+
+namespace {
+constexpr std::size_t kBatchChunk = 1024;
+
+/// Answers a batch a chunk at a time, in three passes so that the memory
+/// accesses of many points overlap (a query is two cache misses: the table
+/// slot, then the cell): locate every point and prefetch its table slot,
+/// find every brick and prefetch its cell, then answer. A bad point stops
+/// the batch there, its error naming its index.
+template <typename Out, typename Convert>
+void batch(const DistanceField::State& s, const detail::ReadGate& gate, std::span<const Vec3d> points,
+           std::span<Out> out, Convert convert) {
+  if (points.size() != out.size()) {
+    throw std::invalid_argument("distance field: " + std::to_string(points.size()) + " points but room for " +
+                                std::to_string(out.size()) + " answers");
+  }
+  std::vector<DistanceField::State::Located> located(std::min(points.size(), kBatchChunk));
+  std::vector<const FieldBrick*> found(located.size());
+  for (std::size_t begin = 0; begin < points.size(); begin += kBatchChunk) {
+    const std::size_t count = std::min(points.size() - begin, kBatchChunk);
+    std::size_t good = count;
+    std::string problem;
+    {
+      detail::ReadLock lock(gate);  // the box may change between chunks
+      for (std::size_t i = 0; i < count; ++i) {
+        try {
+          located[i] = s.locate(points[begin + i]);
+        } catch (const std::out_of_range& e) {
+          good = i;
+          problem = "point " + std::to_string(begin + i) + ": " + e.what();
+          break;
+        }
+      }
+      for (std::size_t i = 0; i < good; ++i) s.bricks.prefetch(located[i].brick);
+      for (std::size_t i = 0; i < good; ++i) {
+        found[i] = s.bricks.find(located[i].brick);
+        if (found[i] != nullptr) __builtin_prefetch(&found[i]->offsets[std::size_t(located[i].cell)]);
+      }
+      for (std::size_t i = 0; i < good; ++i) out[begin + i] = convert(s.answer(found[i], located[i].cell));
+    }
+    if (good < count) throw std::out_of_range(problem);
+  }
+}
+}  // namespace
+
+void DistanceField::distance(std::span<const Vec3d> points, std::span<double> out) const {
+  batch(*state_, state_->gate, points, out, [](const DistanceSample& s) { return s.blocking(); });
+}
+
+void DistanceField::distance_and_gradient(std::span<const Vec3d> points, std::span<DistanceSample> out) const {
+  batch(*state_, state_->gate, points, out, [](const DistanceSample& s) { return s; });
+}
+
+DistanceFieldStats DistanceField::stats() const {
+  detail::ReadLock lock(state_->gate);
+  const State& s = *state_;
+  DistanceFieldStats out;
+  out.bricks = s.bricks.size();
+  out.memory_bytes = sizeof(State) + s.bricks.memory_bytes();
+  out.bricks_recomputed = s.bricks_recomputed;
+  out.bricks_reread = s.bricks_reread;
+  return out;
+}
+
+}  // namespace umbra

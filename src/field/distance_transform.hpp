@@ -1,0 +1,91 @@
+// The exact distance transform of a chunk of bricks: for every cell, the
+// offset to its nearest occupied site and to its nearest unknown site
+// within the field's window, in the field's metric (field_layout.hpp).
+//
+// The metric is a sum over the axes of a function of each axis' offset, so
+// the minimum over all sites splits into three one-dimensional passes, as
+// in Felzenszwalb and Huttenlocher's separable transform: along x the
+// nearest site of each row; along y the best (x result + y term); along z
+// the same again. Each pass keeps the offsets of its best candidate, so the
+// result is the site itself, not only its distance.
+//
+// The y and z passes are lower envelopes of parabolas, linear in the
+// column's length. The axis term of an offset n != 0 is (2 (|n| - 1) E + 1)^2:
+// for a site before the cell that is the parabola (X - C)^2 with X = 2 E y
+// and C = 2 E s + 2 E - 1, for a site after it the same with C = 2 E s -
+// (2 E - 1); each formula overestimates the other side's sites. So the
+// minimum is that of the site at the cell itself, the envelope of the
+// "before" parabolas and that of the "after" parabolas (every term at
+// least the true one, and the true minimum among them).
+//
+// A chunk is kChunkBricks(window) bricks per axis: large enough that the
+// window read around it (the sites of window() cells on each side) costs
+// a few times its own cells, not dozens.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "field/brick_sites.hpp"
+#include "field/field_layout.hpp"
+#include "umbra/core/function_ref.hpp"
+
+namespace umbra::detail {
+
+/// Bricks per axis of a chunk for a field's window.
+inline int chunk_bricks(int window) {
+  const int wanted = (2 * window + kBrickCells - 1) / kBrickCells;  // cells per axis >= twice the window
+  return wanted < 4 ? 4 : (wanted > 16 ? 16 : wanted);
+}
+
+/// A cell's nearest sites, side by side so that a query reads one cache line.
+struct CellSites {
+  SiteOffset occupied;
+  SiteOffset unknown;
+};
+/// The output of one brick, by cell_in_brick().
+using BrickOffsets = std::array<CellSites, kBrickVolume>;
+
+/// Sites of any brick (never nullptr).
+using SiteLookup = FunctionRef<const BrickBits*(BrickIndex)>;
+
+class ChunkTransform {
+ public:
+  explicit ChunkTransform(const FieldLayout& layout);
+
+  [[nodiscard]] int bricks_per_axis() const { return bricks_; }
+  /// Computes the chunk whose first brick is `first` (a multiple of
+  /// bricks_per_axis() per axis) and calls write(brick, offsets) for each of
+  /// its bricks for which wanted(brick) holds.
+  void run(BrickIndex first, SiteLookup sites, FunctionRef<bool(BrickIndex)> wanted,
+           FunctionRef<void(BrickIndex, const BrickOffsets&)> write);
+
+ private:
+  /// One column's minimum of (value at s + axis term of s - t) for the
+  /// output cells t in [window, window + out): values[s] (kNone: no site),
+  /// stride apart; best[t - window] and from[t - window] (the site's s).
+  void column(const std::uint32_t* values, std::size_t stride, std::uint32_t* best, std::int16_t* from);
+  void load_sites(BrickIndex first, SiteLookup sites);
+  void transform(int kind);
+
+  const FieldLayout& layout_;
+  int window_;
+  int bricks_;  // per axis
+  int out_;     // output cells per axis
+  int span_;    // input cells per axis: out + 2 window
+  std::uint32_t e2_;  // 2 E
+  std::vector<std::uint8_t> sites_;    // span^3, bit 0 occupied, bit 1 unknown
+  std::vector<std::int8_t> pass_x_;    // [z][y][x out]: x offset of the row's nearest site, or kNoSite
+  std::vector<std::uint32_t> column_;  // one column's values
+  std::vector<std::uint32_t> pass_y_;  // [z][y out][x out]: best S (kNone: none)
+  std::vector<std::array<std::int8_t, 2>> pass_y_offset_;
+  std::array<std::vector<SiteOffset>, 2> result_;  // [kind][z out][y out][x out]
+  // The envelope's scratch: parabola sites and boundaries, per side.
+  std::vector<int> hull_;
+  std::vector<double> bounds_;
+  std::vector<std::uint32_t> best_;
+  std::vector<std::int16_t> from_;
+};
+
+}  // namespace umbra::detail
