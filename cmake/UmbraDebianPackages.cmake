@@ -40,7 +40,7 @@ set(CPACK_DEBIAN_DEVELOPMENT_PACKAGE_SECTION libdevel)
 set(CPACK_COMPONENT_DEVELOPMENT_DEPENDS runtime)
 # umbra.pc (Requires.private) and umbraConfig.cmake (find_dependency) name
 # these; a consumer's pkg-config or find_package fails without them.
-set(CPACK_DEBIAN_DEVELOPMENT_PACKAGE_DEPENDS "libzstd-dev, libbz2-dev, libpng-dev, zlib1g-dev")
+set(CPACK_DEBIAN_DEVELOPMENT_PACKAGE_DEPENDS "libzstd-dev, libbz2-dev, libpng-dev, zlib1g-dev, liblzf-dev")
 set(CPACK_COMPONENT_DEVELOPMENT_DESCRIPTION "umbra: headers, CMake package and pkg-config file (C++20)")
 
 set(CPACK_DEBIAN_TOOLS_PACKAGE_NAME umbra)

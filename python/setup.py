@@ -3,7 +3,7 @@
 The compiled part umbra/_umbra*.so is built by umbra's own CMake project (the
 repository above this folder) for the interpreter that runs pip, with
 umbra's libraries linked in statically: the module then depends on nothing
-but Debian's shared libraries (zstd, bzip2, libpng, zlib, libstdc++), so an
+but Debian's shared libraries (zstd, bzip2, libpng, zlib, liblzf, libstdc++), so an
 installed package or a wheel keeps working when the clone or its build
 folder is gone, and needs no libumbra installed beside it.
 

@@ -5,7 +5,7 @@
 # Everything umbra, its tests and its benchmarks need on Debian 12.
 UMBRA_APT_PACKAGES=(
   build-essential cmake pkg-config git
-  libzstd-dev libbz2-dev libpng-dev zlib1g-dev  # umbra_io
+  libzstd-dev libbz2-dev libpng-dev zlib1g-dev liblzf-dev  # umbra_io
   liblz4-dev                                    # lz4 chunks of .bag files (ros/src/bag_chunk.cpp)
   libcli11-dev                                  # the umbra program
   libgtest-dev libgmock-dev                     # tests

@@ -69,19 +69,6 @@ struct ScanRow {
   double insert_seconds = 0.0;
 };
 
-/// The reader of one input; .bag files go to the ROS reader (ROS builds only: open_scan_source refuses them).
-std::unique_ptr<ScanSource> open_input(const std::string& input, const BuildOptions& options,
-                                       const ScanSourceOptions& source_options) {
-#ifdef UMBRA_WITH_ROS
-  if (scan_format_for(input, options.format) == "rosbag") {
-    return ros_io::open_rosbag(input, ros_io::RosbagOptions{options.topics, options.frame});
-  }
-#else
-  (void)options;
-#endif
-  return open_scan_source(input, source_options);
-}
-
 /// Warns about clouds a .bag reader skipped for want of a transform.
 void report_skipped(const ScanSource& source) {
 #ifdef UMBRA_WITH_ROS
@@ -231,7 +218,7 @@ std::vector<CheckedInput> preflight(const BuildOptions& options, const BuildPlan
     std::vector<Vec3f> origins;
     try {
       check_input_exists(options.inputs[input]);
-      const std::unique_ptr<ScanSource> source = open_input(options.inputs[input], options, plan.sources);
+      const std::unique_ptr<ScanSource> source = open_scan_source(options.inputs[input], plan.sources);
       for (const std::string& warning : source->warnings()) std::fprintf(stderr, "umbra: warning: %s\n", warning.c_str());
       entry.scans = source->scan_count();
       origins = source->origins();
@@ -316,7 +303,7 @@ int run_build(const BuildOptions& options) {
     std::fflush(stdout);
     std::unique_ptr<ScanSource> source;
     try {
-      source = open_input(options.inputs[file], options, plan.sources);
+      source = open_scan_source(options.inputs[file], plan.sources);
     } catch (const std::exception&) {
       problems.report(where, current_error("opening it"), "that input");
       continue;

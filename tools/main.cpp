@@ -18,6 +18,9 @@
 
 #include "commands.hpp"
 #include "signals.hpp"
+#ifdef UMBRA_WITH_ROS
+#include "umbra_ros/rosbag_source.hpp"
+#endif
 
 namespace {
 
@@ -57,6 +60,9 @@ constexpr const char* kExitCodes =
 
 int main(int argc, char** argv) {
   umbra::cli::remove_unfinished_saves_on_signals();
+#ifdef UMBRA_WITH_ROS
+  umbra::ros_io::register_rosbag_format();  // .bag inputs of `umbra build`
+#endif
   CLI::App app{"umbra: probabilistic 3D occupancy maps with explicit unknown space"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "umbra 0.1.0");

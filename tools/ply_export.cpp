@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "io/atomic_file.hpp"
+#include "umbra/io/file_saving.hpp"
 #include "umbra/core/memory_limit.hpp"
 
 namespace umbra::cli {
@@ -153,7 +153,7 @@ PlyExportSummary export_ply(const OccupancyMap& map, const std::filesystem::path
     }
   }
   const auto* header_bytes = reinterpret_cast<const std::uint8_t*>(header.data());
-  detail::write_file_atomically(path, {std::span(header_bytes, header.size()), std::span<const std::uint8_t>(body)},
+  write_file_atomically(path, {std::span(header_bytes, header.size()), std::span<const std::uint8_t>(body)},
                                 "PLY file");
   summary.bytes = header.size() + body.size();
   return summary;

@@ -3,7 +3,8 @@
 // request line. A terminal must never receive the bytes themselves (an
 // escape sequence could set its title, clear it or worse), so anything
 // outside printable ASCII is written as \xNN. Cost: one pass over at most
-// `max_shown` bytes.
+// `max_shown` bytes. The quoting itself is umbra_io's (io/common/message_text.hpp),
+// the one every error message of umbra's file code uses.
 #pragma once
 
 #include <cstddef>
@@ -12,7 +13,7 @@
 
 namespace umbra::cli {
 
-/// `text` with bytes outside printable ASCII (0x20..0x7e) as \xNN, cut after
+/// `text` with bytes outside printable ASCII (0x20..0x7e), and ' and \, as \xNN, cut after
 /// `max_shown` bytes with "... (N characters)" appended.
 std::string printable(std::string_view text, std::size_t max_shown = 40);
 

@@ -15,7 +15,7 @@
 
 #include "commands.hpp"
 #include "options.hpp"
-#include "io/atomic_file.hpp"
+#include "umbra/io/file_saving.hpp"
 #include "local_http_server.hpp"
 #include "report.hpp"
 #include "umbra/io/map_formats.hpp"
@@ -68,7 +68,7 @@ int write_and_serve(const ViewOptions& options) {
   print_summary(map, data);
   if (!options.output.empty()) {
     const auto* bytes = reinterpret_cast<const std::uint8_t*>(page.data());
-    detail::write_file_atomically(options.output, {std::span<const std::uint8_t>(bytes, page.size())}, "page");
+    write_file_atomically(options.output, {std::span<const std::uint8_t>(bytes, page.size())}, "page");
     std::printf("wrote %s (%s, three.js %s)\n", options.output.c_str(), human_bytes(page.size()).c_str(),
                 viewer_three_version().c_str());
   }

@@ -29,7 +29,7 @@
 #include <vector>
 
 #include "explorer.hpp"
-#include "io/atomic_file.hpp"
+#include "umbra/io/file_saving.hpp"
 #include "octomap_exploration_map.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/sim/industrial_scene.hpp"
@@ -102,7 +102,7 @@ std::string time_or_never(double t) { return t < 0.0 ? "not reached" : fixed(t, 
 
 void write_text(const std::filesystem::path& path, const std::string& text, const char* kind) {
   const auto* bytes = reinterpret_cast<const std::uint8_t*>(text.data());
-  detail::write_file_atomically(path, {std::span<const std::uint8_t>(bytes, text.size())}, kind);
+  write_file_atomically(path, {std::span<const std::uint8_t>(bytes, text.size())}, kind);
 }
 
 /// Coverage at `time`: the last sample at or before it (the map only changes when a frame is inserted).

@@ -12,7 +12,7 @@
 #include "bag_chunk.hpp"
 #include "bag_record.hpp"
 #include "core/memory_budget.hpp"
-#include "io/reader_support.hpp"
+#include "reader_support.hpp"
 
 namespace umbra::ros_io {
 

@@ -3,7 +3,7 @@
 
 #include <cstdio>
 
-#include "io/reader_support.hpp"
+#include "reader_support.hpp"
 
 namespace umbra::ros_io::bag_detail {
 

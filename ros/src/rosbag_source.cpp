@@ -16,7 +16,7 @@
 
 #include "cloud_message.hpp"
 #include "umbra/core/memory_limit.hpp"
-#include "io/reader_support.hpp"
+#include "reader_support.hpp"
 #include "umbra_ros/bag_file.hpp"
 #include "umbra_ros/serialized_messages.hpp"
 
@@ -265,6 +265,12 @@ class RosbagSource final : public RosbagScanSource {
 
 std::unique_ptr<RosbagScanSource> open_rosbag(const std::filesystem::path& path, const RosbagOptions& options) {
   return std::make_unique<RosbagSource>(path, options);
+}
+
+void register_rosbag_format() {
+  register_scan_format("rosbag", {".bag"}, [](const std::filesystem::path& path, const ScanSourceOptions& options) {
+    return open_rosbag(path, RosbagOptions{options.topics, options.frame});
+  });
 }
 
 }  // namespace umbra::ros_io

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "sim/gaussian_source.hpp"
+#include "gaussian_source.hpp"
 
 namespace umbra::sim {
 

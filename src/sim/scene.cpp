@@ -11,7 +11,7 @@
 #include <string>
 #include <utility>
 
-#include "sim/scene_bvh.hpp"
+#include "scene_bvh.hpp"
 
 namespace umbra::sim {
 

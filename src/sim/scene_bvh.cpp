@@ -1,4 +1,4 @@
-#include "sim/scene_bvh.hpp"
+#include "scene_bvh.hpp"
 
 #include <cmath>
 #include <cstdlib>

@@ -46,8 +46,10 @@ depends_on() {  # depends_on PACKAGE DEPENDENCY
 }
 depends_on libumbra-dev libumbra
 depends_on libumbra-dev libzstd-dev
+depends_on libumbra-dev liblzf-dev
 depends_on umbra libumbra
 depends_on libumbra libzstd1
+depends_on libumbra liblzf1
 if [[ " ${packages[*]} " == *" python3-umbra "* ]]; then
   depends_on python3-umbra libumbra
   depends_on python3-umbra python3-numpy

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "io/bitmap_font.hpp"
-#include "io/picture_annotations.hpp"
+#include "bitmap_font.hpp"
+#include "picture_annotations.hpp"
 #include "support/room_map.hpp"
 #include "umbra/io/map_render.hpp"
 #include "umbra/io/topdown_image.hpp"

@@ -662,6 +662,36 @@ TEST(ScanSource, ExplicitFormatAndOptions) {
   EXPECT_FALSE(format_error_of(dir / "graph.bin", options).empty());
 }
 
+// A reader from outside umbra_io (as ros/ adds .bag): its extension becomes
+// known, open_scan_source hands it the path and the options, and the
+// built-in formats are untouched.
+TEST(ScanSource, RegisteredFormatsAreOpenedByTheirReader) {
+  EXPECT_THROW((void)scan_format_for("cloud.regtest"), std::invalid_argument);
+  std::filesystem::path opened;
+  register_scan_format("regtest", {".RegTest"}, [&](const fs::path& path, const ScanSourceOptions& options) {
+    opened = path;
+    ScanSourceOptions xyz = options;
+    xyz.format = "xyz";
+    return open_scan_source(path, xyz);
+  });
+  EXPECT_EQ(scan_format_for("cloud.regtest"), "regtest");
+  EXPECT_EQ(scan_format_for("cloud.xyz", "regtest"), "regtest");
+  EXPECT_EQ(scan_format_for("cloud.xyz"), "xyz");
+  const fs::path dir = test::scratch_dir();
+  write_file(dir / "cloud.regtest", "1 2 3\n");
+  ScanSourceOptions options;
+  options.origin = {4, 5, 6};
+  const std::vector<Scan> scans = read_all(dir / "cloud.regtest", options);
+  EXPECT_EQ(opened, dir / "cloud.regtest");
+  ASSERT_EQ(scans.size(), 1u);
+  EXPECT_EQ(scans[0].origin, (Vec3f{4, 5, 6}));
+  EXPECT_EQ(scans[0].points, (std::vector<Vec3f>{{1, 2, 3}}));
+  EXPECT_THROW(register_scan_format("RegTest", {}, [](const fs::path&, const ScanSourceOptions&) {
+                 return std::unique_ptr<ScanSource>();
+               }), std::invalid_argument);
+  EXPECT_THROW(register_scan_format("other", {}, nullptr), std::invalid_argument);
+}
+
 TEST(ScanSource, RealOctomapScanDat) {
   UMBRA_REQUIRE_SHARED_DATA(path, "octomap/scan.dat.bz2");
   auto source = open_scan_source(path);

@@ -28,6 +28,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 namespace umbra::test {
 namespace {
 
@@ -71,6 +73,35 @@ void write_bag(const std::filesystem::path& path, const std::vector<RosScan>& sc
   in_map.tilt = 0;
   bag.write("/other_points", scan_time(0), to_cloud(in_map, "map", scan_time(0)));
   bag.close();
+}
+
+// Once ros/ registers its reader, open_scan_source reads .bag files with
+// ScanSourceOptions::topics and ::frame: the same scans as open_rosbag.
+TEST(Rosbag, RegisteredReaderIsWhatOpenScanSourceUses) {
+  const std::vector<RosScan> scans = office_scans(2);
+  const auto dir = scratch_dir();
+  write_bag(dir / "office.bag", scans, 1, kCompressions[0].second);
+  ros_io::register_rosbag_format();
+  for (const std::string topic : {"/points", "/other_points"}) {
+    ScanSourceOptions options;
+    options.topics = {topic};
+    options.frame = "map";
+    const auto registered = open_scan_source(dir / "office.bag", options);
+    const auto direct = ros_io::open_rosbag(dir / "office.bag", ros_io::RosbagOptions{{topic}, "map"});
+    Scan a;
+    Scan b;
+    std::size_t count = 0;
+    while (direct->next(b)) {
+      ASSERT_TRUE(registered->next(a));
+      // Bit for bit (the simulated clouds hold NaN points, which == would call different).
+      ASSERT_EQ(a.points.size(), b.points.size());
+      EXPECT_EQ(std::memcmp(a.points.data(), b.points.data(), a.points.size() * sizeof(Vec3f)), 0);
+      EXPECT_EQ(a.origin, b.origin);
+      ++count;
+    }
+    EXPECT_FALSE(registered->next(a));
+    EXPECT_GT(count, 0u) << topic;
+  }
 }
 
 TEST(Rosbag, ScansEqualTheSimulatorsPoints) {

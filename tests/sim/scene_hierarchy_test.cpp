@@ -15,7 +15,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "sim/scene_bvh.hpp"
+#include "scene_bvh.hpp"
 #include "umbra/sim/scene.hpp"
 
 namespace umbra::sim {

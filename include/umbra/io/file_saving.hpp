@@ -1,11 +1,16 @@
 // How umbra saves files, and what a program can do about interrupted saves.
 //
-// Every file umbra writes (.umb, .bt, .ot, .png) goes first to a hidden
+// Every file umbra writes (.umb, .bt, .ot, .png, ScanGraph .graph, and the
+// umbra program's .ply and .html) goes through write_file_atomically() or
+// AtomicFileWriter below, which write first to a hidden
 // temporary file beside its target, `.NAME.tmp-PID-N-SALT`, which is flushed
 // to disk and renamed over the target: the target holds either its old
 // contents or the complete new file, never a part. A target that is a
 // symbolic link is written through: the file it points to is replaced and
-// the link stays a link.
+// the link stays a link. Errors are std::runtime_error "cannot save KIND to
+// 'PATH': WHAT 'TEMP': REASON", KIND naming the contents ("map", "picture").
+// Cost: one write(2) per part or write() call, two fsyncs (the file and its
+// folder), one listing of the folder.
 //
 // A process that dies during a save leaves its temporary file behind. Two
 // remedies, both documented in the README ("Errors and limits"):
@@ -19,9 +24,39 @@
 //    Cost: one listing of the target's folder per save.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <initializer_list>
+#include <memory>
+#include <span>
+#include <string_view>
 
 namespace umbra {
+
+/// Saves the bytes of `parts`, one after another, as the file `path`.
+void write_file_atomically(const std::filesystem::path& path,
+                           std::initializer_list<std::span<const std::uint8_t>> parts, std::string_view kind = "file");
+
+/// A file saved piece by piece, for contents too large to hold in memory at
+/// once: the temporary file is created by the constructor, filled by
+/// write() and renamed over `path` by commit(); destroyed without commit()
+/// (an exception while writing) it is removed and `path` is untouched.
+class AtomicFileWriter {
+ public:
+  explicit AtomicFileWriter(const std::filesystem::path& path, std::string_view kind = "file");
+  AtomicFileWriter(const AtomicFileWriter&) = delete;
+  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+  ~AtomicFileWriter();
+
+  void write(std::span<const std::uint8_t> bytes);
+  /// Flushes the file to disk and renames it over the target; write() may not follow.
+  void commit();
+
+ private:
+  class Temporary;
+  std::unique_ptr<Temporary> temporary_;
+  std::filesystem::path path_;  // the target, through its symbolic links
+};
 
 /// Removes the temporary files of the saves in progress in this process
 /// (at most 64 at a time are tracked). Async-signal-safe; the saves fail.

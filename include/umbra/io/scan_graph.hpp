@@ -28,8 +28,8 @@ std::unique_ptr<ScanSource> open_scan_graph(const std::filesystem::path& path);
 /// translation = scan.origin and the points stored relative to the origin (so
 /// reading the file back gives the same map-frame points up to float
 /// rounding), node ids 0, 1, ..., and no edges. Colours are not stored (the
-/// format has none). The file is written under a temporary name next to
-/// `path` and renamed into place, so readers never see a partial file.
+/// format has none). The file is saved atomically (umbra/io/file_saving.hpp),
+/// so readers never see a partial file.
 /// Throws std::invalid_argument for a non-finite origin or a scan with more
 /// than 2^32 - 1 points, std::runtime_error when writing fails.
 void write_scan_graph(const std::filesystem::path& path, const std::vector<Scan>& scans);

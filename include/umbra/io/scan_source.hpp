@@ -26,11 +26,12 @@
 //          or the association file itself with format "tum"; every row
 //          whose depth and colour images exist is one scan, back-projected
 //          with ScanSourceOptions::depth_camera, origin = the camera position.
-//   rosbag ROS 1 bag, .bag: PointCloud2 messages moved into the frame
-//          ScanSourceOptions::frame with the bag's TF. Read only by umbra
-//          built with ROS (ros/include/umbra_ros/rosbag_source.hpp, used by
-//          the umbra program); open_scan_source itself refuses it with a
-//          message saying so.
+//   rosbag ROS 1 bag, .bag: PointCloud2 messages on ScanSourceOptions::topics
+//          moved into the frame ScanSourceOptions::frame with the bag's TF.
+//          Read only by umbra built with ROS, whose umbra_ros library
+//          registers its reader (register_scan_format, below;
+//          ros/include/umbra_ros/rosbag_source.hpp); without it
+//          open_scan_source refuses .bag files with a message saying so.
 // See ply_file.hpp, pcd_file.hpp, kitti_sequence.hpp and tum_sequence.hpp.
 //
 // Errors: malformed files throw umbra::FormatError naming the file and the
@@ -47,6 +48,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -134,6 +136,19 @@ struct ScanSourceOptions {
   /// rosbag: the map frame the clouds are moved into with the bag's TF.
   std::string frame = "map";
 };
+
+/// Opens a file of one format (what register_scan_format() adds).
+using ScanSourceOpener =
+    std::function<std::unique_ptr<ScanSource>(const std::filesystem::path&, const ScanSourceOptions&)>;
+
+/// Makes open_scan_source() read format `name` (lower case) with `open`,
+/// replacing the reader it had, and adds `extensions` (with the dot, any
+/// case) to those scan_format_for() knows for it: for readers that live
+/// outside umbra_io, as ROS's .bag reader does. Register at start-up, before
+/// other threads open files. Throws std::invalid_argument for an empty or
+/// not lower-case name or an empty opener.
+void register_scan_format(const std::string& name, const std::vector<std::string>& extensions,
+                          ScanSourceOpener open);
 
 /// Opens `path`; throws std::runtime_error / FormatError as described above.
 std::unique_ptr<ScanSource> open_scan_source(const std::filesystem::path& path,

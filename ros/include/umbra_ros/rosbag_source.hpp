@@ -54,4 +54,8 @@ class RosbagScanSource : public ScanSource {
 
 std::unique_ptr<RosbagScanSource> open_rosbag(const std::filesystem::path& path, const RosbagOptions& options = {});
 
+/// Registers open_rosbag as open_scan_source's reader of "rosbag" (.bag),
+/// with ScanSourceOptions::topics and ::frame as its options (umbra/io/scan_source.hpp).
+void register_rosbag_format();
+
 }  // namespace umbra::ros_io

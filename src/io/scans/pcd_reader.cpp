@@ -7,11 +7,13 @@
 // and checks that the uncompressed size is exactly POINTS x the record size
 // and no more than LZF can produce from the compressed bytes. next() reads
 // ascii lines in place (from_chars), binary records through one 1 MiB
-// buffer, or the compressed block (at most the file size) decompressed into
-// one buffer of the validated size, from which the columns are gathered.
+// buffer, or the compressed block (at most the file size) decompressed with
+// liblzf (Debian liblzf-dev, the LZF library PCL itself uses) into one buffer
+// of the validated size, from which the columns are gathered.
 // Cost: one pass over the file, O(points) output, no per-point allocation.
 // The viewpoint convention is documented in pcd_file.hpp.
 #include <algorithm>
+#include <cerrno>
 #include <atomic>
 #include <bit>
 #include <cstdint>
@@ -24,7 +26,8 @@
 #include <string_view>
 #include <vector>
 
-#include "lzf.hpp"
+#include <lzf.h>
+
 #include "reader_support.hpp"
 #include "umbra/io/format_error.hpp"
 #include "umbra/io/pcd_file.hpp"
@@ -43,6 +46,29 @@ using io_detail::ScalarType;
 using io_detail::Tokens;
 
 constexpr std::uint64_t kMaxPointBytes = std::uint64_t{1} << 24;  // larger records are not point clouds
+
+/// No valid LZF stream expands more than 88 times (a 3-byte back reference
+/// yields at most 264 bytes): a larger declared size is refused before allocating.
+constexpr std::uint64_t kLzfMaxExpansion = 88;
+
+/// Decompresses `input` into exactly `output.size()` bytes with liblzf;
+/// what is wrong when it cannot (liblzf checks every run and back reference
+/// against both buffers), else empty. Both sizes come from uint32 fields.
+std::string lzf_decompress_exactly(std::span<const unsigned char> input, std::span<unsigned char> output) {
+  const std::string declared = std::to_string(output.size());
+  if (input.empty()) return output.empty() ? std::string() : "no compressed bytes for " + declared + " declared bytes";
+  errno = 0;
+  const unsigned produced = ::lzf_decompress(input.data(), static_cast<unsigned>(input.size()), output.data(),
+                                             static_cast<unsigned>(output.size()));
+  if (produced == 0) {
+    return errno == E2BIG ? "it decompresses to more than the declared " + declared + " bytes"
+                          : std::string("a run or back reference leaves the data (liblzf: invalid stream)");
+  }
+  if (produced != output.size()) {
+    return "it decompresses to " + std::to_string(produced) + " bytes, not the declared " + declared;
+  }
+  return {};
+}
 
 enum class PcdEncoding { ascii, binary, binary_compressed };
 
@@ -368,7 +394,7 @@ class PcdReader final : public io_detail::SingleScanSource {
                                      std::to_string(record_bytes_) + " bytes need " +
                                      size_text(point_count_, record_bytes_));
     }
-    if (uncompressed_bytes > io_detail::lzf_max_output_bytes(compressed_bytes_)) {
+    if (uncompressed_bytes > kLzfMaxExpansion * compressed_bytes_) {
       throw FormatError::at_byte(file_.name(), data_offset_,
                                  "the uncompressed size " + std::to_string(uncompressed_bytes) +
                                      " bytes is more than LZF can produce from " + std::to_string(compressed_bytes_) +
@@ -443,10 +469,8 @@ class PcdReader final : public io_detail::SingleScanSource {
     consumed_.store(compressed_offset + compressed_bytes_, std::memory_order_relaxed);
     // <= 88 x the compressed size and exactly points x record size (checked at open).
     std::vector<unsigned char> data(static_cast<std::size_t>(point_count_ * record_bytes_));
-    try {
-      io_detail::lzf_decompress(compressed, data);
-    } catch (const io_detail::LzfError& error) {
-      throw FormatError::at_byte(file_.name(), compressed_offset + error.input_offset(), error.what());
+    if (const std::string problem = lzf_decompress_exactly(compressed, data); !problem.empty()) {
+      throw FormatError::at_byte(file_.name(), compressed_offset, "corrupt LZF data: " + problem);
     }
     // Column layout: field after field, each holding every point's value.
     const auto column = [&](std::size_t field) { return data.data() + point_count_ * fields_[field].offset; };

@@ -1,6 +1,6 @@
 #include "umbra/io/png_writer.hpp"
 
-#include "atomic_file.hpp"
+#include "umbra/io/file_saving.hpp"
 #include "core/memory_budget.hpp"
 
 #include <png.h>
@@ -107,7 +107,7 @@ void write_png(const Image& image, const std::filesystem::path& path) {
   const std::string reason = png.message;
   png_image_free(&png);
   if (!encoded) throw std::runtime_error("write_png: cannot encode " + quoted(path) + ": libpng: " + reason);
-  detail::write_file_atomically(path, {bytes}, "picture");
+  write_file_atomically(path, {bytes}, "picture");
 }
 
 Image read_png(const std::filesystem::path& path) {

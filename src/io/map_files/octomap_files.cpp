@@ -12,10 +12,6 @@
 // through a 1 MiB buffer, never whole.
 #include "umbra/io/octomap_files.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <bit>
 #include <cerrno>
@@ -26,7 +22,7 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "atomic_file.hpp"
+#include "umbra/io/file_saving.hpp"
 #include "core/memory_budget.hpp"
 #include "map/map_access.hpp"
 #include "octomap_format.hpp"
@@ -37,23 +33,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr std::size_t kBufferBytes = std::size_t{1} << 20;
 /// Longest header token that is kept (longer keywords are unknown, longer values wrong).
 constexpr std::size_t kMaxTokenBytes = 64;
 /// The second and third lines liboctomap writes.
 constexpr std::string_view kCommentLines =
     "# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
 
-[[noreturn]] void throw_io(const std::string& what, const fs::path& path, int error) {
-  throw std::runtime_error(what + " '" + path.string() + "': " + std::generic_category().message(error));
-}
-
 bool is_space(int c) { return c == ' ' || c == '\t' || c == '\n' || c == '\v' || c == '\f' || c == '\r'; }
 
 /// Reads the header token by token, counting lines.
 class HeaderLexer {
  public:
-  HeaderLexer(ByteInput& in, const std::string& name) : in_(in), name_(name) {}
+  HeaderLexer(ByteReader& in, const std::string& name) : in_(in), name_(name) {}
 
   /// Skips whitespace; false at the end of the input.
   bool skip_space() {
@@ -92,7 +83,7 @@ class HeaderLexer {
     if (!skip_space()) fail("the header ends after '" + std::string(keyword) + "' without its value");
     bool too_long = false;
     std::string text = token(too_long);
-    if (too_long) fail("the value of '" + std::string(keyword) + "' is longer than 64 bytes: " + quote_text(text) + "...");
+    if (too_long) fail("the value of '" + std::string(keyword) + "' is longer than 64 bytes: " + quote_bytes(text) + "...");
     return text;
   }
 
@@ -103,13 +94,13 @@ class HeaderLexer {
   }
 
  private:
-  ByteInput& in_;
+  ByteReader& in_;
   const std::string& name_;
   std::uint64_t line_ = 2;  // the first line is read before the lexer starts
 };
 
 /// Reads the first line and says which format it announces.
-OctoMapFormat read_first_line(ByteInput& in, const std::string& name) {
+OctoMapFormat read_first_line(ByteReader& in, const std::string& name) {
   std::string start;
   const std::size_t longest = std::max(kBtFirstLine.size(), kOtFirstLine.size());
   for (int c = in.peek(); c >= 0 && c != '\n' && start.size() < longest; c = in.peek()) {
@@ -125,7 +116,7 @@ OctoMapFormat read_first_line(ByteInput& in, const std::string& name) {
     throw FormatError::at_line(name, 1,
                                "not an OctoMap file: the first line must start with '" + std::string(kBtFirstLine) +
                                    "' (.bt) or '" + std::string(kOtFirstLine) + "' (.ot), found " +
-                                   (in.size() == 0 ? std::string("an empty file") : quote_text(start, 40)));
+                                   (in.size() == 0 ? std::string("an empty file") : quote_bytes(start, 40)));
   }
   for (int c = in.get(); c >= 0 && c != '\n'; c = in.get()) {
   }
@@ -138,10 +129,10 @@ double parse_resolution(HeaderLexer& lexer, const std::string& text) {
   double value = 0.0;
   const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
   if (error != std::errc() || end != digits.data() + digits.size()) {
-    lexer.fail("res must be a number (the voxel edge in metres), found " + quote_text(text));
+    lexer.fail("res must be a number (the voxel edge in metres), found " + quote_bytes(text));
   }
   if (!(value >= kMinResolution && value <= kMaxResolution)) {  // NaN fails this
-    lexer.fail("res must be the voxel edge in metres, in [0.0001, 1000] (0.1 mm to 1 km), found " + quote_text(text));
+    lexer.fail("res must be the voxel edge in metres, in [0.0001, 1000] (0.1 mm to 1 km), found " + quote_bytes(text));
   }
   return value;
 }
@@ -149,91 +140,18 @@ double parse_resolution(HeaderLexer& lexer, const std::string& text) {
 std::uint64_t parse_size(HeaderLexer& lexer, const std::string& text) {
   std::uint64_t value = 0;
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (error == std::errc::result_out_of_range) lexer.fail("size " + quote_text(text) + " is too large");
+  if (error == std::errc::result_out_of_range) lexer.fail("size " + quote_bytes(text) + " is too large");
   if (error != std::errc() || end != text.data() + text.size()) {
-    lexer.fail("size must be a whole number >= 0 (the number of nodes), found " + quote_text(text));
+    lexer.fail("size must be a whole number >= 0 (the number of nodes), found " + quote_bytes(text));
   }
   return value;
 }
 
 }  // namespace
 
-// --- ByteInput ----------------------------------------------------------------
-
-ByteInput::ByteInput(std::span<const std::uint8_t> bytes)
-    : data_(bytes.data()), end_(bytes.size()), size_(bytes.size()) {}
-
-ByteInput::ByteInput(const fs::path& path) : path_(path) {
-  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd_ < 0) throw_io("cannot open map file", path, errno);
-  struct stat st {};
-  if (::fstat(fd_, &st) != 0) {
-    const int error = errno;
-    ::close(fd_);
-    throw_io("cannot stat map file", path, error);
-  }
-  if (!S_ISREG(st.st_mode)) {
-    ::close(fd_);
-    throw std::runtime_error("cannot read map file '" + path.string() + "': not a regular file");
-  }
-  size_ = static_cast<std::uint64_t>(st.st_size);
-  buffer_.resize(static_cast<std::size_t>(std::min<std::uint64_t>(size_, kBufferBytes)));
-  data_ = buffer_.data();
-}
-
-ByteInput::ByteInput(const ByteInput& source, std::uint64_t offset) : size_(source.size_), path_(source.path_) {
-  if (source.fd_ < 0) {
-    data_ = source.data_;
-    end_ = static_cast<std::size_t>(size_);
-    pos_ = static_cast<std::size_t>(std::min(offset, size_));
-    return;
-  }
-  fd_ = ::fcntl(source.fd_, F_DUPFD_CLOEXEC, 0);
-  if (fd_ < 0) throw_io("cannot read map file", path_, errno);
-  buffer_.resize(source.buffer_.size());
-  data_ = buffer_.data();
-  window_offset_ = offset;  // refill() reads from here
-}
-
-ByteInput::~ByteInput() {
-  if (fd_ >= 0) ::close(fd_);
-}
-
-bool ByteInput::refill() {
-  if (fd_ < 0 || buffer_.empty()) return false;
-  window_offset_ += end_;
-  pos_ = 0;
-  end_ = 0;
-  // Never past the size the file had when it was opened (a file that grows meanwhile is read as it was).
-  if (window_offset_ >= size_) return false;
-  const auto want = static_cast<std::size_t>(std::min<std::uint64_t>(buffer_.size(), size_ - window_offset_));
-  while (end_ == 0) {
-    const ssize_t n = ::pread(fd_, buffer_.data(), want, static_cast<off_t>(window_offset_));
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      throw_io("cannot read map file", path_, errno);
-    }
-    if (n == 0) return false;  // the end (or the file shrank: the reader reports a truncation)
-    end_ = static_cast<std::size_t>(n);
-  }
-  return true;
-}
-
-bool ByteInput::read_slow(std::uint8_t* out, std::size_t n) {
-  while (n > 0) {
-    if (pos_ == end_ && !refill()) return false;
-    const std::size_t chunk = std::min(n, end_ - pos_);
-    std::memcpy(out, data_ + pos_, chunk);
-    pos_ += chunk;
-    out += chunk;
-    n -= chunk;
-  }
-  return true;
-}
-
 // --- header -------------------------------------------------------------------
 
-Header parse_header(ByteInput& in, const std::string& name) {
+Header parse_header(ByteReader& in, const std::string& name) {
   Header header;
   header.format = read_first_line(in, name);
   header.file_bytes = in.size();
@@ -285,11 +203,11 @@ Header parse_header(ByteInput& in, const std::string& name) {
 std::string unreadable_tree_type(const std::string& id) {
   if (id == "OcTree" || id == "OcTreeStamped" || id == "ColorOcTree") return "";
   if (id == "OcTreeBase" || id == "CountingOcTree") {
-    return "tree type " + quote_text(id) +
+    return "tree type " + quote_bytes(id) +
            " is a CountingOcTree (liboctomap registers it as 'OcTreeBase'): it counts hits, it holds no occupancy; "
            "umbra reads the occupancy trees OcTree, OcTreeStamped and ColorOcTree";
   }
-  return "unknown tree type " + quote_text(id) +
+  return "unknown tree type " + quote_bytes(id) +
          ": umbra reads the occupancy trees liboctomap 1.9.7 knows: OcTree, OcTreeStamped, ColorOcTree (and the "
          "legacy id '1', an OcTree)";
 }
@@ -399,36 +317,6 @@ void require_octomap_depth(const OccupancyMap& map, const std::string& what) {
                               "; only maps made with depth_levels = 16 can be written as .bt or .ot");
 }
 
-std::string node_text(int depth, std::uint64_t code) {
-  const Key key = morton::decode(code);
-  return "the node at OctoMap depth " + std::to_string(kOctoMapDepthLevels - depth) + " (first voxel key (" +
-         std::to_string(key.x) + ", " + std::to_string(key.y) + ", " + std::to_string(key.z) + "))";
-}
-
-std::string quote_text(std::string_view text, std::size_t limit) {
-  std::string out = "'";
-  for (std::size_t i = 0; i < text.size() && i < limit; ++i) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    if (c >= 0x20 && c < 0x7F && c != '\'' && c != '\\') {
-      out += static_cast<char>(c);
-    } else {
-      char hex[8];
-      std::snprintf(hex, sizeof hex, "\\x%02x", static_cast<unsigned>(c));
-      out += hex;
-    }
-  }
-  return out + (text.size() > limit ? "'..." : "'");
-}
-
-std::string float_text(float value) {
-  std::ostringstream out;
-  out.precision(9);
-  char bits[16];
-  std::snprintf(bits, sizeof bits, "0x%08x", static_cast<unsigned>(std::bit_cast<std::uint32_t>(value)));
-  out << value << " (bits " << bits << ")";
-  return out.str();
-}
-
 OccupancyMap new_map(const Header& header, const std::string& name, const SensorModel& sensor, bool color) {
   MapConfig config;
   config.resolution = header.resolution;
@@ -448,7 +336,7 @@ OccupancyMap new_map(const Header& header, const std::string& name, const Sensor
 
 namespace {
 
-OccupancyMap decode(octomap_io::ByteInput& in, const std::string& name, const SensorModel& sensor) {
+OccupancyMap decode(octomap_io::ByteReader& in, const std::string& name, const SensorModel& sensor) {
   sensor.validate();
   const octomap_io::Header header = octomap_io::parse_header(in, name);
   // The decoders check the tree's need against the memory limit first; this names an allocation that fails anyway.
@@ -480,17 +368,19 @@ EncodedFile encode(const OccupancyMap& map, OctoMapFormat format, const std::str
 const char* to_string(OctoMapFormat format) { return format == OctoMapFormat::bt ? "bt" : "ot"; }
 
 OccupancyMap load_octomap(const std::filesystem::path& path, const SensorModel& sensor) {
-  octomap_io::ByteInput in(path);
+  const octomap_io::InputFile file(path, {}, "map file");
+  octomap_io::ByteReader in(file, 0);
   return decode(in, path.string(), sensor);
 }
 
 OccupancyMap decode_octomap(std::span<const std::uint8_t> bytes, const std::string& name, const SensorModel& sensor) {
-  octomap_io::ByteInput in(bytes);
+  octomap_io::ByteReader in(bytes);
   return decode(in, name, sensor);
 }
 
 OctoMapFileInfo read_octomap_info(const std::filesystem::path& path) {
-  octomap_io::ByteInput in(path);
+  const octomap_io::InputFile file(path, {}, "map file");
+  octomap_io::ByteReader in(file, 0);
   const std::string name = path.string();
   const octomap_io::Header header = octomap_io::parse_header(in, name);
   octomap_io::check_declared_size(header, name);
@@ -529,7 +419,7 @@ OccupancyMap decode_octomap_tree(OctoMapFormat format, const std::string& id, do
   header.file_bytes = data.size();
   header.data_offset = 0;
   header.nodes = octomap_io::count_tree_nodes(header, data, name);
-  octomap_io::ByteInput in(data);
+  octomap_io::ByteReader in(data);
   return format == OctoMapFormat::bt ? octomap_io::decode_bt(in, header, name, sensor)
                                      : octomap_io::decode_ot(in, header, name, sensor);
 }
@@ -538,7 +428,7 @@ void save_octomap(const OccupancyMap& map, const std::filesystem::path& path, Oc
   const EncodedFile file = encode(map, format, "cannot save '" + path.string() + "'");
   const std::span<const std::uint8_t> header(reinterpret_cast<const std::uint8_t*>(file.header.data()),
                                              file.header.size());
-  detail::write_file_atomically(path, {header, std::span<const std::uint8_t>(file.tree.bytes)});
+  write_file_atomically(path, {header, std::span<const std::uint8_t>(file.tree.bytes)}, "map");
 }
 
 }  // namespace umbra

@@ -158,7 +158,9 @@ class TextInput {
 
 /// `text` quoted for an error message; unlike the binary formats' readers,
 /// this one shows bytes from 0x80 on as they are (UTF-8 text stays legible).
-std::string quote(std::string_view text) { return io_detail::quote(text, io_detail::HighBytes::keep); }
+std::string quote(std::string_view text) {
+  return io_detail::quote(text, {.unprintable = io_detail::Unprintable::question_mark_keep_utf8});
+}
 
 /// Parses a whole token as a float: decimal or scientific, optional sign
 /// (including '+'), "nan" and "inf". Values beyond float range become +-inf

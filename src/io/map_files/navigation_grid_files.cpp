@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "io/atomic_file.hpp"
+#include "umbra/io/file_saving.hpp"
 
 namespace umbra {
 namespace {
@@ -87,8 +87,8 @@ std::filesystem::path save_navigation_grid(const NavigationGrid& grid, const std
   const std::filesystem::path yaml_path = navigation_grid_yaml_path(image_path);
   const std::vector<std::uint8_t> pgm = navigation_grid_pgm(grid);
   const std::string yaml = navigation_grid_yaml(grid, image_path.filename().string());
-  detail::write_file_atomically(image_path, {std::span<const std::uint8_t>(pgm)}, "picture");
-  detail::write_file_atomically(
+  write_file_atomically(image_path, {std::span<const std::uint8_t>(pgm)}, "picture");
+  write_file_atomically(
       yaml_path, {std::span(reinterpret_cast<const std::uint8_t*>(yaml.data()), yaml.size())}, "map description");
   return yaml_path;
 }

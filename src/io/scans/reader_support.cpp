@@ -1,12 +1,7 @@
-// Internal helpers shared by the point-cloud readers: file access by offset
-// (pread), a buffered byte reader, a line splitter, number parsing with
-// std::from_chars, binary scalar decoding, 3x4 poses and the single-scan
-// ScanSource base.
-//
-// Cost model: every read goes through one buffer per reader (1 MiB by
-// default for bytes, growing only for lines longer than the buffer up to a
-// limit), so a reader's memory is independent of the file size; parsing
-// never allocates per token or per record.
+// Internal helpers shared by the point-cloud readers: number parsing with
+// std::from_chars, binary scalar decoding, memory checks for points and the
+// single-scan ScanSource base. Cost model: parsing never allocates per token
+// or per record.
 #include "reader_support.hpp"
 
 #include <algorithm>
@@ -20,33 +15,10 @@
 #include <stdexcept>
 #include <system_error>
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include "core/memory_budget.hpp"
 #include "umbra/io/format_error.hpp"
 
 namespace umbra::io_detail {
-
-namespace {
-constexpr std::size_t kQuotedTextChars = 80;
-constexpr std::size_t kLineChunkBytes = 256 * 1024;
-}  // namespace
-
-std::string errno_text(int error) { return std::generic_category().message(error); }
-
-std::string quote(std::string_view text, HighBytes high_bytes) {
-  std::string quoted = "'";
-  for (std::size_t i = 0; i < text.size() && i < kQuotedTextChars; ++i) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    const bool shown = c >= 0x20 && c != 0x7f && (c < 0x80 || high_bytes == HighBytes::keep);
-    quoted += shown ? static_cast<char>(c) : '?';
-  }
-  if (text.size() > kQuotedTextChars) quoted += "...";
-  quoted += "'";
-  return quoted;
-}
 
 std::string to_lower(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(),
@@ -56,142 +28,6 @@ std::string to_lower(std::string text) {
 
 bool has_bz2_suffix(const std::filesystem::path& path) {
   return to_lower(path.filename().string()).ends_with(".bz2");
-}
-
-void reject_directory(const std::filesystem::path& path) {
-  std::error_code ignored;
-  if (std::filesystem::is_directory(path, ignored)) {
-    throw std::runtime_error("cannot open " + path.string() + ": it is a directory");
-  }
-}
-
-// --- InputFile ---------------------------------------------------------------
-
-InputFile::InputFile(const std::filesystem::path& path, std::string_view format) : name_(path.string()) {
-  descriptor_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (descriptor_ < 0) throw std::runtime_error("cannot open " + name_ + ": " + errno_text(errno));
-  struct stat info {};
-  if (::fstat(descriptor_, &info) != 0) {
-    const int error = errno;
-    ::close(descriptor_);
-    throw std::runtime_error("cannot open " + name_ + ": " + errno_text(error));
-  }
-  if (S_ISDIR(info.st_mode)) {
-    ::close(descriptor_);
-    throw std::runtime_error("cannot open " + name_ + ": it is a directory");
-  }
-  if (!S_ISREG(info.st_mode)) {
-    ::close(descriptor_);
-    std::string reason = "not a regular file";
-    if (!format.empty()) reason += " (" + std::string(format) + " files are read with seeks)";
-    throw std::runtime_error("cannot open " + name_ + ": " + reason);
-  }
-  size_ = static_cast<std::uint64_t>(info.st_size);
-}
-
-InputFile::~InputFile() {
-  if (descriptor_ >= 0) ::close(descriptor_);
-}
-
-std::size_t InputFile::read_at(std::uint64_t offset, void* out, std::size_t capacity) {
-  auto* bytes = static_cast<unsigned char*>(out);
-  std::size_t done = 0;
-  while (done < capacity) {
-    const ::ssize_t got = ::pread(descriptor_, bytes + done, capacity - done, static_cast<off_t>(offset + done));
-    if (got < 0) {
-      if (errno == EINTR) continue;
-      throw std::runtime_error("cannot read " + name_ + ": " + errno_text(errno));
-    }
-    if (got == 0) break;
-    done += static_cast<std::size_t>(got);
-  }
-  return done;
-}
-
-// --- ByteReader --------------------------------------------------------------
-
-ByteReader::ByteReader(InputFile& file, std::uint64_t offset, std::size_t buffer_bytes)
-    : file_(file), buffer_(std::max<std::size_t>(buffer_bytes, 64)), buffer_end_offset_(offset) {}
-
-bool ByteReader::fill(std::size_t count) {
-  const std::size_t have = end_ - begin_;
-  if (count - have > file_.size() - std::min(file_.size(), buffer_end_offset_)) return false;
-  if (begin_ > 0) {
-    std::memmove(buffer_.data(), buffer_.data() + begin_, have);
-    begin_ = 0;
-    end_ = have;
-  }
-  if (count > buffer_.size()) buffer_.resize(count);  // bounded by the file size (checked above)
-  while (end_ < count) {
-    const std::size_t got = file_.read_at(buffer_end_offset_, buffer_.data() + end_, buffer_.size() - end_);
-    if (got == 0) return false;  // the file shrank after it was opened
-    end_ += got;
-    buffer_end_offset_ += got;
-  }
-  return true;
-}
-
-bool ByteReader::skip(std::uint64_t count) {
-  const std::uint64_t have = end_ - begin_;
-  if (count <= have) {
-    begin_ += static_cast<std::size_t>(count);
-    return true;
-  }
-  if (count > remaining()) return false;
-  buffer_end_offset_ += count - have;
-  begin_ = end_ = 0;
-  return true;
-}
-
-// --- LineReader --------------------------------------------------------------
-
-LineReader::LineReader(InputFile& file, std::uint64_t offset, std::uint64_t first_line, std::size_t max_line_bytes)
-    : file_(file),
-      max_line_bytes_(max_line_bytes),
-      buffer_(std::min(kLineChunkBytes, max_line_bytes + 1)),
-      buffer_end_offset_(offset),
-      line_number_(first_line - 1) {}
-
-bool LineReader::next(std::string_view& line) {
-  std::size_t searched = begin_;  // bytes before this have no '\n'
-  while (true) {
-    const auto* newline = static_cast<const char*>(std::memchr(buffer_.data() + searched, '\n', end_ - searched));
-    if (newline != nullptr || (at_end_ && end_ > begin_)) {
-      const std::size_t line_end = newline != nullptr ? static_cast<std::size_t>(newline - buffer_.data()) : end_;
-      if (line_end - begin_ > max_line_bytes_) break;  // reported below
-      line = std::string_view(buffer_.data() + begin_, line_end - begin_);
-      while (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-      begin_ = newline != nullptr ? line_end + 1 : line_end;
-      ++line_number_;
-      return true;
-    }
-    if (at_end_) return false;
-    searched = end_;
-    if (end_ - begin_ > max_line_bytes_) break;
-    // Keep the unfinished line, make room, read more.
-    if (begin_ > 0) {
-      std::memmove(buffer_.data(), buffer_.data() + begin_, end_ - begin_);
-      end_ -= begin_;
-      searched -= begin_;
-      begin_ = 0;
-    }
-    if (end_ == buffer_.size()) buffer_.resize(std::min(buffer_.size() * 2, max_line_bytes_ + 2));
-    const std::size_t got = file_.read_at(buffer_end_offset_, buffer_.data() + end_, buffer_.size() - end_);
-    if (got == 0) at_end_ = true;
-    end_ += got;
-    buffer_end_offset_ += got;
-  }
-  throw FormatError::at_line(file_.name(), line_number_ + 1,
-                             "line longer than " + std::to_string(max_line_bytes_) +
-                                 " bytes; is this really a text file? It starts " +
-                                 quote({buffer_.data() + begin_, std::min<std::size_t>(end_ - begin_, 80)}));
-}
-
-bool LineReader::next_non_blank(std::string_view& line) {
-  while (next(line)) {
-    if (!Tokens(line).at_end()) return true;
-  }
-  return false;
 }
 
 std::size_t Tokens::count_left() const {

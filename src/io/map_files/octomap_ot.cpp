@@ -66,8 +66,8 @@ std::optional<double> clamp_probability_covering(float value, bool upper) {
 
 /// The nodes whose child mask (the last byte of each fixed-size record) is not 0, counted
 /// on an input of its own from where `in` is.
-std::uint64_t count_parents(const ByteInput& in, std::uint64_t nodes, std::size_t record_bytes) {
-  ByteInput records(in, in.offset());
+std::uint64_t count_parents(const ByteReader& in, std::uint64_t nodes, std::size_t record_bytes) {
+  ByteReader records(in, in.offset());
   std::array<std::uint8_t, 8> record{};
   std::uint64_t parents = 0;
   for (std::uint64_t node = 0; node < nodes && records.read(record.data(), record_bytes); ++node) {
@@ -78,7 +78,7 @@ std::uint64_t count_parents(const ByteInput& in, std::uint64_t nodes, std::size_
 
 class OtDecoder {
  public:
-  OtDecoder(ByteInput& in, const std::string& name, detail::TreeBuilder& tree, bool color)
+  OtDecoder(ByteReader& in, const std::string& name, detail::TreeBuilder& tree, bool color)
       : in_(in), name_(name), tree_(tree), color_(color), node_bytes_(node_bytes(color)) {}
 
   void run(std::uint64_t declared_nodes) {
@@ -102,13 +102,13 @@ class OtDecoder {
     const std::uint64_t at = in_.offset();
     std::array<std::uint8_t, 8> bytes{};
     if (!in_.read(bytes.data(), node_bytes_)) {
-      fail(in_.size(), "the file ends inside the tree, in " + node_text(node.depth, code) + ", after " +
+      fail(in_.size(), "the file ends inside the tree, in " + octomap_node(node.depth, code) + ", after " +
                            std::to_string(nodes_) + " nodes (the file is truncated or its size is wrong)");
     }
     ++nodes_;
     float value = get_float(bytes.data());
     if (!std::isfinite(value)) {
-      fail(at, "the log-odds of " + node_text(node.depth, code) + " is " + float_text(value) +
+      fail(at, "the log-odds of " + octomap_node(node.depth, code) + " is " + float_text(value) +
                    ", not a finite number");
     }
     const std::uint8_t mask = bytes[node_bytes_ - 1];
@@ -123,7 +123,7 @@ class OtDecoder {
       return;
     }
     if (node.depth == 0) {
-      fail(at + node_bytes_ - 1, node_text(node.depth, code) + " is at the finest depth (OctoMap depth 16), which "
+      fail(at + node_bytes_ - 1, octomap_node(node.depth, code) + " is at the finest depth (OctoMap depth 16), which "
                                      "has no children, but its child mask is " + std::to_string(mask));
     }
     tree_.subdivide(node);
@@ -163,7 +163,7 @@ class OtDecoder {
     throw FormatError::at_byte(name_, offset, message);
   }
 
-  ByteInput& in_;
+  ByteReader& in_;
   const std::string& name_;
   detail::TreeBuilder& tree_;
   bool color_;
@@ -255,7 +255,7 @@ class OtEncoder {
 
 }  // namespace
 
-OccupancyMap decode_ot(ByteInput& in, const Header& header, const std::string& name, const SensorModel& sensor) {
+OccupancyMap decode_ot(ByteReader& in, const Header& header, const std::string& name, const SensorModel& sensor) {
   check_declared_size(header, name);
   // A node with children gets a group of eight. Every node may have children as far as the size says; when
   // that bound is above the limit, count them (the records have a fixed size and end with the child mask).

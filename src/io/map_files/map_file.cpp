@@ -13,13 +13,12 @@
 // write_file_atomically (temporary file, fsync, rename).
 #include "umbra/io/map_file.hpp"
 
-#include "atomic_file.hpp"
+#include "umbra/io/file_saving.hpp"
+#include "byte_input.hpp"
+#include "message_text.hpp"
 #include "core/memory_budget.hpp"
 #include "map/map_access.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 #include <zlib.h>
 #include <zstd.h>
 #include <zstd_errors.h>
@@ -45,7 +44,6 @@
 namespace umbra {
 namespace {
 
-namespace fs = std::filesystem;
 
 // --- format constants (docs/map-format.md, "Header") -------------------------
 
@@ -131,39 +129,11 @@ std::string number(float v) {
   return out.str();
 }
 
-std::string float_text(float v) {
-  std::ostringstream out;
-  out.precision(9);
-  out << v << " (bits " << hex32(std::bit_cast<std::uint32_t>(v)) << ")";
-  return out.str();
-}
+using io_detail::float_text;
+using io_detail::quote_bytes;
 
-/// Quoted, with anything not printable ASCII as \xNN.
-std::string quoted_bytes(std::span<const std::uint8_t> bytes) {
-  std::string text = "'";
-  for (const std::uint8_t b : bytes) {
-    if (b >= 0x20 && b < 0x7F && b != '\'' && b != '\\') {
-      text += static_cast<char>(b);
-    } else {
-      char hex[8];
-      std::snprintf(hex, sizeof hex, "\\x%02x", static_cast<unsigned>(b));
-      text += hex;
-    }
-  }
-  return text + "'";
-}
-
-std::string node_text(int depth, std::uint64_t code) {
-  const Key key = morton::decode(code);
-  return "node at depth " + std::to_string(depth) + ", key (" + std::to_string(key.x) + ", " +
-         std::to_string(key.y) + ", " + std::to_string(key.z) + ")";
-}
-
-std::string system_reason(int error) { return std::generic_category().message(error); }
-
-[[noreturn]] void throw_io(const std::string& what, const fs::path& path, int error) {
-  throw std::runtime_error(what + " '" + path.string() + "': " + system_reason(error));
-}
+/// "node at depth D, key (x, y, z)", depth as the tree counts it (0: the leaves).
+std::string node_text(int depth, std::uint64_t code) { return io_detail::node_text("depth", depth, code); }
 
 // --- header -------------------------------------------------------------------
 
@@ -212,7 +182,7 @@ MapFileInfo decode_header(const std::string& file, std::span<const std::uint8_t>
   // Magic and version first: they are the part of the layout every version keeps.
   const std::size_t magic_seen = std::min(head.size(), kMagic.size());
   if (!std::equal(head.begin(), head.begin() + static_cast<std::ptrdiff_t>(magic_seen), kMagic.begin())) {
-    throw fail(at::magic, "bad magic: expected 'UMBRAMAP', found " + quoted_bytes(head.first(magic_seen)) +
+    throw fail(at::magic, "bad magic: expected 'UMBRAMAP', found " + quote_bytes({reinterpret_cast<const char*>(head.data()), magic_seen}) +
                               " (not an umbra map file)");
   }
   if (head.size() >= at::version + 4) {
@@ -357,67 +327,6 @@ MapFileInfo decode_header(const std::string& file, std::span<const std::uint8_t>
   return info;
 }
 
-// --- files ----------------------------------------------------------------------
-
-/// Owns a file descriptor.
-class Fd {
- public:
-  explicit Fd(int fd = -1) : fd_(fd) {}
-  Fd(Fd&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
-  Fd& operator=(Fd&& other) noexcept {
-    if (this != &other) {
-      close();
-      fd_ = std::exchange(other.fd_, -1);
-    }
-    return *this;
-  }
-  Fd(const Fd&) = delete;
-  Fd& operator=(const Fd&) = delete;
-  ~Fd() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  [[nodiscard]] int get() const { return fd_; }
-  /// Closes now and returns close()'s errno (0 on success).
-  int close() {
-    const int fd = std::exchange(fd_, -1);
-    return fd >= 0 && ::close(fd) != 0 ? errno : 0;
-  }
-
- private:
-  int fd_;
-};
-
-struct OpenedFile {
-  Fd fd;
-  std::uint64_t size = 0;
-};
-
-OpenedFile open_for_reading(const fs::path& path) {
-  OpenedFile file;
-  file.fd = Fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
-  if (file.fd.get() < 0) throw_io("cannot open map file", path, errno);
-  struct stat st {};
-  if (::fstat(file.fd.get(), &st) != 0) throw_io("cannot stat map file", path, errno);
-  if (!S_ISREG(st.st_mode)) throw std::runtime_error("cannot read map file '" + path.string() + "': not a regular file");
-  file.size = static_cast<std::uint64_t>(st.st_size);
-  return file;
-}
-
-/// Reads up to `size` bytes at `offset`; returns how many there were before end of file.
-std::size_t read_at(const OpenedFile& file, const fs::path& path, std::uint64_t offset, std::uint8_t* out,
-                    std::size_t size) {
-  std::size_t done = 0;
-  while (done < size) {
-    const ssize_t n = ::pread(file.fd.get(), out + done, size - done, static_cast<off_t>(offset + done));
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      throw_io("cannot read map file", path, errno);
-    }
-    if (n == 0) break;
-    done += static_cast<std::size_t>(n);
-  }
-  return done;
-}
 
 // --- streams ----------------------------------------------------------------------
 
@@ -842,7 +751,7 @@ std::uint64_t bytes_to_load(const MapFileInfo& info) {
   return groups > UINT64_MAX - info.file_bytes ? UINT64_MAX : groups + info.file_bytes;
 }
 
-OccupancyMap load_body(const OpenedFile& file, const std::filesystem::path& path, const MapFileInfo& info);
+OccupancyMap load_body(const io_detail::InputFile& file, const std::filesystem::path& path, const MapFileInfo& info);
 
 }  // namespace
 
@@ -907,26 +816,24 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path, const 
   std::array<std::uint8_t, kChecksumBytes> trailer{};
   put_u32(trailer.data(), crc);
 
-  detail::write_file_atomically(path, {header, structure_frame, values_frame, colors_frame, trailer});
+  write_file_atomically(path, {header, structure_frame, values_frame, colors_frame, trailer}, "map");
 }
 
 MapFileInfo read_map_info(const std::filesystem::path& path) {
-  const OpenedFile file = open_for_reading(path);
+  const io_detail::InputFile file(path, {}, "map file");
   std::array<std::uint8_t, kHeaderBytes> head{};
-  const std::size_t n =
-      read_at(file, path, 0, head.data(), static_cast<std::size_t>(std::min<std::uint64_t>(file.size, kHeaderBytes)));
-  return decode_header(path.string(), std::span(head).first(n), file.size);
+  const std::size_t n = file.read_at(0, head.data(), head.size());
+  return decode_header(path.string(), std::span(head).first(n), file.size());
 }
 
 OccupancyMap load_map(const std::filesystem::path& path) {
   const std::string name = path.string();
-  const OpenedFile file = open_for_reading(path);
+  const io_detail::InputFile file(path, {}, "map file");
 
   // 1. The header, checked against the real file size before anything is allocated.
   std::array<std::uint8_t, kHeaderBytes> head{};
-  const std::size_t head_size =
-      read_at(file, path, 0, head.data(), static_cast<std::size_t>(std::min<std::uint64_t>(file.size, kHeaderBytes)));
-  const MapFileInfo info = decode_header(name, std::span(head).first(head_size), file.size);
+  const std::size_t head_size = file.read_at(0, head.data(), head.size());
+  const MapFileInfo info = decode_header(name, std::span(head).first(head_size), file.size());
   const std::uint64_t need = bytes_to_load(info);
   detail::require_memory(name, "loading this map (" + std::to_string(info.inner_nodes) + " nodes with children)", need);
   return detail::naming_bad_alloc(name, "loading the map", need, [&] { return load_body(file, path, info); });
@@ -934,12 +841,12 @@ OccupancyMap load_map(const std::filesystem::path& path) {
 
 namespace {
 
-OccupancyMap load_body(const OpenedFile& file, const std::filesystem::path& path, const MapFileInfo& info) {
+OccupancyMap load_body(const io_detail::InputFile& file, const std::filesystem::path& path, const MapFileInfo& info) {
   const std::string name = path.string();
 
   // 2. The whole file (its size is now known to be what the header declares), and its checksum.
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(info.file_bytes));
-  const std::size_t got = read_at(file, path, 0, bytes.data(), bytes.size());
+  const std::size_t got = file.read_at(0, bytes.data(), bytes.size());
   if (got != bytes.size()) {
     throw FormatError::at_byte(name, got, "truncated while reading: header declares " + std::to_string(bytes.size()) +
                                               " bytes, read " + std::to_string(got) + " (is the file being written?)");

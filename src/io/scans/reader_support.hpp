@@ -1,12 +1,7 @@
 // Internal helpers shared by the point-cloud readers (ScanGraph, xyz, PLY,
-// PCD, KITTI, TUM; not installed).
-//
-// InputFile opens a regular file (std::runtime_error "cannot open FILE:
-// reason" otherwise) and reads at offsets with pread; ByteReader streams its
-// bytes through one reusable buffer and hands out pointers to whole records
-// (no per-record allocation, a file that ends early is reported by a null
-// pointer so the caller can name what was expected at which byte offset);
-// LineReader splits text into lines without copying them and counts them.
+// PCD, KITTI, TUM; not installed). Their files are read through
+// common/byte_input.hpp (InputFile, ByteReader, LineReader) and their
+// messages quote with common/message_text.hpp; both come with this header.
 // FileHandle closes a stdio file (for streams that cannot be read by offset,
 // such as pipes, and for writing). The number parsers wrap std::from_chars;
 // the scalar loaders decode little- or big-endian integers and IEEE floats of
@@ -28,21 +23,13 @@
 #include <string_view>
 #include <vector>
 
+#include "byte_input.hpp"
+#include "message_text.hpp"
 #include "umbra/core/pose.hpp"
 #include "umbra/core/vec3.hpp"
 #include "umbra/io/scan_source.hpp"
 
 namespace umbra::io_detail {
-
-/// The system's text for an errno value, e.g. "No such file or directory".
-std::string errno_text(int error);
-
-/// What quote() shows of bytes 0x80 to 0xff (parts of UTF-8 characters).
-enum class HighBytes : std::uint8_t { replace, keep };
-
-/// `text` quoted for an error message, at most 80 characters: control bytes
-/// and DEL shown as '?', and so are bytes from 0x80 on unless `high_bytes` is keep.
-std::string quote(std::string_view text, HighBytes high_bytes = HighBytes::replace);
 
 /// `text` with the ASCII letters in lower case.
 std::string to_lower(std::string text);
@@ -50,105 +37,11 @@ std::string to_lower(std::string text);
 /// True when the file name ends in ".bz2" (any case).
 bool has_bz2_suffix(const std::filesystem::path& path);
 
-/// Throws std::runtime_error("cannot open FILE: it is a directory") when
-/// `path` names a folder (checked without opening it, so that an unreadable
-/// folder is named as a folder, and before fopen, which opens folders).
-void reject_directory(const std::filesystem::path& path);
-
 /// A stdio file that is closed when the handle goes.
 struct FileCloser {
   void operator()(std::FILE* file) const { std::fclose(file); }
 };
 using FileHandle = std::unique_ptr<std::FILE, FileCloser>;
-
-/// A regular file opened for reading (binary), with its size fixed at open.
-class InputFile {
- public:
-  /// Throws std::runtime_error("cannot open FILE: reason") for a missing file,
-  /// a directory or anything else that is not a readable regular file; for
-  /// the last, a non-empty `format` adds why: "not a regular file (FORMAT
-  /// files are read with seeks)".
-  explicit InputFile(const std::filesystem::path& path, std::string_view format = {});
-  InputFile(const InputFile&) = delete;
-  InputFile& operator=(const InputFile&) = delete;
-  ~InputFile();
-
-  [[nodiscard]] const std::string& name() const { return name_; }
-  [[nodiscard]] std::uint64_t size() const { return size_; }
-
-  /// Reads up to `capacity` bytes at `offset`; fewer only at the end of the
-  /// file. Throws std::runtime_error when the system reports an error.
-  std::size_t read_at(std::uint64_t offset, void* out, std::size_t capacity);
-
- private:
-  std::string name_;
-  int descriptor_ = -1;
-  std::uint64_t size_ = 0;
-};
-
-/// Sequential binary reading through one buffer.
-class ByteReader {
- public:
-  ByteReader(InputFile& file, std::uint64_t offset, std::size_t buffer_bytes = std::size_t{1} << 20);
-
-  /// The next `count` bytes, contiguous, valid until the next call; null when
-  /// the file ends before them (the position is then unchanged).
-  const unsigned char* take(std::size_t count) {
-    if (end_ - begin_ < count && !fill(count)) return nullptr;
-    const unsigned char* bytes = buffer_.data() + begin_;
-    begin_ += count;
-    return bytes;
-  }
-
-  /// Skips `count` bytes; false (position unchanged) when the file is shorter.
-  bool skip(std::uint64_t count);
-
-  /// File offset of the next byte take() returns.
-  [[nodiscard]] std::uint64_t offset() const { return buffer_end_offset_ - (end_ - begin_); }
-  /// Bytes left in the file after offset().
-  [[nodiscard]] std::uint64_t remaining() const { return file_.size() - offset(); }
-
- private:
-  bool fill(std::size_t count);
-
-  InputFile& file_;
-  std::vector<unsigned char> buffer_;
-  std::size_t begin_ = 0;                // next unread byte in buffer_
-  std::size_t end_ = 0;                  // one past the last valid byte in buffer_
-  std::uint64_t buffer_end_offset_ = 0;  // file offset of buffer_[end_]
-};
-
-/// Splits a file (from some offset on) into lines.
-class LineReader {
- public:
-  /// Reads from `offset`; the first line returned gets number `first_line`.
-  /// Lines longer than `max_line_bytes` are a FormatError ("is this a text file?").
-  LineReader(InputFile& file, std::uint64_t offset, std::uint64_t first_line = 1,
-             std::size_t max_line_bytes = std::size_t{1} << 20);
-
-  /// The next line without its '\n' and trailing '\r'; false at the end of
-  /// the file. The view stays valid until the next call.
-  bool next(std::string_view& line);
-
-  /// The next line that holds more than whitespace (Tokens::is_space), skipping
-  /// blank ones; false when only blank lines are left.
-  bool next_non_blank(std::string_view& line);
-
-  /// Number of the line last returned (0 before the first).
-  [[nodiscard]] std::uint64_t line_number() const { return line_number_; }
-  /// File offset just past the line last returned (its '\n' included).
-  [[nodiscard]] std::uint64_t offset() const { return buffer_end_offset_ - (end_ - begin_); }
-
- private:
-  InputFile& file_;
-  std::size_t max_line_bytes_;
-  std::vector<char> buffer_;
-  std::size_t begin_ = 0;
-  std::size_t end_ = 0;
-  std::uint64_t buffer_end_offset_ = 0;
-  std::uint64_t line_number_ = 0;
-  bool at_end_ = false;
-};
 
 /// Whitespace-separated tokens of one line.
 class Tokens {

@@ -1,10 +1,9 @@
 // Internals of the OctoMap file readers and writers (octomap_files.hpp):
-// the byte input both readers stream from, the text header, the per-format
-// tree codecs, and message helpers. Private to umbra_io.
+// the text header, the per-format tree codecs and the node names of their
+// messages. Both readers stream from common/byte_input.hpp's ByteReader and
+// quote with common/message_text.hpp. Private to umbra_io.
 //
-// Cost model: ByteInput serves bytes from memory or from a file through a
-// 1 MiB buffer (one pread per MiB); get() and read() are inline and only
-// call out of line to refill. The header parser looks at each header byte
+// Cost model: see byte_input.hpp for the reading; the header parser looks at each header byte
 // once and keeps at most 64 bytes of any token.
 #pragma once
 
@@ -16,61 +15,18 @@
 #include <string_view>
 #include <vector>
 
+#include "byte_input.hpp"
+#include "message_text.hpp"
 #include "umbra/io/octomap_files.hpp"
 
 namespace umbra::octomap_io {
 
-/// Sequential bytes from memory or from a file; offset() is the position of the next byte.
-class ByteInput {
- public:
-  /// Bytes in memory; they must outlive the input.
-  explicit ByteInput(std::span<const std::uint8_t> bytes);
-  /// A regular file. Throws std::runtime_error naming the path when it cannot be opened or read.
-  explicit ByteInput(const std::filesystem::path& path);
-  /// A second, independent input over the same bytes (the same open file) from `offset` on.
-  ByteInput(const ByteInput& source, std::uint64_t offset);
-  ByteInput(const ByteInput&) = delete;
-  ByteInput& operator=(const ByteInput&) = delete;
-  ~ByteInput();
+using io_detail::float_text;
+using io_detail::quote_bytes;
 
-  /// Total bytes (the file's size when it was opened).
-  [[nodiscard]] std::uint64_t size() const { return size_; }
-  [[nodiscard]] std::uint64_t offset() const { return window_offset_ + pos_; }
-  [[nodiscard]] std::uint64_t remaining() const { return size_ > offset() ? size_ - offset() : 0; }
-
-  /// The next byte, or -1 at the end.
-  int get() {
-    if (pos_ == end_ && !refill()) return -1;
-    return data_[pos_++];
-  }
-  /// The next byte without consuming it, or -1 at the end.
-  int peek() {
-    if (pos_ == end_ && !refill()) return -1;
-    return data_[pos_];
-  }
-  /// The next `n` bytes into `out`; false when fewer remain (then the input is at its end).
-  bool read(std::uint8_t* out, std::size_t n) {
-    if (end_ - pos_ >= n) {
-      std::memcpy(out, data_ + pos_, n);
-      pos_ += n;
-      return true;
-    }
-    return read_slow(out, n);
-  }
-
- private:
-  bool refill();
-  bool read_slow(std::uint8_t* out, std::size_t n);
-
-  const std::uint8_t* data_ = nullptr;
-  std::size_t pos_ = 0;
-  std::size_t end_ = 0;
-  std::uint64_t window_offset_ = 0;  // file offset of data_[0]
-  std::uint64_t size_ = 0;
-  int fd_ = -1;  // -1: memory
-  std::filesystem::path path_;
-  std::vector<std::uint8_t> buffer_;
-};
+/// The byte input both readers stream from (a file or bytes in memory).
+using io_detail::ByteReader;
+using io_detail::InputFile;
 
 /// The header, plus where its fields were (for messages).
 struct Header : OctoMapFileInfo {
@@ -82,7 +38,7 @@ inline constexpr std::string_view kOtFirstLine = "# Octomap OcTree file";
 
 /// Parses the header up to and including the line that holds `data`;
 /// `in` is then at the first byte of the tree. Throws FormatError with a line number.
-Header parse_header(ByteInput& in, const std::string& name);
+Header parse_header(ByteReader& in, const std::string& name);
 
 /// Why `id` is not a tree type umbra reads (a message), or empty when it is one.
 std::string unreadable_tree_type(const std::string& id);
@@ -112,8 +68,8 @@ std::string resolution_text(double resolution);
 
 /// Trees in the two formats. The decoders read from `in` (positioned at the
 /// data) into a new map; the encoders return the tree bytes and its node count.
-OccupancyMap decode_bt(ByteInput& in, const Header& header, const std::string& name, const SensorModel& sensor);
-OccupancyMap decode_ot(ByteInput& in, const Header& header, const std::string& name, const SensorModel& sensor);
+OccupancyMap decode_bt(ByteReader& in, const Header& header, const std::string& name, const SensorModel& sensor);
+OccupancyMap decode_ot(ByteReader& in, const Header& header, const std::string& name, const SensorModel& sensor);
 
 struct EncodedTree {
   std::vector<std::uint8_t> bytes;
@@ -125,14 +81,11 @@ EncodedTree encode_ot(const OccupancyMap& map);
 /// Throws std::invalid_argument unless the map is 16 levels deep.
 void require_octomap_depth(const OccupancyMap& map, const std::string& what);
 
-/// "the node at OctoMap depth D (first voxel key (x, y, z))" for a node at umbra depth `depth`.
-std::string node_text(int depth, std::uint64_t code);
-
-/// Quoted, with anything not printable ASCII as \xNN, cut after `limit` bytes.
-std::string quote_text(std::string_view text, std::size_t limit = 64);
-
-/// A float with enough digits to tell it apart, and its bits.
-std::string float_text(float value);
+/// "the node at OctoMap depth D, key (x, y, z)" for a node at umbra depth
+/// `depth` (OctoMap counts depths from the root down, umbra from the leaves up).
+inline std::string octomap_node(int depth, std::uint64_t code) {
+  return "the " + io_detail::node_text("OctoMap depth", kOctoMapDepthLevels - depth, code);
+}
 
 /// The map a decoder fills: resolution from the header, 16 levels, the sensor model, colour if asked.
 OccupancyMap new_map(const Header& header, const std::string& name, const SensorModel& sensor, bool color);

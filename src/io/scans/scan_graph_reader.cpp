@@ -31,9 +31,9 @@
 #include <system_error>
 #include <vector>
 
-#include <unistd.h>
 
 #include "reader_support.hpp"
+#include "umbra/io/file_saving.hpp"
 #include "umbra/io/format_error.hpp"
 #include "umbra/io/scan_graph.hpp"
 #include "umbra/io/scan_source.hpp"
@@ -41,8 +41,6 @@
 namespace umbra {
 namespace {
 
-using io_detail::errno_text;
-using io_detail::FileHandle;
 using io_detail::InputFile;
 using io_detail::Pose;
 
@@ -332,38 +330,13 @@ void write_scan_graph(const std::filesystem::path& path, const std::vector<Scan>
     }
   }
 
-  // Write next to the destination under a unique name, then rename into place.
-  static std::atomic<unsigned> temporary_counter{0};
-  const std::string destination = path.string();
-  std::filesystem::path temporary;
-  FileHandle out;
-  for (int attempt = 0; attempt < 100 && !out; ++attempt) {
-    temporary = destination + ".tmp-" + std::to_string(::getpid()) + "-" +
-                std::to_string(temporary_counter.fetch_add(1));
-    out.reset(std::fopen(temporary.c_str(), "wbx"));  // x: fail if it exists
-    if (!out && errno != EEXIST) break;
-  }
-  if (!out) throw std::runtime_error("cannot write " + destination + ": " + errno_text(errno));
-
-  bool keep_temporary = false;
-  struct TemporaryRemover {
-    const std::filesystem::path& file;
-    const bool& keep;
-    ~TemporaryRemover() {
-      if (!keep) {
-        std::error_code ignored;
-        std::filesystem::remove(file, ignored);
-      }
-    }
-  } remover{temporary, keep_temporary};
-
+  // Streamed in 1 MiB pieces through one atomic save (umbra/io/file_saving.hpp).
+  AtomicFileWriter out(path, "ScanGraph");
   std::vector<unsigned char> buffer;
   constexpr std::size_t kFlushBytes = 1 << 20;
   buffer.reserve(kFlushBytes + kPointBytes + kNodeTailBytes + 16);
   const auto flush = [&] {
-    if (!buffer.empty() && std::fwrite(buffer.data(), 1, buffer.size(), out.get()) != buffer.size()) {
-      throw std::runtime_error("cannot write " + destination + ": " + errno_text(errno));
-    }
+    out.write(buffer);
     buffer.clear();
   };
 
@@ -387,15 +360,7 @@ void write_scan_graph(const std::filesystem::path& path, const std::vector<Scan>
   append_u32(buffer, 0);  // no edges
   flush();
 
-  if (std::fclose(out.release()) != 0) {
-    throw std::runtime_error("cannot write " + destination + ": " + errno_text(errno));
-  }
-  std::error_code rename_error;
-  std::filesystem::rename(temporary, path, rename_error);
-  if (rename_error) {
-    throw std::runtime_error("cannot write " + destination + ": " + rename_error.message());
-  }
-  keep_temporary = true;
+  out.commit();
 }
 
 }  // namespace umbra

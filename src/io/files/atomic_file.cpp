@@ -1,5 +1,5 @@
-// write_file_atomically() (atomic_file.hpp) and the clean-up of interrupted
-// saves (umbra/io/file_saving.hpp).
+// Atomic saves: write_file_atomically(), AtomicFileWriter and the clean-up
+// of interrupted saves (umbra/io/file_saving.hpp).
 //
 // Temporary files are named `.NAME.tmp-PID-N-SALT` beside their target. A
 // fixed table of 64 slots lists the ones being written, so that a signal
@@ -8,8 +8,6 @@
 // written once with write(2) (retried on EINTR and short writes), then one
 // fsync of the file and one of its folder; one listing of the folder to find
 // stale temporary files.
-#include "atomic_file.hpp"
-
 #include "umbra/io/file_saving.hpp"
 #include "umbra/io/map_file.hpp"  // set_map_file_fault_for_testing
 
@@ -18,6 +16,8 @@
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
+
+#include "core/assert.hpp"
 
 #include <array>
 #include <atomic>
@@ -194,30 +194,50 @@ std::function<void()>& fault_hook() {
 
 void set_map_file_fault_for_testing(std::function<void()> hook) { fault_hook() = std::move(hook); }
 
-void write_file_atomically(const fs::path& requested, std::initializer_list<std::span<const std::uint8_t>> parts,
-                           std::string_view kind) {
-  const fs::path path = through_links(requested);
-  remove_stale_temporaries(path);
-  {
-    TemporaryFile temp(path, kind);
-    bool first = true;
-    for (const auto part : parts) {
-      temp.write(part);
-      if (std::exchange(first, false) && fault_hook()) fault_hook()();
-    }
-    temp.commit();
-  }
+}  // namespace umbra::detail
+
+namespace umbra {
+
+class AtomicFileWriter::Temporary : public detail::TemporaryFile {
+ public:
+  using TemporaryFile::TemporaryFile;
+};
+
+AtomicFileWriter::AtomicFileWriter(const std::filesystem::path& path, std::string_view kind)
+    : path_(detail::through_links(path)) {
+  detail::remove_stale_temporaries(path_);
+  temporary_ = std::make_unique<Temporary>(path_, kind);
+}
+
+AtomicFileWriter::~AtomicFileWriter() = default;
+
+void AtomicFileWriter::write(std::span<const std::uint8_t> bytes) {
+  UMBRA_ASSERT(temporary_ != nullptr);  // write() after commit()
+  temporary_->write(bytes);
+}
+
+void AtomicFileWriter::commit() {
+  UMBRA_ASSERT(temporary_ != nullptr);
+  temporary_->commit();
+  temporary_.reset();
   // Make the rename itself durable. Best effort: the file is already complete
   // under its name, and some file systems refuse fsync on folders.
-  if (const int dir = ::open(folder_of(path).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dir >= 0) {
+  if (const int dir = ::open(detail::folder_of(path_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dir >= 0) {
     ::fsync(dir);
     ::close(dir);
   }
 }
 
-}  // namespace umbra::detail
-
-namespace umbra {
+void write_file_atomically(const std::filesystem::path& path,
+                           std::initializer_list<std::span<const std::uint8_t>> parts, std::string_view kind) {
+  AtomicFileWriter file(path, kind);
+  bool first = true;
+  for (const auto part : parts) {
+    file.write(part);
+    if (std::exchange(first, false) && detail::fault_hook()) detail::fault_hook()();
+  }
+  file.commit();
+}
 
 void remove_unfinished_saves() noexcept {
   for (detail::Slot& slot : detail::g_slots) {
@@ -231,7 +251,7 @@ void check_can_save(const std::filesystem::path& path) {
   if (std::filesystem::is_directory(target, error)) {
     throw std::runtime_error("cannot save to '" + path.string() + "': it is a folder");
   }
-  detail::TemporaryFile probe(target, "a file");  // created and removed again
+  const AtomicFileWriter probe(target, "a file");  // created and removed again
 }
 
 }  // namespace umbra

@@ -43,7 +43,7 @@ std::array<std::uint8_t, 8> child_codes(std::uint8_t low, std::uint8_t high) {
 
 class BtDecoder {
  public:
-  BtDecoder(ByteInput& in, const std::string& name, detail::TreeBuilder& tree, LogOddsRange range)
+  BtDecoder(ByteReader& in, const std::string& name, detail::TreeBuilder& tree, LogOddsRange range)
       : in_(in), name_(name), tree_(tree), free_value_(range.min), occupied_value_(range.max) {}
 
   void run(std::uint64_t declared_nodes) {
@@ -75,7 +75,7 @@ class BtDecoder {
   std::array<std::uint8_t, 2> read_pair(NodeRef node, std::uint64_t code) {
     std::array<std::uint8_t, 2> pair{};
     if (!in_.read(pair.data(), 2)) {
-      fail(in_.size(), "the file ends inside the tree: " + node_text(node.depth, code) +
+      fail(in_.size(), "the file ends inside the tree: " + octomap_node(node.depth, code) +
                            " has children and needs 2 bytes describing them (the file is truncated)");
     }
     return pair;
@@ -96,7 +96,7 @@ class BtDecoder {
           break;
         case kHasChildren:
           if (child_depth == 0) {
-            fail(pair_offset + slot / 4, "child " + std::to_string(slot) + " of " + node_text(node.depth, code) +
+            fail(pair_offset + slot / 4, "child " + std::to_string(slot) + " of " + octomap_node(node.depth, code) +
                                              " is marked as having children (bits 11), but it is at the finest "
                                              "depth (OctoMap depth 16), which has no children");
           }
@@ -116,7 +116,7 @@ class BtDecoder {
       const std::uint64_t offset = in_.offset();
       const std::array<std::uint8_t, 2> child_pair = read_pair(child, child_code);
       if (child_pair[0] == 0 && child_pair[1] == 0) {
-        fail(offset, node_text(child.depth, child_code) +
+        fail(offset, octomap_node(child.depth, child_code) +
                          " is marked as having children (bits 11), but its own two bytes are 0 0 (no children)");
       }
       tree_.subdivide(child);
@@ -128,7 +128,7 @@ class BtDecoder {
     throw FormatError::at_byte(name_, offset, message);
   }
 
-  ByteInput& in_;
+  ByteReader& in_;
   const std::string& name_;
   detail::TreeBuilder& tree_;
   float free_value_;
@@ -207,7 +207,7 @@ class BtEncoder {
 
 }  // namespace
 
-OccupancyMap decode_bt(ByteInput& in, const Header& header, const std::string& name, const SensorModel& sensor) {
+OccupancyMap decode_bt(ByteReader& in, const Header& header, const std::string& name, const SensorModel& sensor) {
   check_declared_size(header, name);
   // Every node with children is 2 bytes of the data, and gets a group of eight children.
   require_tree_memory(header, name, (header.file_bytes - header.data_offset) / 2);
