@@ -66,4 +66,15 @@ class ThreadPool {
   std::exception_ptr failure_;
 };
 
+/// Runs work(part) for part in [0, parts): on `pool`'s workers when there is
+/// a pool (null: one thread) and more than one part, else in order here.
+template <typename Work>
+void for_each_part(ThreadPool* pool, std::size_t parts, const Work& work) {
+  if (pool == nullptr || parts < 2) {
+    for (std::size_t p = 0; p < parts; ++p) work(p);
+    return;
+  }
+  pool->run(parts, [&](std::size_t p, unsigned) { work(p); });
+}
+
 }  // namespace umbra

@@ -20,16 +20,6 @@ struct Sample {
   std::uint32_t point;
 };
 
-/// Runs work(part) for part in [0, parts), on the pool when there is one.
-template <typename Work>
-void for_each_part(ThreadPool* pool, std::size_t parts, const Work& work) {
-  if (pool == nullptr || parts < 2) {
-    for (std::size_t p = 0; p < parts; ++p) work(p);
-    return;
-  }
-  pool->run(parts, [&](std::size_t p, unsigned) { work(p); });
-}
-
 /// The samples of points [begin, end), in scan order.
 std::vector<Sample> samples_of(const Grid& grid, std::span<const Vec3f> points, std::span<const std::uint64_t> known_codes,
                                std::size_t begin, std::size_t end, const std::optional<KeyBox>& box) {

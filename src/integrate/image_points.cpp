@@ -24,16 +24,6 @@ void for_each_depth(const DepthImage& depth, const Work& work) {
   }
 }
 
-/// Runs work(part) for part in [0, parts), on the pool when there is one.
-template <typename Work>
-void for_each_part(ThreadPool* pool, std::size_t parts, const Work& work) {
-  if (pool == nullptr || parts < 2) {
-    for (std::size_t p = 0; p < parts; ++p) work(p);
-    return;
-  }
-  pool->run(parts, [&](std::size_t p, unsigned) { work(p); });
-}
-
 }  // namespace
 
 std::size_t count_readings(const DepthImage& depth, int row_begin, int row_end) {
