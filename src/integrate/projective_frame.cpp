@@ -129,7 +129,7 @@ bool ProjectiveRule::decided_by_cells(Key first, int depth) const {
   const ProjectiveRule& coarse = cells[static_cast<std::size_t>(c - 1)]->rule;
   const Vec3f origin = coarse.brick_origin(Key{first.x >> c, first.y >> c, first.z >> c});
   const float z_ref = origin.z + coarse.centre_dz;
-  return z_ref > 0.0f && coarse.half_voxel_pixels / z_ref < 1.0f;
+  return z_ref > 0.0f && coarse.half_voxel_pixels / z_ref < kCellPixels / 2.0f;
 }
 
 std::uint64_t ProjectiveRule::brick_voxels_in_box(std::uint64_t brick) const {
@@ -162,17 +162,29 @@ void ProjectiveRule::add_cell_misses(std::uint64_t node, Key first, int depth, b
     }
     return;
   }
-  // Cell i is the depth-c node node + i 8^c.
+  // Cell i is the depth-c node node + i 8^c; cells 8 j to 8 j + 7 make up
+  // the depth-(c + 1) node j, marked as one where all eight are cleared.
+  const auto add = [&](std::uint64_t first_voxel, int node_depth) {
+    const std::uint64_t voxels = std::uint64_t{1} << (3 * node_depth);
+    if (!box_keys ||
+        (box_keys->contains(morton::decode(first_voxel)) && box_keys->contains(morton::decode(first_voxel + voxels - 1)))) {
+      batch.add_miss_node(first_voxel, node_depth);
+      return;
+    }
+    for (std::uint64_t b = first_voxel; b < first_voxel + voxels; b += 64) {
+      const std::uint64_t in_box = brick_voxels_in_box(b);
+      if (in_box != 0) batch.add_misses_in_brick(b, in_box);
+    }
+  };
   const std::uint64_t cell_voxels = std::uint64_t{1} << (3 * c);
-  for (std::uint64_t rest = cleared; rest != 0; rest &= rest - 1) {
-    const std::uint64_t cell = node + static_cast<std::uint64_t>(std::countr_zero(rest)) * cell_voxels;
-    if (!box_keys || (box_keys->contains(morton::decode(cell)) && box_keys->contains(morton::decode(cell + cell_voxels - 1)))) {
-      batch.add_miss_node(cell, c);
+  for (std::uint64_t j = 0; j < 8; ++j) {
+    const std::uint64_t byte = (cleared >> (8 * j)) & 0xFFu;
+    if (byte == 0xFFu) {
+      add(node + 8 * j * cell_voxels, c + 1);
       continue;
     }
-    for (std::uint64_t b = cell; b < cell + cell_voxels; b += 64) {
-      const std::uint64_t voxels = brick_voxels_in_box(b);
-      if (voxels != 0) batch.add_misses_in_brick(b, voxels);
+    for (std::uint64_t rest = byte; rest != 0; rest &= rest - 1) {
+      add(node + (8 * j + static_cast<std::uint64_t>(std::countr_zero(rest))) * cell_voxels, c);
     }
   }
 }

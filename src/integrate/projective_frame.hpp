@@ -74,9 +74,10 @@
 //
 // Cells where voxels are narrower than pixels. At 5 mm and finer, and for
 // depth images (not the images of scans), a node of depth 2 + c (c >= 1)
-// whose depth-c nodes each project onto less than two pixels (the node read
-// as one brick of the grid of 2^c times the resolution has window level 0)
-// and are at most 1 cm wide is decided by *cells* of level c: the rule above
+// whose depth-c nodes each project onto less than four pixels (the node
+// read as one brick of the grid of 2^c times the resolution has window
+// level 0 or 1) and are at most 1 cm wide is decided by *cells* of level c:
+// the rule above
 // evaluated on that coarser grid, whose voxels are the depth-c nodes; a
 // cleared cell clears all its voxels. The coarsest level that applies is
 // taken (the walk meets it first). The cells use the finest grid's edge
@@ -88,7 +89,10 @@
 // 5 to 25 voxels at 2 mm) makes a band in front of every surface where the
 // answer changes voxel by voxel: ten TUM frames at 2 mm visited 5.5 million
 // bricks a frame and stored 113 million nodes. The hits stay the finest
-// voxels'.
+// voxels'. (Cells up to two pixels wide: 1.2x to 1.3x slower at 4 and 2
+// mm, the maps 2% to 4% larger; the simple integrator's free voxels left
+// unknown went from 2.8% to 2.7% at 4 mm and 1.7% to 2.0% at 2 mm, TUM in
+// a box, recall and precision >= 99.93% either way.)
 //
 // Range. With max_range set, v is within range when every voxel centre of
 // its depth-`range_depth` ancestor is within max_range of the camera (a test
@@ -222,6 +226,8 @@ struct ProjectiveRule {
   /// Decides far nodes by cells where the file comment says so, cells at
   /// most `widest` metres wide.
   static constexpr double kWidestCell = 0.01;
+  /// Cells are used where they are narrower than this many pixels.
+  static constexpr float kCellPixels = 4.0f;
   void use_cells(double widest = kWidestCell);
   /// Whether cells decide the depth-`depth` node whose first voxel is
   /// `first` (depth 2 + c for a level c of cells).

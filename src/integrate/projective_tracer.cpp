@@ -156,7 +156,10 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth)
   // The voxels' windows (projective_frame.hpp) reach beyond their own
   // pixels by at most 1.5 cells of their level plus a pixel; the nearest
   // bricks have the largest level.
-  const double w = rule_.half_voxel_pixels * (1.0 + kRelativeError) / near;
+  // Cells (projective_frame.hpp) are voxels 2^c times as wide: their
+  // windows reach as far as those of the widest level's.
+  const double cell_scale = std::ldexp(1.0, static_cast<int>(rule_.cells.size()));
+  const double w = rule_.half_voxel_pixels * cell_scale * (1.0 + kRelativeError) / near;
   const int level = w < 1.0 ? 0
                             : std::min(static_cast<int>(std::bit_width(static_cast<unsigned>(std::min(w, 1048576.0)))),
                                        rule_.top_level);
