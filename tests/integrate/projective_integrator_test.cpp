@@ -454,6 +454,27 @@ void expect_faithful(const MapAgreement& a, const char* what, double min_recall 
   EXPECT_LE(a.free_left_unknown(), 0.05) << what;
 }
 
+TEST(ProjectiveIntegrator, SameMapForAnyThreadCountWithCells) {
+  // At 4 mm, where far nodes are decided by cells (projective_frame.hpp):
+  // the threads' subtrees must not cut a node that cells decide. A range
+  // of 2.5 m keeps the map small and still holds cells (their range nodes
+  // are 3 deep).
+  const std::vector<sim::SimulatedDepthImage> frames = sim::demo_depth_images(3);
+  std::vector<std::vector<std::tuple<std::uint64_t, int, float>>> results;
+  for (const unsigned threads : {1u, 2u, 3u, 16u}) {
+    OccupancyMap map(0.004);
+    InsertOptions options;
+    options.integrator = IntegratorKind::projective;
+    options.max_range = 2.5;
+    options.threads = threads;
+    for (std::size_t i = 0; i < 2; ++i) map.insert_depth_image(frames[i].view(), frames[i].camera, frames[i].pose, {}, options);
+    ASSERT_TRUE(test::check_invariants(map).empty());
+    results.push_back(leaves_of(test::tree_of(map)));
+  }
+  EXPECT_GT(results[0].size(), 1000u);
+  for (std::size_t i = 1; i < results.size(); ++i) EXPECT_EQ(results[i], results[0]) << "run " << i;
+}
+
 TEST(ProjectiveIntegrator, AgreesWithSimpleOnTheSimulatedCamera) {
   const std::vector<sim::SimulatedDepthImage> frames = sim::demo_depth_images(1);
   expect_faithful(agreement(frames, 8, 0.04, 6.5), "8 frames, 4 cm");
