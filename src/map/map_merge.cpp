@@ -15,7 +15,8 @@
 #include <cstdint>
 #include <mutex>
 #include <optional>
-#include <sstream>
+#include <array>
+#include <charconv>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -51,13 +52,17 @@ struct MergePlan {
   std::uint64_t voxels = 0;
 };
 
+/// The shortest text that reads back as `value` (0.1, not 0.10000000000000001).
+std::string shortest(double value) {
+  std::array<char, 32> text{};
+  const auto end = std::to_chars(text.data(), text.data() + text.size(), value).ptr;
+  return std::string(text.data(), end);
+}
+
 void check_compatible(const OccupancyMap& map, const OccupancyMap& other) {
   if (map.resolution() != other.resolution()) {
-    std::ostringstream message;
-    message.precision(17);
-    message << "merge: the maps' resolutions differ (this map " << map.resolution() << " m, the other "
-            << other.resolution() << " m)";
-    throw std::invalid_argument(message.str());
+    throw std::invalid_argument("merge: the maps' resolutions differ (this map " + shortest(map.resolution()) +
+                                " m, the other " + shortest(other.resolution()) + " m)");
   }
   if (map.depth_levels() != other.depth_levels()) {
     throw std::invalid_argument("merge: the maps' depth levels differ (this map " +
