@@ -76,8 +76,8 @@ std::vector<SourceNode> known_nodes(const OccupancyTree& tree) {
   tree.for_each_leaf([&](NodeRef node, std::uint64_t code) {
     const float value = tree.log_odds(node);
     if (value == 0.0f) return;  // never observed: adds nothing
-    const std::uint8_t weight = tree.color_weight(node);
-    nodes.push_back({morton::decode(code), node.depth, value, tree.color(node).value_or(Rgb{}), weight});
+    const std::uint8_t weight = tree.color_weight(node);  // 0 without colour
+    nodes.push_back({morton::decode(code), node.depth, value, weight != 0 ? *tree.color(node) : Rgb{}, weight});
   });
   return nodes;
 }
@@ -287,8 +287,11 @@ std::pair<Rgb, std::uint8_t> blend_colors(std::optional<Rgb> own, std::uint8_t o
 }
 
 MergeStats apply_plan(detail::MapState& state, MergePlan& plan) {
-  std::sort(plan.regions.begin(), plan.regions.end(),
-            [](const NodeDelta& a, const NodeDelta& b) { return a.code < b.code; });
+  // Leaves come in Morton order, so an aligned offset keeps them sorted: check before sorting.
+  const auto by_code = [](const NodeDelta& a, const NodeDelta& b) { return a.code < b.code; };
+  if (!std::is_sorted(plan.regions.begin(), plan.regions.end(), by_code)) {
+    std::sort(plan.regions.begin(), plan.regions.end(), by_code);
+  }
   coarsen(plan.regions);
   // The map to itself, as for any change (occupancy_map.hpp, Concurrency).
   if (state.gate.held_by_this_thread()) state.gate.close();  // throws: this thread is reading the map
