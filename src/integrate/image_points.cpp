@@ -193,7 +193,7 @@ void ImagePoints::find_voxels(const Grid& grid, int width, Band& band) {
       band.above[column] = code;
     }
   }
-  radix_sort(band.candidates, 3 * grid.depth_levels(), [](std::uint64_t code) { return code; });
+  radix_sort(band.candidates, 3 * grid.depth_levels(), [](std::uint64_t code) { return code; }, band.sort_scratch);
   band.candidates.erase(std::unique(band.candidates.begin(), band.candidates.end()), band.candidates.end());
 }
 
@@ -201,7 +201,11 @@ std::size_t ImagePoints::memory_bytes() const {
   std::size_t bytes = points_.capacity() * sizeof(Vec3f) + pixels_.capacity() * sizeof(std::uint32_t) +
                       colors_.capacity() * sizeof(Rgb) + codes_.capacity() * sizeof(std::uint64_t) +
                       bands_.capacity() * sizeof(Band);
-  for (const Band& band : bands_) bytes += (band.candidates.capacity() + band.above.capacity()) * sizeof(std::uint64_t);
+  for (const Band& band : bands_) {
+    bytes += (band.candidates.capacity() + band.above.capacity() + band.sort_scratch.records.capacity()) *
+                 sizeof(std::uint64_t) +
+             band.sort_scratch.counts.capacity() * sizeof(std::uint32_t);
+  }
   return bytes;
 }
 

@@ -28,6 +28,7 @@
 #include "umbra/core/pose.hpp"
 #include "umbra/core/vec3.hpp"
 #include "umbra/integrate/depth_image.hpp"
+#include "core/radix_sort.hpp"
 
 namespace umbra {
 
@@ -77,6 +78,7 @@ class ImagePoints {
     std::size_t count = 0;
     std::vector<std::uint64_t> candidates;  // its voxel codes: sorted, each once
     std::vector<std::uint64_t> above;       // the code last seen in each column
+    RadixSortScratch<std::uint64_t> sort_scratch;
     std::size_t non_finite = 0;
     std::size_t out_of_bounds = 0;
   };
