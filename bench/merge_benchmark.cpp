@@ -87,7 +87,8 @@ std::uint64_t differing_below(const OccupancyMap& merged, Key key, int depth, fl
 
 std::uint64_t differing_voxels(const OccupancyMap& whole, const OccupancyMap& merged) {
   std::uint64_t differing = 0;
-  whole.for_each_leaf([&](const Node& leaf) { differing += differing_below(merged, leaf.key, leaf.depth, leaf.log_odds); });
+  whole.for_each_leaf(
+      [&](const Node& leaf) { differing += differing_below(merged, leaf.key, leaf.depth, leaf.log_odds); });
   return differing;
 }
 
@@ -204,8 +205,8 @@ int main(int argc, char** argv) {
   }
   std::ostringstream table;
   table << "| data | res | scans | insert all (s) | merge (s) | merge / insert | merge turned (s) | OctoMap loop (s) "
-           "| voxels merged | node additions | OctoMap leaves | voxels differing, default clamp | voxels differing, wide "
-           "clamp | states differing, default clamp |\n"
+           "| voxels merged | node additions | OctoMap leaves | voxels differing, default clamp "
+           "| voxels differing, wide clamp | states differing, default clamp |\n"
         << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const std::string& item : bench::split_list(runs)) {
     const std::size_t colon = item.find(':');

@@ -11,12 +11,12 @@
 // (add_to_nodes). Planning first keeps the map unchanged when the plan
 // fails (a voxel outside the map) and lets a map merge into itself.
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <mutex>
 #include <optional>
-#include <array>
-#include <charconv>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -47,7 +47,7 @@ struct ColorDelta {
 };
 
 struct MergePlan {
-  std::vector<NodeDelta> regions;  // sorted by code, disjoint
+  std::vector<NodeDelta> regions;  // disjoint; apply_plan sorts them by code
   std::vector<ColorDelta> colors;
   std::uint64_t voxels = 0;
 };
@@ -173,8 +173,9 @@ std::optional<VoxelOffset> whole_voxel_shift(const Pose& transform, double resol
     if (voxels != std::nearbyint(voxels) || std::abs(voxels) > 1e15) return std::nullopt;
     // Exactly whole: t = n * resolution with c - t in the rule landing on the
     // same voxel as k - n (a centre is half a voxel from every border).
-    if (static_cast<double>(static_cast<std::int64_t>(voxels)) * resolution != transform.m[axis][3]) return std::nullopt;
-    shift[axis] = static_cast<std::int64_t>(voxels);
+    const auto whole = static_cast<std::int64_t>(voxels);
+    if (static_cast<double>(whole) * resolution != transform.m[axis][3]) return std::nullopt;
+    shift[axis] = whole;
   }
   return VoxelOffset{shift[0], shift[1], shift[2]};
 }
