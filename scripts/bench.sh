@@ -14,6 +14,8 @@
 #                                       (the 2D navigation grid)
 #   scripts/bench.sh field ARGS...      bench/field_benchmark.cpp (the
 #                                       distance field against dynamicEDT3D)
+#   scripts/bench.sh merge ARGS...      bench/merge_benchmark.cpp (merging
+#                                       maps against inserting and OctoMap)
 # ARGS go to the program (--help lists them); results: docs/benchmarks.md.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -21,7 +23,7 @@ root="$(umbra_root)"
 build_dir="${UMBRA_BENCH_BUILD_DIR:-$root/build-bench}"
 
 benchmark=insert
-if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python || "$1" == build || "$1" == navigation || "$1" == field ) ]]; then
+if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python || "$1" == build || "$1" == navigation || "$1" == field || "$1" == merge ) ]]; then
   benchmark="$1"
   shift
 fi

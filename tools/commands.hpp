@@ -30,6 +30,7 @@ Command add_build_command(CLI::App& app);
 Command add_info_command(CLI::App& app);
 Command add_convert_command(CLI::App& app);
 Command add_crop_command(CLI::App& app);
+Command add_merge_command(CLI::App& app);
 Command add_compare_command(CLI::App& app);
 Command add_export_command(CLI::App& app);
 Command add_query_command(CLI::App& app);

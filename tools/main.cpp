@@ -1,4 +1,4 @@
-// umbra: build, inspect, convert, crop, compare, export, draw, view,
+// umbra: build, inspect, convert, crop, merge, compare, export, draw, view,
 // project to 2D and demonstrate occupancy maps from the command line.
 //
 // Exit codes (commands.hpp, `umbra --help`, README "Errors and limits"): 0
@@ -75,6 +75,7 @@ int main(int argc, char** argv) {
   commands.push_back(umbra::cli::add_info_command(app));
   commands.push_back(umbra::cli::add_convert_command(app));
   commands.push_back(umbra::cli::add_crop_command(app));
+  commands.push_back(umbra::cli::add_merge_command(app));
   commands.push_back(umbra::cli::add_compare_command(app));
   commands.push_back(umbra::cli::add_export_command(app));
   commands.push_back(umbra::cli::add_query_command(app));

@@ -20,6 +20,7 @@ PYBIND11_MODULE(_umbra, m) {
   bind_io(m, map);
   bind_depth(m, map);
   bind_navigation(m, map);
+  bind_merge(m, map);
   bind_sim(m);
   bind_field(m);
   add_text_signatures(m);

@@ -146,6 +146,15 @@ class InsertStats:
     def exclusive_seconds(self) -> float:
         """Seconds the scan kept queries out (its apply phase)."""
 
+class MergeStats:
+    """What a merge did."""
+    @property
+    def voxels(self) -> int:
+        """Finest voxels of the map that received a value (a pruned node counts all its voxels)."""
+    @property
+    def nodes(self) -> int:
+        """Node additions applied to the tree (fewer than voxels where pruned blocks land whole)."""
+
 class MapStatistics:
     """What `umbra info` reports. Voxel counts are in finest voxels; bounds are those of the known space (None when nothing is known)."""
     @property
@@ -429,6 +438,15 @@ class OccupancyMap:
     def __deepcopy__(self, memo: object) -> OccupancyMap: ...
     def save(self, path: PathLike) -> None:
         """Saves the map as .umb, .bt or .ot (by extension), atomically: a temporary file renamed over path."""
+
+    # --- merging maps
+    def merge(
+        self,
+        other: OccupancyMap,
+        offset: Optional[Sequence[int]] = None,
+        transform: Optional[ArrayLike] = None,
+    ) -> MergeStats:
+        """Adds other's log-odds to this map's, voxel by voxel, clamped to this map's sensor model; voxels other never observed change nothing. offset (3 ints): other's voxel k lands on k + offset. transform ((4, 4) or (3, 4), other's frame to this map's, rigid): each voxel takes other's voxel its centre maps back into. Colours average by their sample counts where both maps have colour. ValueError for other resolutions or depth levels, a transform that is not rigid, or both offset and transform; IndexError when a known voxel of other lands outside this map (the map is unchanged then). Returns MergeStats."""
 
     # --- inserting and changing voxels
     def insert(

@@ -75,6 +75,7 @@ MapServer::MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, Serve
   reset_service_ = private_node.advertiseService("reset", &MapServer::reset, this);
   clear_bbx_service_ = private_node.advertiseService("clear_bbx", &MapServer::clear_bbx, this);
   check_collision_service_ = private_node.advertiseService("check_collision", &MapServer::check_collision, this);
+  merge_service_ = private_node.advertiseService("merge", &MapServer::merge, this);
   log_start();
 }
 
@@ -87,9 +88,10 @@ void MapServer::log_start() const {
                        occupied_publisher_.getTopic() + "', '" + centers_publisher_.getTopic() + "', '" +
                        projected_publisher_.getTopic() + "'";
   if (settings_.cells.free_cells) topics += ", '" + free_publisher_.getTopic() + "'";
-  ROS_INFO("umbra_server: publishing %s; services '%s', '%s', '%s', '%s', '%s'", topics.c_str(),
+  ROS_INFO("umbra_server: publishing %s; services '%s', '%s', '%s', '%s', '%s', '%s'", topics.c_str(),
            binary_service_.getService().c_str(), full_service_.getService().c_str(), reset_service_.getService().c_str(),
-           clear_bbx_service_.getService().c_str(), check_collision_service_.getService().c_str());
+           clear_bbx_service_.getService().c_str(), check_collision_service_.getService().c_str(),
+           merge_service_.getService().c_str());
 }
 
 bool MapServer::wanted(const ros::Publisher& publisher) const {
@@ -357,6 +359,31 @@ bool MapServer::check_collision(umbra_msgs::CheckCollision::Request& request,
     response.free = false;
     response.error = e.what();
   }
+  return true;
+}
+
+// --- ~merge (umbra_msgs/MergeMap) ------------------------------------------------
+
+bool MapServer::merge(umbra_msgs::MergeMap::Request& request, umbra_msgs::MergeMap::Response& response) {
+  const std::string& frame = request.map.header.frame_id;
+  if (!frame.empty() && frame != settings_.frame) {
+    response.error = "the map is in frame '" + frame + "', the node maps in '" + settings_.frame +
+                     "' (~merge does not transform maps)";
+  } else {
+    try {
+      const OccupancyMap other = map_from_message(request.map, "~merge request's map");
+      response.voxels = map_.merge(other, VoxelOffset{request.offset_x, request.offset_y, request.offset_z}).voxels;
+      response.success = true;
+    } catch (const std::exception& error) {
+      response.error = error.what();
+    }
+  }
+  if (!response.success) {
+    ROS_ERROR("umbra_server: ~merge refused: %s", response.error.c_str());
+    return true;  // answered: the response says why
+  }
+  ROS_INFO("umbra_server: merged a map: %llu voxels", static_cast<unsigned long long>(response.voxels));
+  publish_all(ros::Time::now());
   return true;
 }
 

@@ -26,7 +26,8 @@
 // ~reset (std_srvs/Empty: forget everything), ~clear_bbx
 // (octomap_msgs/BoundingBoxQuery: every known voxel in the box becomes
 // free at the clamping minimum; unknown voxels stay unknown),
-// ~check_collision (umbra_msgs/CheckCollision). At start-up it logs the
+// ~check_collision (umbra_msgs/CheckCollision), ~merge (umbra_msgs/MergeMap:
+// another map added, log-odds summed voxel by voxel). At start-up it logs the
 // map frame and the resolved names of its topics and services.
 //
 // Threads: ROS callbacks run one at a time (ros::spin); each insertion
@@ -49,6 +50,7 @@
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 #include <umbra_msgs/CheckCollision.h>
+#include <umbra_msgs/MergeMap.h>
 
 #include <array>
 #include <memory>
@@ -97,6 +99,9 @@ class MapServer {
   /// space blocking unless the request says otherwise (the query layer's is_free).
   bool check_collision(umbra_msgs::CheckCollision::Request& request, umbra_msgs::CheckCollision::Response& response);
 
+  /// ~merge (umbra_msgs/MergeMap): adds a received map to the node's (OccupancyMap::merge), then publishes.
+  bool merge(umbra_msgs::MergeMap::Request& request, umbra_msgs::MergeMap::Response& response);
+
   ServerSettings settings_;
   OccupancyMap map_;
   tf2_ros::Buffer tf_buffer_;
@@ -116,6 +121,7 @@ class MapServer {
   ros::ServiceServer reset_service_;
   ros::ServiceServer clear_bbx_service_;
   ros::ServiceServer check_collision_service_;
+  ros::ServiceServer merge_service_;
   DecodedCloud decoded_;
   Scan scan_;
   DecodedDepthImage decoded_image_;

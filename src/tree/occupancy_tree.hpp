@@ -198,6 +198,19 @@ class OccupancyTree {
   /// its misses. With a thread pool, independent subtrees are updated in
   /// parallel; the result is the same, bit for bit.
   void apply(const UpdateBatch& batch, float hit, float miss, ThreadPool* pool = nullptr);
+  /// One addition for add_to_nodes: `delta` to every voxel of the
+  /// depth-`depth` node whose first finest voxel is `code`.
+  struct NodeDelta {
+    std::uint64_t code;
+    int depth;
+    float delta;
+  };
+  /// Adds each region's delta to every voxel it covers (then clamps), in one
+  /// depth-first walk: sorted by code, disjoint. A region that is a whole
+  /// childless node of the tree changes that node alone, so the cost follows
+  /// the regions and the nodes they meet, not the voxels (tree/node_deltas.cpp;
+  /// merging maps uses it).
+  void add_to_nodes(std::span<const NodeDelta> regions);
   /// Adds one colour sample to finest voxel `code` (the tree must have colour).
   void add_color(std::uint64_t code, Rgb rgb);
   /// Adds colour samples in one walk; sorted by code, each voxel's samples
@@ -301,6 +314,8 @@ class OccupancyTree {
   /// refreshes `parents` (listed top down) bottom up.
   void run_concurrently(ThreadPool& pool, const std::vector<std::size_t>& new_groups, std::size_t tasks,
                         const std::function<void(std::size_t)>& task, const std::vector<SplitNode>& parents);
+  void add_to_nodes_below(int depth, std::uint32_t group, unsigned slot, std::span<const NodeDelta> regions);
+  void add_to_nodes_in_group(int depth, std::uint32_t group, std::span<const NodeDelta> regions);
   void apply_brick(std::uint32_t group, const UpdateBatch::Brick& todo, float hit, float miss);
   void apply_everywhere(int depth, std::uint32_t group, unsigned slot, float delta);
   void prune_below(int depth, std::uint32_t group, unsigned slot);

@@ -38,6 +38,7 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <std_srvs/Empty.h>
 #include <umbra_msgs/CheckCollision.h>
+#include <umbra_msgs/MergeMap.h>
 #include <tf2_msgs/TFMessage.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -559,6 +560,38 @@ TEST_F(Loopback, NodeMapEqualsUmbraBuild) {
     EXPECT_NE(bad.response.error.find("radius"), std::string::npos) << bad.response.error;
   }
 
+  // ~merge: another map (the library's of the first scans, as a full message) added with an offset; the node
+  // then publishes the library's merge of the same maps. Refused requests leave the map and say why.
+  {
+    const std::vector<RosScan> first_scans(scans.begin(), scans.begin() + 2);
+    umbra_msgs::MergeMap merge;
+    merge.request.map = ros_io::octomap_message(reference_map(first_scans, resolution), OctoMapFormat::ot, "map",
+                                                ros::Time::now());
+    merge.request.offset_x = 3;
+    merge.request.offset_y = -2;
+    OccupancyMap merged = cleared;
+    const MergeStats stats = merged.merge(ros_io::map_from_message(merge.request.map), VoxelOffset{3, -2, 0});
+    const std::size_t before_merge = full_.count;
+    ASSERT_TRUE(call_service("/umbra_server/merge", merge));
+    EXPECT_TRUE(merge.response.success) << merge.response.error;
+    EXPECT_EQ(merge.response.voxels, stats.voxels);
+    ASSERT_TRUE(wait_for([&] { return full_.count > before_merge && binary_.count == full_.count; }, kMessageLimit));
+    ASSERT_NO_FATAL_FAILURE(expect_published(merged));
+
+    umbra_msgs::MergeMap coarse;
+    coarse.request.map = ros_io::octomap_message(reference_map(first_scans, 0.2), OctoMapFormat::ot, "map",
+                                                 ros::Time::now());
+    ASSERT_TRUE(call_service("/umbra_server/merge", coarse));
+    EXPECT_FALSE(coarse.response.success);
+    EXPECT_NE(coarse.response.error.find("resolutions differ"), std::string::npos) << coarse.response.error;
+    umbra_msgs::MergeMap elsewhere = merge;
+    elsewhere.request.map.header.frame_id = "odom";
+    ASSERT_TRUE(call_service("/umbra_server/merge", elsewhere));
+    EXPECT_FALSE(elsewhere.response.success);
+    EXPECT_NE(elsewhere.response.error.find("'odom'"), std::string::npos) << elsewhere.response.error;
+    ASSERT_NO_FATAL_FAILURE(expect_published(merged));
+  }
+
   // ~reset: an empty map.
   std_srvs::Empty empty;
   const std::size_t before_reset = full_.count;
@@ -740,7 +773,7 @@ TEST_F(Loopback, CloudsWithoutTransformAreNamedInAWarning) {
             "umbra_server: publishing '/octomap_binary', '/octomap_full', '/occupied_cells_vis_array', "
             "'/octomap_point_cloud_centers', '/projected_map'; services '/octomap_binary', '/octomap_full', "
             "'/umbra_server/reset', "
-            "'/umbra_server/clear_bbx', '/umbra_server/check_collision'");
+            "'/umbra_server/clear_bbx', '/umbra_server/check_collision', '/umbra_server/merge'");
 
   // TF knows map -> lidar, not the frame of the cloud.
   const std::vector<RosScan> scans = office_scans(1);

@@ -119,6 +119,7 @@ TEST(CliUsability, AMissingInputIsAFailureNamingTheFile) {
       "query " + room + " sphere --input " + quoted(dir / "missing.txt"),
       "crop " + missing + " -o " + quoted(dir / "out.umb") + " --bbox 0,0,0,1,1,1",
       "compare " + room + " " + missing,
+      "merge " + room + " " + missing + " -o " + quoted(dir / "out.umb"),
       "export " + missing + " -o " + quoted(dir / "out.ply"),
       "view " + missing + " -o " + quoted(dir / "out.html"),
   };

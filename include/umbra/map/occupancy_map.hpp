@@ -56,6 +56,8 @@
 #include "umbra/query/query_range.hpp"
 #include "umbra/query/shapes.hpp"
 #include "umbra/core/node.hpp"
+#include "umbra/core/pose.hpp"
+#include "umbra/map/map_merge.hpp"
 
 namespace umbra {
 
@@ -263,6 +265,24 @@ class OccupancyMap {
   void prune();
   /// Everything unknown again.
   void clear();
+
+  // --- merging maps (map_merge.hpp, src/map/map_merge.cpp) -------------------
+  /// Adds `other`'s log-odds to this map's, voxel by voxel (clamped to this
+  /// map's sensor model); other's voxel k lands on k + offset. Voxels other
+  /// never observed change nothing; a pruned node covers all its voxels.
+  /// Colour: where both maps have it, a voxel's colour becomes the average of
+  /// the two weighted by their sample counts (docs/design.md, "Merging maps").
+  /// Throws std::invalid_argument when the resolutions or depth levels
+  /// differ (naming both), std::out_of_range when a known voxel of other
+  /// would land outside this map; the map is unchanged then. Merging a map
+  /// into itself doubles its log-odds.
+  MergeStats merge(const OccupancyMap& other, VoxelOffset offset = {});
+  /// The same with other placed by a rigid transform (other's frame to this
+  /// map's), resampled: this map's voxel with centre c takes other's voxel
+  /// containing T^-1 c. Also throws std::invalid_argument for a transform
+  /// that is not rigid. A transform that is a whole-voxel translation merges
+  /// as that VoxelOffset (the same result, faster).
+  MergeStats merge(const OccupancyMap& other, const Pose& transform);
 
   // --- statistics ---------------------------------------------------------
   [[nodiscard]] NodeCounts node_counts() const;
