@@ -14,6 +14,9 @@
 #                                       (the 2D navigation grid)
 #   scripts/bench.sh field ARGS...      bench/field_benchmark.cpp (the
 #                                       distance field against dynamicEDT3D)
+#   scripts/bench.sh decay ARGS...      bench/decay_benchmark.cpp (decay
+#                                       toward unknown against insertion and
+#                                       an OctoMap leaf loop)
 # ARGS go to the program (--help lists them); results: docs/benchmarks.md.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -21,7 +24,7 @@ root="$(umbra_root)"
 build_dir="${UMBRA_BENCH_BUILD_DIR:-$root/build-bench}"
 
 benchmark=insert
-if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python || "$1" == build || "$1" == navigation || "$1" == field ) ]]; then
+if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python || "$1" == build || "$1" == navigation || "$1" == field || "$1" == decay ) ]]; then
   benchmark="$1"
   shift
 fi
