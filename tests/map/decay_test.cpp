@@ -17,6 +17,7 @@
 #include "support/dense_grid.hpp"
 #include "support/map_internals.hpp"
 #include "support/test_support.hpp"
+#include "umbra/field/distance_field.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/map/voxel_box.hpp"
@@ -195,6 +196,40 @@ TEST(Decay, DecayedVoxelsBecomeUnknownAndPruneAway) {
   EXPECT_EQ(map.node_counts().total(), 1u);  // the root alone, unknown
   EXPECT_EQ(map.log_odds({0.0, 0.0, 0.0}, map.depth_levels()), 0.0f);
   EXPECT_EQ(test::check_invariants(map), "");
+}
+
+/// A distance field kept up to date through the change journal sees the
+/// obstacles a decay step made unknown: after update() it answers as a
+/// field built from scratch on the decayed map.
+TEST(Decay, DistanceFieldFollowsDecaySteps) {
+  OccupancyMap map(0.1, 10);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> c(-2.5f, 2.5f);
+  for (int s = 0; s < 3; ++s) {
+    std::vector<Vec3f> points;
+    for (int i = 0; i < 300; ++i) points.push_back({c(rng), c(rng), c(rng)});
+    InsertOptions options;
+    options.stamp = s;
+    map.insert_point_cloud({0.0f, 0.0f, 0.0f}, points, options);
+  }
+  DistanceFieldOptions field_options;
+  field_options.max_distance = 0.5;
+  DistanceField field(map, field_options);
+  std::vector<Vec3d> probe;
+  for (int i = 0; i < 2000; ++i) probe.push_back({c(rng), c(rng), c(rng)});
+  const auto ask = [&](const DistanceField& f) {
+    std::vector<DistanceSample> samples(probe.size());
+    f.distance_and_gradient(probe, samples);
+    std::vector<double> flat;
+    for (const DistanceSample& s : samples) flat.insert(flat.end(), {s.occupied, s.unknown});
+    return flat;
+  };
+  map.set_decay({0.5, 0.1, std::nullopt});
+  for (const double time : {2.5, 3.5, 5.0}) {  // the hits of the first scan go first
+    map.advance_clock(time);
+    field.update();
+    EXPECT_EQ(ask(field), ask(DistanceField(map, field_options))) << "at " << time;
+  }
 }
 
 /// The map's file bytes (save_map), the byte-for-byte form of a map.
