@@ -466,6 +466,7 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
       rule.tree = tree;
       rule.occupied_log_odds = tree->thresholds().occupied;
     }
+    rule.use_cells();  // depth images at fine resolutions (projective_frame.hpp)
   }
   const int root_depth = grid.depth_levels();
   if (threads == 1) {
@@ -481,7 +482,10 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
   };
   std::vector<Task> tasks;
   std::vector<ProjectiveTracer::Task> nodes;
-  for (int depth = root_depth - 1; depth >= 2; --depth) {
+  // Not below the nodes cells may decide (projective_frame.hpp): those are traced whole.
+  int lowest = 2;
+  for (const ProjectiveRule& rule : rules) lowest = std::max(lowest, 2 + static_cast<int>(rule.cells.size()));
+  for (int depth = std::max(root_depth - 1, lowest); depth >= lowest; --depth) {
     tasks.clear();
     for (std::size_t i = 0; i < rules.size(); ++i) {
       nodes.clear();

@@ -6,7 +6,9 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/assert.hpp"
 #include "umbra/core/morton.hpp"
+#include "tree/update_batch.hpp"
 
 namespace umbra {
 
@@ -17,6 +19,7 @@ constexpr float kProjectionLimit = 16777216.0f;
 
 /// Bricks this small or smaller are seen whole or not at all (see the header).
 constexpr double kFinestSeenBorder = 0.02;
+
 
 }  // namespace
 
@@ -100,6 +103,77 @@ ProjectiveRule::ProjectiveRule(const Grid& grid_in, const ProjectiveFrame& frame
     const int ideal = static_cast<int>(std::lround(std::log2(max_range / 64.0 / res)));
     range_depth = ideal < 2 ? 0 : std::min(ideal, grid_in.depth_levels());
     if (range_depth == 0) max_range_squared = static_cast<float>(max_range * max_range);
+  }
+}
+
+void ProjectiveRule::use_cells(double widest) {
+  cells.clear();
+  if (!whole_bricks_seen || tree != nullptr) return;
+  for (int c = 1; std::ldexp(grid->resolution(), c) <= widest * (1.0 + 1e-9); ++c) {
+    if (grid->depth_levels() - c < 3) break;                     // a coarse grid with bricks and room above them
+    if (max_range > 0.0 && range_depth != 0 && range_depth < 2 + c) break;  // the range node would split the node
+    auto level = std::make_shared<CellLevel>(CellLevel{Grid(std::ldexp(grid->resolution(), c), grid->depth_levels() - c), *this});
+    ProjectiveRule& coarse = level->rule;
+    coarse = ProjectiveRule(level->grid, *frame, -1.0, margin, std::nullopt);  // margin: the same float
+    coarse.edge_reach = edge_reach;
+    coarse.whole_bricks_seen = true;
+    // The finest grid's range: per node in add_cell_misses, or voxel by voxel on the cells' centres.
+    coarse.max_range_squared = range_depth == 0 ? max_range_squared : 0.0f;
+    cells.push_back(std::move(level));
+  }
+}
+
+bool ProjectiveRule::decided_by_cells(Key first, int depth) const {
+  const int c = depth - 2;
+  if (c < 1 || c > static_cast<int>(cells.size())) return false;
+  const ProjectiveRule& coarse = cells[static_cast<std::size_t>(c - 1)]->rule;
+  const Vec3f origin = coarse.brick_origin(Key{first.x >> c, first.y >> c, first.z >> c});
+  const float z_ref = origin.z + coarse.centre_dz;
+  return z_ref > 0.0f && coarse.half_voxel_pixels / z_ref < 1.0f;
+}
+
+std::uint64_t ProjectiveRule::brick_voxels_in_box(std::uint64_t brick) const {
+  if (!box_keys) return ~std::uint64_t{0};
+  const Key low = morton::decode(brick);
+  const Key high{low.x + 3, low.y + 3, low.z + 3};
+  if (box_keys->contains(low) && box_keys->contains(high)) return ~std::uint64_t{0};
+  std::uint64_t mask = 0;
+  for (unsigned i = 0; i < 64; ++i) mask |= std::uint64_t{box_keys->contains(morton::decode(brick + i))} << i;
+  return mask;
+}
+
+void ProjectiveRule::add_cell_misses(std::uint64_t node, Key first, int depth, bool plain, UpdateBatch& batch) const {
+  const int c = depth - 2;
+  UMBRA_ASSERT(c >= 1 && c <= static_cast<int>(cells.size()) && (node & ((std::uint64_t{1} << (3 * depth)) - 1)) == 0);
+  if (!within_range(first)) return;  // its range node holds the whole node (use_cells)
+  const ProjectiveRule& coarse = cells[static_cast<std::size_t>(c - 1)]->rule;
+  const std::uint64_t brick = node >> (3 * c);  // the node as a brick of the coarse grid
+  const std::uint64_t cleared =
+      plain ? coarse.cleared_plain(brick) : coarse.cleared_in_range(brick, Key{first.x >> c, first.y >> c, first.z >> c});
+  if (cleared == 0) return;
+  if (c == 1) {
+    // Cell i is the depth-1 node node + 8 i: brick i / 8, its depth-1 node i % 8.
+    for (std::uint64_t b = 0; b < 8; ++b) {
+      const std::uint64_t byte = (cleared >> (8 * b)) & 0xFFu;
+      std::uint64_t voxels = 0;
+      for (unsigned j = 0; j < 8; ++j) voxels |= ((byte >> j) & 1u) * (std::uint64_t{0xFF} << (8 * j));
+      if (voxels != 0) voxels &= brick_voxels_in_box(node + 64 * b);
+      if (voxels != 0) batch.add_misses_in_brick(node + 64 * b, voxels);
+    }
+    return;
+  }
+  // Cell i is the depth-c node node + i 8^c.
+  const std::uint64_t cell_voxels = std::uint64_t{1} << (3 * c);
+  for (std::uint64_t rest = cleared; rest != 0; rest &= rest - 1) {
+    const std::uint64_t cell = node + static_cast<std::uint64_t>(std::countr_zero(rest)) * cell_voxels;
+    if (!box_keys || (box_keys->contains(morton::decode(cell)) && box_keys->contains(morton::decode(cell + cell_voxels - 1)))) {
+      batch.add_miss_node(cell, c);
+      continue;
+    }
+    for (std::uint64_t b = cell; b < cell + cell_voxels; b += 64) {
+      const std::uint64_t voxels = brick_voxels_in_box(b);
+      if (voxels != 0) batch.add_misses_in_brick(b, voxels);
+    }
   }
 }
 
@@ -226,7 +300,7 @@ std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
   if (!within_range(first)) return 0;
   const Vec3f base = brick_origin(first);
   const int level = window_level(base);
-  const float* cells = level == 0 ? frame->depth.data() : frame->pyramid.window_max(level);
+  const float* readings = level == 0 ? frame->depth.data() : frame->pyramid.window_max(level);
   const int cells_wide = frame->pyramid.width(level);
   const float scale = std::ldexp(1.0f, -level);  // exact: a power of two
   std::uint64_t result = 0;
@@ -251,7 +325,7 @@ std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
     const float v = std::min(std::max(v_free, 0.0f), height_inside);
     float d = 0.0f;
     if (level == 0) {
-      d = cells[static_cast<std::size_t>(static_cast<int>(v)) * static_cast<std::size_t>(cells_wide) +
+      d = readings[static_cast<std::size_t>(static_cast<int>(v)) * static_cast<std::size_t>(cells_wide) +
                 static_cast<std::size_t>(static_cast<int>(u))];
       if (!frame->depth_halves.empty()) {
         // Its half pixel's nearest reading, where it has one (u + u and v + v are exact).
@@ -264,7 +338,7 @@ std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
       // The window's first cell (a, b), and its maximum from window_max.
       const int a = static_cast<int>(std::floor(u * scale - 0.5f));
       const int b = static_cast<int>(std::floor(v * scale - 0.5f));
-      d = cells[static_cast<std::size_t>(b + 1) * static_cast<std::size_t>(cells_wide + 1) +
+      d = readings[static_cast<std::size_t>(b + 1) * static_cast<std::size_t>(cells_wide + 1) +
                 static_cast<std::size_t>(a + 1)];
     }
     if (d > 0.0f) seen |= std::uint64_t{1} << i;

@@ -11,16 +11,6 @@ namespace umbra {
 
 namespace {
 
-/// The brick mask of the voxels of brick `brick` inside the box.
-std::uint64_t brick_voxels_in_box(const KeyBox& box, std::uint64_t brick) {
-  const Key low = morton::decode(brick);
-  const Key high{low.x + 3, low.y + 3, low.z + 3};
-  if (box.contains(low) && box.contains(high)) return ~std::uint64_t{0};
-  std::uint64_t mask = 0;
-  for (unsigned i = 0; i < 64; ++i) mask |= std::uint64_t{box.contains(morton::decode(brick + i))} << i;
-  return mask;
-}
-
 // How far the rule's float camera-frame coordinates may stray from the exact
 // ones, relative to their size: the brick origin is rounded once (2^-24),
 // the offset once, their sum once; 2e-6 is several times that.
@@ -200,7 +190,7 @@ void ProjectiveTracer::trace_brick(std::uint64_t brick, Key first, UpdateBatch& 
   // Its range node was classified on the way down unless it is the brick itself.
   if (rule_.range_depth == 2 && !rule_.within_range(first)) return;
   std::uint64_t voxels = rule_.cleared_in_range(brick, first);
-  if (voxels != 0 && rule_.box_keys) voxels &= brick_voxels_in_box(*rule_.box_keys, brick);
+  if (voxels != 0 && rule_.box_keys) voxels &= rule_.brick_voxels_in_box(brick);
   if (voxels != 0 && holds_obstacle(brick, 2)) {
     for (std::uint64_t rest = voxels; rest != 0; rest &= rest - 1) {
       const unsigned i = static_cast<unsigned>(std::countr_zero(rest));
@@ -225,6 +215,10 @@ void ProjectiveTracer::trace_node(std::uint64_t code, Key first, int depth, Upda
     trace_brick(code, first, batch);
     return;
   }
+  if (rule_.decided_by_cells(first, depth)) {
+    rule_.add_cell_misses(code, first, depth, false, batch);
+    return;
+  }
   const int child_depth = depth - 1;
   const std::uint32_t half = std::uint32_t{1} << child_depth;
   for (std::uint32_t slot = 0; slot < 8; ++slot) {
@@ -245,7 +239,9 @@ void ProjectiveTracer::trace_node(std::uint64_t code, Key first, int depth, Upda
 void ProjectiveTracer::collect(std::uint64_t code, int depth, int task_depth, std::vector<Task>& tasks) const {
   const Decision decision = classify(code, depth);
   if (decision == Decision::none) return;
-  if (decision == Decision::all || depth <= task_depth || depth == 2) {
+  // No task below a node that cells may decide: it is traced whole.
+  UMBRA_ASSERT(task_depth >= 2 + static_cast<int>(rule_.cells.size()));
+  if (decision == Decision::all || depth <= task_depth) {
     tasks.push_back({code, depth, decision});
     return;
   }

@@ -50,7 +50,8 @@ class ProjectiveTracer {
   /// it cannot tell from the node as a whole).
   [[nodiscard]] Decision classify(std::uint64_t code, int depth) const;
 
-  /// Adds the misses of the depth-`depth` node `code` (depth >= 2) to `batch`.
+  /// Adds the misses of the depth-`depth` node `code` (depth >= 2, and not
+  /// below a node that cells may decide) to `batch`.
   void trace(std::uint64_t code, int depth, UpdateBatch& batch) const {
     trace_node(code, morton::decode(code), depth, batch);
   }
