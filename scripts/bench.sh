@@ -16,6 +16,9 @@
 #                                       distance field against dynamicEDT3D)
 #   scripts/bench.sh merge ARGS...      bench/merge_benchmark.cpp (merging
 #                                       maps against inserting and OctoMap)
+#   scripts/bench.sh decay ARGS...      bench/decay_benchmark.cpp (decay
+#                                       toward unknown against insertion and
+#                                       an OctoMap leaf loop)
 # ARGS go to the program (--help lists them); results: docs/benchmarks.md.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -23,7 +26,7 @@ root="$(umbra_root)"
 build_dir="${UMBRA_BENCH_BUILD_DIR:-$root/build-bench}"
 
 benchmark=insert
-if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python || "$1" == build || "$1" == navigation || "$1" == field || "$1" == merge ) ]]; then
+if [[ $# -gt 0 && ( "$1" == insert || "$1" == query || "$1" == concurrency || "$1" == python || "$1" == build || "$1" == navigation || "$1" == field || "$1" == merge || "$1" == decay ) ]]; then
   benchmark="$1"
   shift
 fi

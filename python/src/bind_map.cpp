@@ -45,10 +45,12 @@ py::array_t<T> per_point(const OccupancyMap& map, py::handle object, int depth, 
 }
 
 InsertStats insert(OccupancyMap& map, py::handle points_object, py::handle origin_object, py::handle colors_object,
-                   const std::string& integrator, double max_range, int clear_depth, int fine_steps, int threads) {
+                   const std::string& integrator, double max_range, int clear_depth, int fine_steps, int threads,
+                   std::optional<double> stamp) {
   const ScanPoints points(points_object, "points");
   const Vec3f origin(vec3_of(origin_object, "origin"));
-  const InsertOptions options = insert_options(integrator, max_range, clear_depth, fine_steps, threads);
+  InsertOptions options = insert_options(integrator, max_range, clear_depth, fine_steps, threads);
+  options.stamp = stamp;
   if (colors_object.is_none()) {
     py::gil_scoped_release released;
     return map.insert_point_cloud(origin, points.span(), options);
@@ -95,6 +97,29 @@ void bind_settings(MapClass& map) {
       .def_property("bounding_box", released(&OccupancyMap::bounding_box),
                     released(&OccupancyMap::set_bounding_box),
                     "An Aabb limiting future insertions (rays clipped to it), or None.")
+      // --- decay toward unknown
+      .def(
+          "set_decay",
+          [](OccupancyMap& m, double occupied_per_second, double free_per_second, std::optional<Aabb> region) {
+            m.set_decay(DecayRates{occupied_per_second, free_per_second, region});
+          },
+          py::arg("occupied_per_second"), py::arg("free_per_second"), py::arg("region") = py::none(),
+          py::call_guard<py::gil_scoped_release>(),
+          "From now on every advance of the clock moves each voxel (in region, an Aabb, if given) toward unknown "
+          "(log-odds 0) by rate x seconds passed: occupied_per_second off occupied values, free_per_second off "
+          "free ones; both 0: no decay. ValueError for a negative or non-finite rate.")
+      .def_property_readonly(
+          "decay",
+          [](const OccupancyMap& m) {
+            const DecayRates rates = m.decay();
+            return py::make_tuple(rates.occupied_per_second, rates.free_per_second, rates.region);
+          },
+          "The decay rates as (occupied_per_second, free_per_second, region or None).")
+      .def("advance_clock", &OccupancyMap::advance_clock, py::arg("time"), py::call_guard<py::gil_scoped_release>(),
+           "Advances the map's clock to time (seconds) and decays the map by the time passed; the first time only "
+           "sets the clock, an earlier time changes nothing.")
+      .def_property_readonly("clock", released(&OccupancyMap::clock),
+                             "The clock's time in seconds, or None before the first advance_clock or stamp.")
       .def("prune", &OccupancyMap::prune, py::call_guard<py::gil_scoped_release>(), "Merge equal children now.")
       .def("clear", &OccupancyMap::clear, py::call_guard<py::gil_scoped_release>(), "Make everything unknown again.")
       .def("node_counts", &OccupancyMap::node_counts, py::call_guard<py::gil_scoped_release>(),
@@ -115,11 +140,12 @@ void bind_settings(MapClass& map) {
 void bind_insertion_and_updates(MapClass& map) {
   map.def("insert", &insert, py::arg("points"), py::arg("origin"), py::arg("colors") = py::none(), py::kw_only(),
           py::arg("integrator") = "discrete", py::arg("max_range") = -1.0, py::arg("clear_depth") = -1,
-          py::arg("fine_steps") = 2, py::arg("threads") = 0,
+          py::arg("fine_steps") = 2, py::arg("threads") = 0, py::arg("stamp") = py::none(),
           "Integrates one scan: points (N, 3) seen from origin (3,), optionally colors (N, 3) uint8. Returns "
           "InsertStats. integrator: 'discrete' (OctoMap's discretize=true), 'simple' (discretize=false) or "
           "'fast' (free space cleared at clear_depth, -1: 16 cm nodes; fine_steps coarse nodes before each end "
-          "point traced voxel by voxel). max_range <= 0: unlimited. threads: 0 for all cores.");
+          "point traced voxel by voxel). max_range <= 0: unlimited. threads: 0 for all cores. stamp: seconds on "
+          "the map's clock, advanced to it first (decay, see set_decay); None: the clock is left alone.");
 
   map.def(
          "update_hit",

@@ -426,3 +426,41 @@ def test_occupied_voxels_hold_end_points(integrator):
     occupied = m.query(umbra.pred.occupied() & umbra.pred.leaf())
     assert len(occupied) > 1000 and (occupied["depth"] == 0).all()
     assert {tuple(int(v) for v in k) for k in occupied["key"]} <= end_keys
+
+
+# --- decay toward unknown ----------------------------------------------------------------------------------
+
+
+def decayed(log_odds, occupied_step, free_step):
+    """docs/design.md's rule in float32: positive values lose occupied_step, negative ones gain free_step, to 0."""
+    l = np.asarray(log_odds, dtype=np.float32)
+    a, b = np.float32(occupied_step), np.float32(free_step)
+    return np.where(l > 0, np.maximum(l - a, np.float32(0)), np.where(l < 0, np.minimum(l + b, np.float32(0)), l))
+
+
+def test_decay_moves_every_voxel_toward_unknown_by_the_rule():
+    m = umbra.OccupancyMap(0.1, depth_levels=10)
+    points = office_points(np.random.default_rng(5), 2000)
+    m.insert(points, (10.0, 6.0, 1.5), stamp=10.0)
+    assert m.clock == 10.0
+    m.set_decay(0.4, 0.3)
+    assert m.decay == (0.4, 0.3, None)
+    before = m.leaves()
+    known = before[before["state"] != umbra.UNKNOWN]
+    centres = known["center"]
+    m.advance_clock(11.5)  # 1.5 s: steps float32(0.6) and float32(0.45)
+    np.testing.assert_array_equal(m.log_odds(centres), decayed(known["log_odds"], 0.4 * 1.5, 0.3 * 1.5))
+    assert (m.states(centres) == umbra.UNKNOWN).any()  # single misses (-0.405) are forgotten
+    m.advance_clock(11.0)  # earlier: nothing
+    assert m.clock == 11.5
+    m.advance_clock(100.0)
+    assert m.node_counts().total == 1  # everything forgotten: the root alone
+
+
+def test_decay_refuses_bad_rates_and_stamps():
+    m = umbra.OccupancyMap(0.1, depth_levels=8)
+    with pytest.raises(ValueError, match="occupied_per_second"):
+        m.set_decay(-1.0, 0.0)
+    with pytest.raises(ValueError, match="stamp"):
+        m.insert(np.array([[1.0, 0.0, 0.0]]), (0, 0, 0), stamp=float("nan"))
+    assert m.clock is None

@@ -422,6 +422,17 @@ class OccupancyMap:
         """An Aabb limiting future insertions (rays clipped to it), or None."""
     @bounding_box.setter
     def bounding_box(self, value: Optional[Aabb]) -> None: ...
+    # --- decay toward unknown
+    def set_decay(self, occupied_per_second: float, free_per_second: float, region: Optional[Aabb] = None) -> None:
+        """From now on every advance of the clock moves each voxel (in region, an Aabb, if given) toward unknown (log-odds 0) by rate x seconds passed: occupied_per_second off occupied values, free_per_second off free ones; both 0: no decay. ValueError for a negative or non-finite rate."""
+    @property
+    def decay(self) -> Tuple[float, float, Optional[Aabb]]:
+        """The decay rates as (occupied_per_second, free_per_second, region or None)."""
+    def advance_clock(self, time: float) -> None:
+        """Advances the map's clock to time (seconds) and decays the map by the time passed; the first time only sets the clock, an earlier time changes nothing."""
+    @property
+    def clock(self) -> Optional[float]:
+        """The clock's time in seconds, or None before the first advance_clock or stamp."""
     def prune(self) -> None:
         """Merge equal children now."""
     def clear(self) -> None:
@@ -460,8 +471,9 @@ class OccupancyMap:
         clear_depth: int = -1,
         fine_steps: int = 2,
         threads: int = 0,
+        stamp: Optional[float] = None,
     ) -> InsertStats:
-        """Integrates one scan: points (N, 3) seen from origin (3,), optionally colors (N, 3) uint8. Returns InsertStats. integrator: 'discrete' (OctoMap's discretize=true), 'simple' (discretize=false) or 'fast' (free space cleared at clear_depth, -1: 16 cm nodes; fine_steps coarse nodes before each end point traced voxel by voxel). max_range <= 0: unlimited. threads: 0 for all cores."""
+        """Integrates one scan: points (N, 3) seen from origin (3,), optionally colors (N, 3) uint8. Returns InsertStats. integrator: 'discrete' (OctoMap's discretize=true), 'simple' (discretize=false) or 'fast' (free space cleared at clear_depth, -1: 16 cm nodes; fine_steps coarse nodes before each end point traced voxel by voxel). max_range <= 0: unlimited. threads: 0 for all cores. stamp: seconds on the map's clock, advanced to it first (decay, see set_decay); None: the clock is left alone."""
     def insert_depth_image(
         self,
         depth: ArrayLike,

@@ -56,6 +56,7 @@ MapServer::MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, Serve
                           const sensor_msgs::Image::ConstPtr& color) { insert_image(depth, info, color); },
                    [this](const sensor_msgs::Image::ConstPtr& depth, DepthImageInput::Drop why) { drop_image(depth, why); }) {
   map_.set_auto_prune(settings_.compress_map);
+  map_.set_decay(settings_.decay);
   cloud_filter_.registerCallback(&MapServer::insert_cloud, this);
   cloud_filter_.registerFailureCallback(
       [this](const sensor_msgs::PointCloud2::ConstPtr& cloud, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
@@ -139,9 +140,10 @@ void MapServer::insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
       scan_.points.resize(kept);
       if (!scan_.colors.empty()) scan_.colors.resize(kept);
     }
+    const InsertOptions options = stamped(settings_.insert, cloud->header.stamp);
     const InsertStats stats = settings_.color && !scan_.colors.empty()
-                                  ? map_.insert_point_cloud(scan_.origin, scan_.points, scan_.colors, settings_.insert)
-                                  : map_.insert_point_cloud(scan_.origin, scan_.points, settings_.insert);
+                                  ? map_.insert_point_cloud(scan_.origin, scan_.points, scan_.colors, options)
+                                  : map_.insert_point_cloud(scan_.origin, scan_.points, options);
     if (non_finite > 0) {
       ROS_INFO_THROTTLE(5.0, "umbra_server: %zu of the %zu points of the %s are NaN or infinite and were skipped",
                         non_finite, total, name.c_str());
@@ -163,6 +165,14 @@ void MapServer::insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
     return;
   }
   publish_after(name, cloud->header.stamp);
+}
+
+InsertOptions MapServer::stamped(const InsertOptions& options, const ros::Time& stamp) const {
+  // With decay on, the message's stamp is the map's clock; without, no stamp
+  // at all, so that the map is exactly the one without decay.
+  InsertOptions with_stamp = options;
+  if (settings_.decay.enabled()) with_stamp.stamp = stamp.toSec();
+  return with_stamp;
 }
 
 void MapServer::insert_image(const sensor_msgs::Image::ConstPtr& depth, const sensor_msgs::CameraInfo::ConstPtr& info,
@@ -188,7 +198,7 @@ void MapServer::insert_image(const sensor_msgs::Image::ConstPtr& depth, const se
     const InsertStats stats =
         map_.insert_depth_image(decoded_image_.view(), camera, pose,
                                 color ? std::span<const Rgb>(image_colors_) : std::span<const Rgb>(),
-                                settings_.image_insert);
+                                stamped(settings_.image_insert, depth->header.stamp));
     if (stats.out_of_bounds > 0) {
       ROS_WARN_THROTTLE(5.0, "umbra_server: %zu points of the %s lie outside the map and were skipped",
                         stats.out_of_bounds, name.c_str());

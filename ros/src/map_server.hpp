@@ -89,6 +89,8 @@ class MapServer {
   [[nodiscard]] std::string refused_images_text() const;
   /// Publishes the map after the message `name` (stamp `stamp`) was inserted; errors are logged.
   void publish_after(const std::string& name, const ros::Time& stamp);
+  /// `options` with the message's stamp when decay is on (the map's clock), else unchanged.
+  [[nodiscard]] InsertOptions stamped(const InsertOptions& options, const ros::Time& stamp) const;
   bool reset(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
   bool clear_bbx(octomap_msgs::BoundingBoxQuery::Request& request, octomap_msgs::BoundingBoxQuery::Response& response);
   bool get_binary(octomap_msgs::GetOctomap::Request& request, octomap_msgs::GetOctomap::Response& response);

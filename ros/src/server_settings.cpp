@@ -109,6 +109,11 @@ ServerSettings read_settings(const ros::NodeHandle& node) {
                                 "cannot take the colour images)");
   }
 
+  // Decay toward unknown (off by default).
+  s.decay.occupied_per_second = param(node, "decay/occupied_per_second", s.decay.occupied_per_second);
+  s.decay.free_per_second = param(node, "decay/free_per_second", s.decay.free_per_second);
+  check("~decay/{occupied_per_second,free_per_second}", [&] { s.decay.validate(); });
+
   const auto ignored_if = [&](const std::string& name, const std::string& instead) {
     if (param(node, name, false)) s.ignored.push_back(name + ": " + instead);
   };

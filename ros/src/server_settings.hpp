@@ -20,6 +20,9 @@
 // sensor_model/max_range), image_colors (colour the voxels from rgb/image);
 // for the projected map: projected_map_rule (any_free, octomap_server's, by
 // default; or all_known) and projected_map_depth (0: cells of one voxel).
+// Decay toward unknown: decay/occupied_per_second, decay/free_per_second
+// (log-odds per second, default 0: off), applied on the clock of the
+// messages' stamps as each cloud or image arrives (umbra/map/decay.hpp).
 #pragma once
 
 #include <ros/node_handle.h>
@@ -31,6 +34,7 @@
 #include "map_messages.hpp"
 #include "umbra/core/log_odds.hpp"
 #include "umbra/integrate/insert_options.hpp"
+#include "umbra/map/decay.hpp"
 #include "umbra/query/navigation_grid.hpp"
 
 namespace umbra::ros_io {
@@ -53,6 +57,9 @@ struct ServerSettings {
   /// Depth images: integrator from image_integrator, max_range from image_max_range, the rest as `insert`.
   InsertOptions image_insert;
   bool image_colors = false;  ///< image_colors: colours from rgb/image (needs keep_colors)
+  // --- decay toward unknown ---
+  DecayRates decay;  ///< decay/{occupied,free}_per_second; off by default
+
   /// octomap_server parameters that are set but not implemented, as "name: what happens instead".
   std::vector<std::string> ignored;
 };

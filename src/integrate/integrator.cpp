@@ -55,6 +55,7 @@ void InsertOptions::validate(int depth_levels) const {
                                 std::to_string(hardware_threads()) + " here; at least 16), got " +
                                 std::to_string(threads));
   }
+  if (stamp && !std::isfinite(*stamp)) throw std::invalid_argument("stamp must be finite, got " + std::to_string(*stamp));
 }
 
 int InsertOptions::resolved_clear_depth(const Grid& grid) const {

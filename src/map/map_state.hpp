@@ -19,6 +19,7 @@
 #include "tree/occupancy_tree.hpp"
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/log_odds.hpp"
+#include "umbra/map/decay.hpp"
 
 namespace umbra::detail {
 
@@ -39,6 +40,11 @@ struct MapState {
   /// What changed, for distance fields (change_journal.hpp); shared so that
   /// a field outliving this state (the map was assigned) still holds it.
   std::shared_ptr<ChangeJournal> journal = std::make_shared<ChangeJournal>();
+  // Decay toward unknown (map_decay.cpp): the rates, their region as keys,
+  // and the clock (nothing until the first time is given).
+  DecayRates decay;
+  std::optional<OccupancyTree::KeyBox> decay_keys;
+  std::optional<double> clock;
   std::mutex writer;
   ReadGate gate;
 };

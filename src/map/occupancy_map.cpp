@@ -7,6 +7,7 @@
 #include <string>
 
 #include "tree/make_node.hpp"
+#include "map/map_decay.hpp"
 #include "map/map_state.hpp"
 
 namespace umbra {
@@ -87,6 +88,9 @@ OccupancyMap::OccupancyMap(const OccupancyMap& other) : grid_(other.grid_), colo
     state_ = std::make_unique<detail::MapState>(grid_.depth_levels(), from.sensor, from.thresholds, color_);
     state_->tree = from.tree;
     state_->bounding_box = from.bounding_box;
+    state_->decay = from.decay;
+    state_->decay_keys = from.decay_keys;
+    state_->clock = from.clock;
   });
 }
 
@@ -205,12 +209,18 @@ InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f
 
 namespace {
 
-/// One scan: `trace` (which only reads the tree: readers go on meanwhile),
-/// then the apply phase, the only one that keeps readers out.
-template <typename Trace>
-InsertStats insert_scan(detail::MapState& state, Trace&& trace) {
+/// One scan: with a stamp, the clock's advance (decay toward unknown, its
+/// own exclusive phase; `check` first throws for what trace would refuse,
+/// so that a refused scan leaves the map unchanged); then `trace` (which
+/// only reads the tree: readers go on meanwhile), then the apply phase.
+template <typename Check, typename Trace>
+InsertStats insert_scan(detail::MapState& state, const std::optional<double>& stamp, Check&& check, Trace&& trace) {
   if (state.gate.held_by_this_thread()) state.gate.close();  // throws: this thread is reading the map
   std::lock_guard writer(state.writer);
+  if (stamp) {
+    std::forward<Check>(check)();
+    detail::advance_clock_locked(state, *stamp);
+  }
   InsertStats stats = std::forward<Trace>(trace)();
   {
     const auto start = std::chrono::steady_clock::now();
@@ -235,7 +245,12 @@ InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f
                                 std::to_string(points.size()));
   }
   detail::MapState& state = *state_;
-  return insert_scan(state, [&] {
+  const auto check = [&] {
+    options.validate(grid_.depth_levels());
+    if (!origin.is_finite()) throw std::invalid_argument("sensor origin is not finite");
+    static_cast<void>(grid_.key(Vec3d(origin)));  // throws std::out_of_range outside the map
+  };
+  return insert_scan(state, options.stamp, check, [&] {
     return state.integrator.trace(state.tree, grid_, origin, points, colors, options, state.bounding_box);
   });
 }
@@ -246,7 +261,17 @@ InsertStats OccupancyMap::insert_depth_image(const DepthImage& depth, const Pinh
     throw std::invalid_argument("colours given, but the map was made without colour (MapConfig::color)");
   }
   detail::MapState& state = *state_;
-  return insert_scan(state, [&] {
+  const auto check = [&] {
+    options.validate(grid_.depth_levels());
+    camera.validate();
+    if (!colors.empty() && colors.size() != depth.pixel_count()) {
+      throw std::invalid_argument("one colour per pixel expected: " + std::to_string(colors.size()) + " colours, " +
+                                  std::to_string(depth.pixel_count()) + " pixels");
+    }
+    if (!pose.is_rigid()) throw std::invalid_argument("the camera pose must be a rotation and a translation");
+    static_cast<void>(grid_.key(Vec3d(pose.translation())));  // throws std::out_of_range outside the map
+  };
+  return insert_scan(state, options.stamp, check, [&] {
     return state.integrator.trace_image(state.tree, grid_, depth, camera, pose, colors, options, state.bounding_box);
   });
 }

@@ -239,6 +239,40 @@ class OccupancyTree {
   /// Merges every group of eight equal childless children, bottom up.
   void prune();
 
+  // --- decay toward unknown (tree_decay.cpp; docs/design.md, "Decay toward unknown")
+  /// How far one decay step moves values toward 0 (unknown): `occupied` is
+  /// taken off positive values, `free` added to negative ones (both >= 0).
+  struct DecayStep {
+    float occupied = 0.0f;
+    float free = 0.0f;
+  };
+  /// The finest voxels lo <= key <= hi (inclusive, every axis).
+  struct KeyBox {
+    Key lo;
+    Key hi;
+  };
+  /// A node some voxel of which changed state in a decay step.
+  struct DecayChange {
+    std::uint64_t code;  ///< first finest voxel of the node
+    int depth;
+  };
+  /// The decay rule for one value: 0 when |value| <= the step for its sign,
+  /// else value moved toward 0 by that step (single precision). Monotone, so
+  /// the maximum of decayed values is the decayed maximum.
+  [[nodiscard]] static float decayed(float value, DecayStep step) {
+    if (value > 0.0f) return value > step.occupied ? value - step.occupied : 0.0f;
+    if (value < 0.0f) return -value > step.free ? value + step.free : 0.0f;
+    return 0.0f;
+  }
+  /// Applies `step` to every finest voxel (inside `region` when given); a
+  /// voxel reaching 0 becomes unknown as if never observed (its colour is
+  /// dropped). Walks only subtrees where some value can change; inner
+  /// values, indicators and pruning are refreshed on the way back. With
+  /// `changes`, appends the nodes of depth >= `change_depth` (childless
+  /// coarser ones at their own depth) in which some voxel changed state.
+  void decay(DecayStep step, const std::optional<KeyBox>& region, std::vector<DecayChange>* changes = nullptr,
+             int change_depth = 0);
+
   // --- statistics, checks ------------------------------------------------
   [[nodiscard]] NodeCounts count_nodes() const;
   /// Bytes allocated for the tree (capacity, not use).
@@ -333,6 +367,12 @@ class OccupancyTree {
   void add_colors_in_parallel(std::span<const ColorSample> samples, ThreadPool& pool);
   /// Running average of a voxel's colour with one more sample.
   static void blend(Rgb& rgb, std::uint8_t& weight, Rgb sample);
+  /// decay() below node (depth, group, slot) whose first voxel is `code`;
+  /// true when some voxel below changed state.
+  bool decay_below(int depth, std::uint32_t group, unsigned slot, std::uint64_t code, DecayStep step,
+                   const std::optional<KeyBox>& region, std::vector<DecayChange>* changes, int change_depth);
+  /// Drops a node's colour (no-op without colour).
+  void forget_color(int depth, std::uint32_t group, unsigned slot);
   std::string check_node(int depth, std::uint32_t group, unsigned slot, std::vector<std::vector<bool>>& seen) const;
 
   int depth_levels_;

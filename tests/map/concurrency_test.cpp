@@ -11,7 +11,8 @@
 // collision checks, whole-map iterations and counts; every iteration also
 // checks that each inner node it meets agrees with its children (never a
 // coarse node that disagrees with them). Integrators, thread counts, colour
-// and automatic pruning vary. The same test runs under ThreadSanitizer in
+// and automatic pruning vary, and decay steps (advance_clock) run between
+// the scans in one test. The same test runs under ThreadSanitizer in
 // the `tsan` label (tests/map/run_tsan_stress.sh).
 #include <atomic>
 #include <cmath>
@@ -66,6 +67,7 @@ struct Setup {
   unsigned threads;
   bool color;
   bool auto_prune;
+  bool decay = false;  ///< each scan preceded by a decay step (advance_clock), a step of its own
 };
 
 /// One question a reader asks; its answer as a string (comparable across maps).
@@ -172,15 +174,28 @@ void run_contract(const Setup& setup, std::size_t scan_count, int readers, int r
       map.insert_point_cloud(scans.origins[i], scans.points[i], options);
     }
   };
-
-  // The snapshots: the map after 0, 1, ... scans.
-  std::vector<OccupancyMap> snapshots;
-  {
+  // The writer's steps, each seen whole by readers: the scans, and with
+  // decay a clock step before each (fast rates: states change every step).
+  const std::size_t step_count = setup.decay ? 2 * scan_count : scan_count;
+  auto step = [&](OccupancyMap& map, std::size_t s) {
+    if (!setup.decay) return insert(map, s);
+    if (s % 2 == 0) return map.advance_clock(0.5 * static_cast<double>(s));
+    insert(map, s / 2);
+  };
+  auto new_map = [&] {
     OccupancyMap map(config);
     map.set_auto_prune(setup.auto_prune);
+    if (setup.decay) map.set_decay({1.0, 0.4, std::nullopt});
+    return map;
+  };
+
+  // The snapshots: the map after 0, 1, ... steps.
+  std::vector<OccupancyMap> snapshots;
+  {
+    OccupancyMap map = new_map();
     snapshots.push_back(map);
-    for (std::size_t i = 0; i < scan_count; ++i) {
-      insert(map, i);
+    for (std::size_t i = 0; i < step_count; ++i) {
+      step(map, i);
       snapshots.push_back(map);
     }
   }
@@ -191,8 +206,7 @@ void run_contract(const Setup& setup, std::size_t scan_count, int readers, int r
   }
 
   for (int round = 0; round < rounds; ++round) {
-    OccupancyMap map(config);
-    map.set_auto_prune(setup.auto_prune);
+    OccupancyMap map = new_map();
     std::atomic<std::size_t> started{0};
     std::atomic<std::size_t> finished{0};
     std::atomic<bool> done{false};
@@ -224,9 +238,9 @@ void run_contract(const Setup& setup, std::size_t scan_count, int readers, int r
         }
       });
     }
-    for (std::size_t i = 0; i < scan_count; ++i) {
+    for (std::size_t i = 0; i < step_count; ++i) {
       started.store(i + 1);
-      insert(map, i);
+      step(map, i);
       finished.store(i + 1);
     }
     // Let the readers see the finished map too.
@@ -244,6 +258,12 @@ TEST(Concurrency, ReadersSeeWholeScansWithEveryIntegrator) {
     SCOPED_TRACE(to_string(kind));
     run_contract({kind, 1, false, true}, 8, 2, 1);
   }
+}
+
+/// Decay steps (advance_clock) between the scans: readers see each step whole.
+TEST(Concurrency, ReadersSeeWholeDecaySteps) {
+  run_contract({IntegratorKind::discrete, 1, false, true, true}, 6, 2, 1);
+  run_contract({IntegratorKind::fast, 2, true, false, true}, 5, 2, 1);
 }
 
 TEST(Concurrency, ReadersSeeWholeScansWithThreadsColourAndNoPruning) {

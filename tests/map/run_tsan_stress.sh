@@ -2,7 +2,7 @@
 # The concurrency checks under ThreadSanitizer (CTest tsan_stress, label
 # tsan, in the default suite): the TSan tree is built by scripts/sanitize.sh
 # thread, the one way to build it, but only the executables with threads
-# (the reader/writer contract, insertion with several threads and the
+# (the reader/writer contract, decay steps included, insertion with several threads and the
 # parallel apply and colour walk, the node pools' concurrent phase, the
 # thread pool, the parallel colour samples and radix sort), and only their
 # threaded tests run. Any report fails the run (halt_on_error).

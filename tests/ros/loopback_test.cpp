@@ -848,12 +848,44 @@ TEST_F(Loopback, IntegratorRangeAndHeightParameters) {
   EXPECT_NE(data_of(*full_.get()), tree_bytes(reference_map(scans, resolution), OctoMapFormat::ot));
 }
 
+/// Decay toward unknown on the clock of the clouds' stamps: two scans, then
+/// one three seconds later; the published map is the library's with the
+/// same rates and stamps, in which the first scans' obstacles are unknown.
+TEST_F(Loopback, DecayParametersForgetAnObstacle) {
+  const double resolution = 0.1;
+  const std::vector<RosScan> scans = office_scans(2);
+  ASSERT_NO_FATAL_FAILURE(start_server(resolution, {"_decay/occupied_per_second:=2.0", "_decay/free_per_second:=1.0"}));
+  ASSERT_NO_FATAL_FAILURE(publish(scans, 4000.0));
+  RosScan late;
+  late.position = scans[0].position;
+  late.points = {Vec3f(scans[0].position) + Vec3f{1.0f, 0.0f, 0.0f}};
+  ASSERT_NO_FATAL_FAILURE(publish({late}, 4003.0));
+
+  OccupancyMap expected(resolution, kOctoMapDepthLevels);
+  expected.set_decay({2.0, 1.0, std::nullopt});
+  InsertOptions options;
+  const auto insert = [&](const RosScan& scan, double time) {
+    options.stamp = ros::Time(time).toSec();  // the server's clock: the stamp as ROS stores it
+    expected.insert_point_cloud(Vec3f(scan.position), scan.points, options);
+  };
+  insert(scans[0], 4000.0);
+  // An obstacle of the first scan: occupied now, unknown once forgotten.
+  const Vec3f obstacle = scans[0].points[scans[0].points.size() / 2];
+  ASSERT_EQ(expected.state(Vec3d(obstacle)), OccupancyState::occupied);
+  insert(scans[1], 4000.1);
+  insert(late, 4003.0);
+  EXPECT_EQ(expected.state(Vec3d(obstacle)), OccupancyState::unknown);
+  ASSERT_NO_FATAL_FAILURE(expect_published(expected));
+}
+
 TEST_F(Loopback, BadParametersStopTheNodeWithAMessage) {
   const std::vector<std::pair<std::string, std::string>> cases{
       {"_integrator:=bogus", "bad parameter ~integrator"},
       {"_resolution:=-0.1", "bad parameter ~resolution"},
       {"_sensor_model/hit:=0.3", "bad parameter ~sensor_model/{hit,miss,min,max}"},
       {"_image_integrator:=rays", "bad parameter ~image_integrator"},
+      {"_decay/occupied_per_second:=-1.0", "bad parameter ~decay/{occupied_per_second,free_per_second}: decay rate "
+                                           "occupied_per_second must be finite and >= 0"},
       {"_image_colors:=true", "bad parameter ~image_colors: true needs ~keep_colors true"},
       {"_projected_map_rule:=most_free",
        "bad parameter ~projected_map_rule: unknown projection rule 'most_free' (the rules: all_known, any_free)"},

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 
 #include "umbra/core/grid.hpp"
@@ -49,11 +50,17 @@ struct InsertOptions {
   /// system refuses to start some of them (a process limit), the scan runs
   /// on those that did start: InsertStats::threads says how many.
   unsigned threads = 0;
+  /// When the scan was taken, in seconds on the map's clock (any epoch, e.g.
+  /// ROS time). Given, the map's clock is advanced to it before the scan is
+  /// inserted (OccupancyMap::advance_clock: the decay toward unknown since
+  /// the last stamp, if set_decay asked for one). Nothing: the clock is left
+  /// alone and the map changes exactly as without decay.
+  std::optional<double> stamp;
 
   /// Throws std::invalid_argument naming the bad field (NaN max_range,
   /// clear_depth above the map's depth levels, negative fine_steps, a
   /// negative or non-finite surface_margin, a scan_resolution outside [0,
-  /// 0.5), threads above max_threads()).
+  /// 0.5), threads above max_threads(), a non-finite stamp).
   void validate(int depth_levels) const;
   /// The clear depth used for a map with this grid.
   [[nodiscard]] int resolved_clear_depth(const Grid& grid) const;

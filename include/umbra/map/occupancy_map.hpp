@@ -23,8 +23,8 @@
 //    reads the map) and applies the traced scan in one short exclusive
 //    phase: a query waits at most for one such phase.
 //  - everything else that changes the map (single-voxel updates, colours,
-//    prune(), set_auto_prune(), thresholds, sensor model, clear(), the box)
-//    is exclusive in the same way; two writers take turns.
+//    prune(), set_auto_prune(), thresholds, sensor model, clear(), the box,
+//    a decay step of advance_clock or a stamped scan) is exclusive in the same way; two writers take turns.
 //  - an open query range holds the map for reading until it is destroyed; a
 //    thread that changes the map while it holds a range of its own gets
 //    std::logic_error (it would wait for itself). Destroy a range on the
@@ -50,6 +50,7 @@
 #include "umbra/core/vec3.hpp"
 #include "umbra/integrate/depth_image.hpp"
 #include "umbra/integrate/insert_options.hpp"
+#include "umbra/map/decay.hpp"
 #include "umbra/query/collision.hpp"
 #include "umbra/query/information_gain.hpp"
 #include "umbra/query/predicate.hpp"
@@ -142,6 +143,24 @@ class OccupancyMap {
   /// limit. Throws std::invalid_argument for a box with min > max.
   void set_bounding_box(const std::optional<Aabb>& box);
   [[nodiscard]] std::optional<Aabb> bounding_box() const;
+
+  // --- decay toward unknown (umbra/map/decay.hpp; src/map/map_decay.cpp) ---
+  /// How fast the map forgets: from now on every advance of the clock moves
+  /// each voxel (in rates.region, if given) toward unknown by rate x the
+  /// time advanced. Both rates 0 (the default): no decay. Throws
+  /// std::invalid_argument for bad rates (DecayRates::validate) and
+  /// std::out_of_range for a region wholly outside the map.
+  void set_decay(const DecayRates& rates);
+  [[nodiscard]] DecayRates decay() const;
+  /// Advances the map's clock to `time` (seconds, any epoch) and decays the
+  /// map by the time passed, in one step that readers see whole. The first
+  /// time sets the clock without decay; a time earlier than the clock
+  /// changes nothing (a late scan is inserted without decay). Scans with
+  /// InsertOptions::stamp call it before they are inserted. Throws
+  /// std::invalid_argument for a non-finite time.
+  void advance_clock(double time);
+  /// The clock's time; nothing before the first advance_clock or stamp.
+  [[nodiscard]] std::optional<double> clock() const;
 
   // --- inserting scans ----------------------------------------------------
   /// Integrates one scan. Simple and discrete integrators: OctoMap's

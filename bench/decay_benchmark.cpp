@@ -1,0 +1,205 @@
+// Decay toward unknown (docs/benchmarks.md, "Decay toward unknown"): the
+// time of one decay step (OccupancyMap::advance_clock) on real maps, against
+// the insertion of a scan into the same map and against the loop an OctoMap
+// user writes for the same rule, side by side in one run:
+//   - umbra: the map of all the dataset's scans (discrete integrator), then
+//     `--steps` steps of `--dt` seconds at `--occupied` / `--free` log-odds
+//     per second; also the same steps limited to a box (`--region` metres
+//     around the first sensor position); memory_bytes() before and after;
+//   - OctoMap: the OcTree of the same scans (insertPointCloud, discretize:
+//     the same voxels), each step a loop over its leaves moving each value
+//     toward 0 by the same float, then updateInnerOccupancy() (leaves that
+//     reach 0 stay: see octomap_step);
+//   - both maps' states compared after the steps, at the centres of each
+//     one's leaves (they must agree, or the timing compares different work).
+// Datasets: 3dtk (5 cm), tum (2 cm); median of the steps.
+//
+//   umbra_decay_benchmark [--data ../shared/data] [--datasets 3dtk,tum] [--steps 10]
+//                         [--dt 0.5] [--occupied 0.4] [--free 0.2] [--region 4]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <octomap/OcTree.h>
+
+#include "bench_data.hpp"
+#include "umbra/map/occupancy_map.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+struct Options {
+  std::string data_dir = "../shared/data";
+  std::vector<std::string> datasets{"3dtk", "tum"};
+  int steps = 10;
+  double dt = 0.5;
+  double occupied = 0.4;
+  double free = 0.2;
+  double region = 4.0;
+};
+
+/// The documented rule (docs/design.md), for OctoMap's values.
+float decayed(float l, float occupied, float free) {
+  if (l > 0.0f) return l > occupied ? l - occupied : 0.0f;
+  if (l < 0.0f) return -l > free ? l + free : 0.0f;
+  return 0.0f;
+}
+
+/// One decay step over an OcTree, as a user writes it: every leaf moved
+/// toward 0, then inner nodes recomputed. Leaves that reach 0 stay as nodes
+/// of log-odds 0 (OctoMap calls them free: 0 is not above its threshold):
+/// deleting them (OcTree::deleteNode, OctoMap's only "unknown") aborts in
+/// Debian's liboctomap 1.9 (an assertion in ~OcTreeDataNode when a deletion
+/// empties a parent), so the comparison below counts l = 0 as unknown.
+std::size_t octomap_step(octomap::OcTree& tree, float occupied, float free) {
+  std::size_t zero = 0;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    const float next = decayed(it->getLogOdds(), occupied, free);
+    it->setLogOdds(next);
+    zero += next == 0.0f;
+  }
+  tree.updateInnerOccupancy();
+  return zero;
+}
+
+/// Finest voxels on which the two maps' states differ (over umbra's known leaves and OctoMap's leaves).
+std::size_t disagreements(const umbra::OccupancyMap& map, const octomap::OcTree& tree) {
+  std::size_t differ = 0;
+  map.for_each_leaf([&](const umbra::Node& node) {
+    if (node.state == umbra::OccupancyState::unknown) return;
+    const octomap::OcTreeNode* found = tree.search(node.center.x, node.center.y, node.center.z);
+    const bool occupied = node.state == umbra::OccupancyState::occupied;
+    if (found == nullptr || found->getLogOdds() == 0.0f || tree.isNodeOccupied(found) != occupied) ++differ;
+  });
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    if (it->getLogOdds() != 0.0f && map.state(umbra::Vec3d{it.getX(), it.getY(), it.getZ()}) == umbra::OccupancyState::unknown) ++differ;
+  }
+  return differ;
+}
+
+void run(const std::string& name, const Options& options) {
+  umbra::bench::DatasetOptions data_options;
+  data_options.data_dir = options.data_dir;
+  const umbra::bench::Dataset data = umbra::bench::load_dataset(name, data_options);
+  const double resolution = name == "tum" ? 0.02 : 0.05;
+  umbra::OccupancyMap map(resolution);
+  octomap::OcTree tree(resolution);
+  umbra::InsertOptions insert;
+  insert.integrator = umbra::IntegratorKind::discrete;
+  insert.max_range = data.max_range;
+  insert.threads = 1;
+  std::vector<double> umbra_insert, octomap_insert;
+  for (const umbra::Scan& scan : data.scans) {
+    auto start = Clock::now();
+    map.insert_point_cloud(scan.origin, scan.points, insert);
+    umbra_insert.push_back(seconds_since(start));
+    octomap::Pointcloud cloud;
+    for (const umbra::Vec3f& p : scan.points) cloud.push_back(p.x, p.y, p.z);
+    start = Clock::now();
+    tree.insertPointCloud(cloud, octomap::point3d(scan.origin.x, scan.origin.y, scan.origin.z), data.max_range, false,
+                          true);
+    octomap_insert.push_back(seconds_since(start));
+  }
+  const umbra::NodeCounts counts = map.node_counts();
+  std::printf("%s %.2f cm: %zu scans; umbra %zu nodes (%zu leaves, %zu inner leaves), %.1f MB; OctoMap %zu nodes, %.1f MB\n",
+              name.c_str(), resolution * 100, data.scans.size(), counts.total(), counts.leaf, counts.inner_leaf,
+              map.memory_bytes() / 1e6, tree.size(), tree.memoryUsage() / 1e6);
+  std::printf("  insert per scan (median, 1 thread): umbra %.1f ms, OctoMap %.1f ms\n",
+              umbra::bench::median(umbra_insert) * 1e3, umbra::bench::median(octomap_insert) * 1e3);
+
+  const float occupied_step = static_cast<float>(options.occupied * options.dt);
+  const float free_step = static_cast<float>(options.free * options.dt);
+  const auto decay_steps = [&](umbra::OccupancyMap& m) {
+    std::vector<double> times;
+    double clock = 0.0;
+    m.advance_clock(clock);
+    for (int i = 0; i < options.steps; ++i) {
+      clock += options.dt;
+      const auto start = Clock::now();
+      m.advance_clock(clock);
+      times.push_back(seconds_since(start));
+    }
+    return times;
+  };
+
+  // Whole map.
+  umbra::OccupancyMap whole = map;
+  whole.set_decay({options.occupied, options.free, std::nullopt});
+  const std::size_t bytes_before = whole.memory_bytes();
+  const std::vector<double> umbra_times = decay_steps(whole);
+  std::vector<double> octomap_times;
+  std::size_t octomap_zero = 0;
+  for (int i = 0; i < options.steps; ++i) {
+    const auto start = Clock::now();
+    octomap_zero = octomap_step(tree, occupied_step, free_step);
+    octomap_times.push_back(seconds_since(start));
+  }
+  std::printf("  decay step, whole map (%d steps of %.2f s at %.2f / %.2f per s): umbra median %.2f ms (first %.2f, "
+              "last %.2f), OctoMap loop median %.2f ms (first %.2f, last %.2f)\n",
+              options.steps, options.dt, options.occupied, options.free, umbra::bench::median(umbra_times) * 1e3,
+              umbra_times.front() * 1e3, umbra_times.back() * 1e3, umbra::bench::median(octomap_times) * 1e3,
+              octomap_times.front() * 1e3, octomap_times.back() * 1e3);
+  const umbra::NodeCounts after = whole.node_counts();
+  std::printf("  after: umbra %zu nodes, memory_bytes %.1f MB -> %.1f MB; OctoMap "
+              "%zu nodes (%zu leaves at 0); leaves whose states differ: %zu\n",
+              after.total(), bytes_before / 1e6, whole.memory_bytes() / 1e6,
+              tree.size(), octomap_zero, disagreements(whole, tree));
+
+  // A region around the first sensor position.
+  umbra::OccupancyMap boxed = map;
+  const umbra::Vec3d o(data.scans.front().origin);
+  const umbra::Vec3d half{options.region / 2, options.region / 2, options.region / 2};
+  boxed.set_decay({options.occupied, options.free, umbra::Aabb{o - half, o + half}});
+  const std::vector<double> boxed_times = decay_steps(boxed);
+  std::printf("  decay step, %.1f m box: umbra median %.2f ms (first %.2f, last %.2f)\n", options.region,
+              umbra::bench::median(boxed_times) * 1e3, boxed_times.front() * 1e3, boxed_times.back() * 1e3);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::cerr << arg << " needs a value\n";
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (arg == "--data" || arg == "--data-dir") {
+      options.data_dir = value();
+    } else if (arg == "--datasets") {
+      options.datasets = umbra::bench::split_list(value());
+    } else if (arg == "--steps") {
+      options.steps = std::stoi(value());
+    } else if (arg == "--dt") {
+      options.dt = std::stod(value());
+    } else if (arg == "--occupied") {
+      options.occupied = std::stod(value());
+    } else if (arg == "--free") {
+      options.free = std::stod(value());
+    } else if (arg == "--region") {
+      options.region = std::stod(value());
+    } else {
+      std::cerr << "usage: umbra_decay_benchmark [--data DIR] [--datasets 3dtk,tum] [--steps N] [--dt S] "
+                   "[--occupied R] [--free R] [--region M]\n";
+      return arg == "--help" ? 0 : 2;
+    }
+  }
+  try {
+    for (const std::string& name : options.datasets) run(name, options);
+  } catch (const std::exception& e) {
+    std::cerr << "umbra_decay_benchmark: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,14 @@
+// The map's clock and its decay toward unknown, for the map's own code
+// (OccupancyMap::advance_clock and the stamped inserts of occupancy_map.cpp).
+#pragma once
+
+#include "map/map_state.hpp"
+
+namespace umbra::detail {
+
+/// Advances `state`'s clock to `time` (finite) and applies the decay of the
+/// time passed, in one exclusive phase (it closes the gate itself, only when
+/// something may change). The caller holds state.writer.
+void advance_clock_locked(MapState& state, double time);
+
+}  // namespace umbra::detail

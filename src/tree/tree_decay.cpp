@@ -1,0 +1,114 @@
+// OccupancyTree::decay: every value moves toward 0 (unknown) by one step
+// (docs/design.md, "Decay toward unknown").
+//
+// One depth-first walk that skips what cannot change: a subtree whose values
+// are all 0, or all of a sign whose step is 0, as the node's maximum and its
+// contains_free bit tell (see skip_subtree), and subtrees outside the
+// region. A childless node (a pruned block) is one value however many voxels
+// it covers, so a step costs the stored nodes that can change, not the
+// voxels or the map's volume. On the way back each node is refreshed from
+// its children (value, indicators, colour, pruning), as apply() does.
+#include <optional>
+#include <vector>
+
+#include "tree/occupancy_tree.hpp"
+
+namespace umbra {
+namespace {
+
+enum class Overlap { outside, partial, inside };
+
+/// How the depth-`depth` node whose first voxel is `code` meets `region`.
+Overlap overlap(std::uint64_t code, int depth, const std::optional<OccupancyTree::KeyBox>& region) {
+  if (!region) return Overlap::inside;
+  const Key corner = morton::decode(code);
+  const std::uint64_t last = (std::uint64_t{1} << depth) - 1;
+  bool inside = true;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::uint64_t begin = corner[axis];
+    const std::uint64_t end = begin + last;
+    if (end < region->lo[axis] || begin > region->hi[axis]) return Overlap::outside;
+    inside &= begin >= region->lo[axis] && end <= region->hi[axis];
+  }
+  return inside ? Overlap::inside : Overlap::partial;
+}
+
+}  // namespace
+
+void OccupancyTree::forget_color(int depth, std::uint32_t group, unsigned slot) {
+  // A voxel decayed to unknown is as if never observed: no colour either.
+  if (!has_color()) return;
+  ColorGroup& own = colors(depth, group);
+  own.rgb[slot] = Rgb{};
+  own.weight[slot] = 0;
+}
+
+void OccupancyTree::decay(DecayStep step, const std::optional<KeyBox>& region, std::vector<DecayChange>* changes,
+                          int change_depth) {
+  UMBRA_ASSERT(step.occupied >= 0.0f && step.free >= 0.0f);
+  if (step.occupied == 0.0f && step.free == 0.0f) return;
+  decay_below(depth_levels_, 0, 0, 0, step, region, changes, change_depth);
+}
+
+bool OccupancyTree::decay_below(int depth, std::uint32_t group, unsigned slot, std::uint64_t code, DecayStep step,
+                                const std::optional<KeyBox>& region, std::vector<DecayChange>* changes,
+                                int change_depth) {
+  const Overlap where = overlap(code, depth, region);
+  if (where == Overlap::outside) return false;
+  const auto record = [&](int at) {
+    if (changes != nullptr) changes->push_back({code, at});
+  };
+  {
+    InnerGroup& node = inner_[depth][group];
+    if (node.child[slot] == kNoGroup) {
+      const float value = node.log_odds[slot];
+      const float next = decayed(value, step);
+      if (next == value) return false;  // unknown already, or its sign does not decay
+      if (where == Overlap::inside) {
+        set_childless(node, slot, next);
+        if (next == 0.0f) forget_color(depth, group, slot);
+        const bool changed = thresholds_.classify(value) != thresholds_.classify(next);
+        if (changed && depth >= change_depth) record(depth);
+        return changed;
+      }
+      expand(depth, group, slot);  // only a part of it decays
+    } else {
+      // Nothing below can change when every value is 0 or of a sign that
+      // does not decay. The maximum bounds the positive values; contains_free
+      // rules out negative ones only when every negative value is free
+      // (free threshold >= 0, i.e. p_free >= 0.5, the default).
+      const bool no_positive = node.log_odds[slot] <= 0.0f;
+      const bool no_negative = thresholds_.free >= 0.0f && (node.contains_free & (1u << slot)) == 0;
+      if ((no_positive || step.occupied == 0.0f) && (no_negative || step.free == 0.0f)) return false;
+    }
+  }
+  const std::uint32_t child = inner_[depth][group].child[slot];
+  bool changed = false;
+  if (depth == 1) {
+    LeafGroup& leaves = leaves_[child];
+    for (unsigned i = 0; i < 8; ++i) {
+      const std::uint64_t leaf_code = code | i;
+      if (where == Overlap::partial && overlap(leaf_code, 0, region) == Overlap::outside) continue;
+      const float value = leaves.log_odds[i];
+      const float next = decayed(value, step);
+      if (next == value) continue;
+      leaves.log_odds[i] = next;
+      if (next == 0.0f) forget_color(0, child, i);
+      if (thresholds_.classify(value) != thresholds_.classify(next)) {
+        changed = true;
+        if (change_depth == 0 && changes != nullptr) changes->push_back({leaf_code, 0});
+      }
+    }
+  } else {
+    const int child_depth = depth - 1;
+    for (unsigned i = 0; i < 8; ++i) {
+      changed |= decay_below(child_depth, child, i, code | (std::uint64_t{i} << (3 * child_depth)), step, region,
+                             changes, change_depth);
+    }
+  }
+  refresh(depth, group, slot, auto_prune_);
+  if (changed && depth == change_depth) record(depth);
+  return changed;
+}
+
+}  // namespace umbra
