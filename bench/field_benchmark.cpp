@@ -159,6 +159,7 @@ struct Row {
   std::size_t umbra_bytes = 0, umbra_rss = 0, edt_bytes = 0, edt_rss = 0;
   std::size_t umbra_known_bytes = 0;
   double umbra_known_build = 0;
+  std::size_t bricks_lowered = 0, bricks_transformed = 0;  // by all updates
 };
 
 void print_answers(const char* label, std::size_t n, std::size_t umbra_exact, double umbra_worst, std::size_t edt_exact,
@@ -257,12 +258,21 @@ Row run(const std::string& name, const Options& options) {
     start = Clock::now();
     field->update();
     row.umbra_updates.push_back(seconds_since(start));
+    const umbra::DistanceFieldStats st = field->stats();
+    row.bricks_lowered += st.bricks_recomputed - st.bricks_transformed;
+    row.bricks_transformed += st.bricks_transformed;
     start = Clock::now();
     parallel.update();
     row.umbra_parallel_updates.push_back(seconds_since(start));
     start = Clock::now();
     edt->update();
     row.edt_updates.push_back(seconds_since(start));
+  }
+
+  if (scans.size() > 1) {
+    std::printf("%s: updates lowered %.0f and transformed %.0f bricks a scan (of %zu stored)\n", name.c_str(),
+                double(row.bricks_lowered) / double(scans.size() - 1),
+                double(row.bricks_transformed) / double(scans.size() - 1), field->stats().bricks);
   }
 
   // Queries.

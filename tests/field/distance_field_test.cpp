@@ -334,6 +334,47 @@ TEST(DistanceField, UpdatedAfterEveryScanAsBruteForce) {
   }
 }
 
+TEST(DistanceField, UpdatedAsBruteForceWhenObstaclesComeAndGo) {
+  // Few obstacles in free space, so that removing one raises distances far
+  // around it (the cells whose nearest site went are transformed again),
+  // adding one lowers them (the others are lowered by the added sites
+  // only), and unknown space seen as free raises the unknown distances.
+  for (const bool boxed : {false, true}) {
+    OccupancyMap map(kResolution);
+    for (double z = -0.55; z < 0.6; z += kResolution) {
+      for (double y = -1.15; y < 1.2; y += kResolution) {
+        for (double x = -1.15; x < 1.2; x += kResolution) map.set_log_odds(Vec3d{x, y, z}, -1.0f);
+      }
+    }
+    DistanceFieldOptions options;
+    options.max_distance = 0.65;
+    options.threads = boxed ? 2 : 1;
+    if (boxed) options.box = Aabb{{-1.0, -1.3, -0.9}, {1.6, 0.9, 1.4}};
+    DistanceField field(map, options);
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> u(-1.15, 1.15);
+    std::vector<Vec3d> obstacles;
+    for (int step = 0; step < 8; ++step) {
+      // Half of the obstacles go (free again), new ones come, one more
+      // layer of unknown space becomes free.
+      std::shuffle(obstacles.begin(), obstacles.end(), rng);
+      for (std::size_t i = obstacles.size() / 2; i < obstacles.size(); ++i) map.set_log_odds(obstacles[i], -1.0f);
+      obstacles.resize(obstacles.size() / 2);
+      for (int i = 0; i < 6; ++i) {
+        obstacles.push_back({u(rng), u(rng), 0.5 * u(rng)});
+        map.set_log_odds(obstacles.back(), 2.0f);
+      }
+      const double layer = 0.65 + 0.1 * step;
+      for (double y = -1.15; y < 0.2; y += kResolution) {
+        for (double x = -0.55; x < 1.2; x += kResolution) map.set_log_odds(Vec3d{x, y, layer}, -1.0f);
+      }
+      field.update();
+      expect_field_matches(map, field, 900 + std::uint32_t(step), 250,
+                           boxed ? "obstacles come and go, boxed" : "obstacles come and go");
+    }
+  }
+}
+
 TEST(DistanceField, UpdateRecomputesOnlyNearChanges) {
   OccupancyMap map = random_map(12, true);
   DistanceFieldOptions options;
