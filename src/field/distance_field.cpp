@@ -456,14 +456,14 @@ void DistanceField::State::update() {
     auto brick = std::make_unique<FieldBrick>();
     brick->bits = own != changes.end() ? own->second.after : (stored != nullptr ? stored->bits : default_sites(b));
     brick->offsets = before;
-    std::vector<detail::CellCoord> near[2];
+    std::array<std::vector<detail::AddedSites>, 2> near;
     for (const std::uint32_t c : *adders) {
       for (int kind = 0; kind < 2; ++kind) {
         if ((transform_kinds >> kind & 1) != 0) continue;  // the transform gives that kind
-        near[kind].insert(near[kind].end(), added[c][std::size_t(kind)].begin(), added[c][std::size_t(kind)].end());
+        if (!added[c][std::size_t(kind)].empty()) near[std::size_t(kind)].push_back({changed[c], added[c][std::size_t(kind)]});
       }
     }
-    const bool lowered = detail::lower_by_added_sites(layout, b, brick->offsets, {near[0], near[1]});
+    const bool lowered = detail::lower_by_added_sites(layout, b, brick->offsets, near);
     if (transform_kinds != 0) {
       dirty_parts[worker].emplace_back(key, Partial{transform_kinds, std::move(brick)});
       return;

@@ -42,7 +42,6 @@ constexpr std::uint32_t kFar = std::numeric_limits<std::uint32_t>::max();
 struct AxisTerms {
   std::array<std::uint32_t, kBrickCells> squared{};
   std::array<std::int8_t, kBrickCells> offset{};
-  std::uint32_t least = kFar;  // over the 8 cells
 };
 
 AxisTerms axis_terms(const FieldLayout& layout, std::uint32_t first_cell, std::uint32_t site) {
@@ -50,64 +49,132 @@ AxisTerms axis_terms(const FieldLayout& layout, std::uint32_t first_cell, std::u
   const int w = layout.window();
   for (int i = 0; i < kBrickCells; ++i) {
     const std::int64_t n = std::int64_t(site) - std::int64_t(first_cell + std::uint32_t(i));
-    if (n < -w || n > w) {
-      t.squared[std::size_t(i)] = kFar;
-      continue;
-    }
-    t.squared[std::size_t(i)] = layout.squared_gap(int(n));
+    t.squared[std::size_t(i)] = n < -w || n > w ? kFar : layout.squared_gap(int(n));
     t.offset[std::size_t(i)] = std::int8_t(n);
-    t.least = std::min(t.least, t.squared[std::size_t(i)]);
   }
   return t;
+}
+
+/// The fewest cells between [lo, lo + count) and [site_lo, site_hi] on one axis.
+std::int64_t axis_gap(std::int64_t lo, std::int64_t count, std::int64_t site_lo, std::int64_t site_hi) {
+  if (site_hi < lo) return lo - site_hi;
+  if (site_lo > lo + count - 1) return site_lo - (lo + count - 1);
+  return 0;
+}
+
+/// The least S from the brick's cells to anything in the cell box
+/// [lo, hi] (kFar beyond the window).
+std::uint32_t least_squared(const FieldLayout& layout, const std::int64_t first[3], const std::int64_t lo[3],
+                            const std::int64_t hi[3]) {
+  std::uint64_t sum = 0;
+  for (int a = 0; a < 3; ++a) {
+    const std::int64_t n = axis_gap(first[a], kBrickCells, lo[a], hi[a]);
+    if (n > layout.window()) return kFar;
+    sum += layout.squared_gap(int(n));
+  }
+  return sum >= kFar ? kFar : std::uint32_t(sum);
+}
+
+/// S of each cell's nearest site in one kind, and the largest per row (8
+/// cells along x), per slab (64 cells, one z) and over the brick: a site
+/// lowers a cell only if its S is below all three.
+class CurrentDistances {
+ public:
+  CurrentDistances(const FieldLayout& layout, const BrickOffsets& offsets, int kind) {
+    for (int i = 0; i < kBrickVolume; ++i) {
+      const SiteOffset o = kind == 0 ? offsets[std::size_t(i)].occupied : offsets[std::size_t(i)].unknown;
+      s_[std::size_t(i)] = o.none() ? kFar : layout.squared(o);
+    }
+    for (int row = 0; row < kBrickCells * kBrickCells; ++row) update_row(row);
+    for (int z = 0; z < kBrickCells; ++z) update_slab(z);
+    update_brick();
+  }
+  [[nodiscard]] std::uint32_t cell(int i) const { return s_[std::size_t(i)]; }
+  [[nodiscard]] std::uint32_t row(int r) const { return row_[std::size_t(r)]; }
+  [[nodiscard]] std::uint32_t slab(int z) const { return slab_[std::size_t(z)]; }
+  [[nodiscard]] std::uint32_t brick() const { return brick_; }
+  void set(int i, std::uint32_t s) { s_[std::size_t(i)] = s; }
+  void update_row(int r) {
+    std::uint32_t m = 0;
+    for (int x = 0; x < kBrickCells; ++x) m = std::max(m, s_[std::size_t(r * kBrickCells + x)]);
+    row_[std::size_t(r)] = m;
+  }
+  void update_slab(int z) {
+    std::uint32_t m = 0;
+    for (int y = 0; y < kBrickCells; ++y) m = std::max(m, row_[std::size_t(z * kBrickCells + y)]);
+    slab_[std::size_t(z)] = m;
+  }
+  void update_brick() { brick_ = *std::max_element(slab_.begin(), slab_.end()); }
+
+ private:
+  std::array<std::uint32_t, kBrickVolume> s_{};
+  std::array<std::uint32_t, kBrickCells * kBrickCells> row_{};
+  std::array<std::uint32_t, kBrickCells> slab_{};
+  std::uint32_t brick_ = 0;
+};
+
+/// Lowers the cells of one kind by one site; returns whether any changed.
+bool lower_by_site(const FieldLayout& layout, const std::int64_t first[3], CellCoord site, int kind,
+                   CurrentDistances& current, BrickOffsets& offsets) {
+  const AxisTerms tx = axis_terms(layout, std::uint32_t(first[0]), site.x);
+  const AxisTerms ty = axis_terms(layout, std::uint32_t(first[1]), site.y);
+  const AxisTerms tz = axis_terms(layout, std::uint32_t(first[2]), site.z);
+  const std::uint32_t least_x = *std::min_element(tx.squared.begin(), tx.squared.end());
+  const std::uint32_t least_y = *std::min_element(ty.squared.begin(), ty.squared.end());
+  bool changed = false;
+  for (int z = 0; z < kBrickCells; ++z) {
+    const std::uint64_t sz = tz.squared[std::size_t(z)];
+    if (sz + least_y + least_x >= current.slab(z)) continue;
+    bool slab_changed = false;
+    for (int y = 0; y < kBrickCells; ++y) {
+      const int r = z * kBrickCells + y;
+      const std::uint64_t yz = sz + ty.squared[std::size_t(y)];
+      if (yz + least_x >= current.row(r)) continue;
+      bool row_changed = false;
+      for (int x = 0; x < kBrickCells; ++x) {
+        const std::uint64_t s = yz + tx.squared[std::size_t(x)];
+        const int i = r * kBrickCells + x;
+        if (s >= current.cell(i) || !layout.within_cap(std::uint32_t(s))) continue;  // a tie keeps the old site
+        current.set(i, std::uint32_t(s));
+        const SiteOffset o{tx.offset[std::size_t(x)], ty.offset[std::size_t(y)], tz.offset[std::size_t(z)]};
+        (kind == 0 ? offsets[std::size_t(i)].occupied : offsets[std::size_t(i)].unknown) = o;
+        row_changed = true;
+      }
+      if (row_changed) {
+        current.update_row(r);
+        slab_changed = true;
+      }
+    }
+    if (slab_changed) {
+      current.update_slab(z);
+      changed = true;
+    }
+  }
+  if (changed) current.update_brick();
+  return changed;
 }
 
 }  // namespace
 
 bool lower_by_added_sites(const FieldLayout& layout, BrickIndex brick, BrickOffsets& offsets,
-                          const std::array<std::span<const CellCoord>, 2>& added) {
+                          const std::array<std::vector<AddedSites>, 2>& added) {
   bool changed = false;
-  const std::uint32_t first[3] = {brick.x * kBrickCells, brick.y * kBrickCells, brick.z * kBrickCells};
-  std::array<std::uint32_t, kBrickVolume> current{};  // S of each cell's nearest site (kFar: none)
+  const std::int64_t first[3] = {std::int64_t(brick.x) * kBrickCells, std::int64_t(brick.y) * kBrickCells,
+                                 std::int64_t(brick.z) * kBrickCells};
   for (int kind = 0; kind < 2; ++kind) {
     if (added[std::size_t(kind)].empty()) continue;
-    std::uint32_t worst = 0;
-    for (int i = 0; i < kBrickVolume; ++i) {
-      const SiteOffset o = kind == 0 ? offsets[std::size_t(i)].occupied : offsets[std::size_t(i)].unknown;
-      current[std::size_t(i)] = o.none() ? kFar : layout.squared(o);
-      worst = std::max(worst, current[std::size_t(i)]);
-    }
-    for (const CellCoord& site : added[std::size_t(kind)]) {
-      const AxisTerms tx = axis_terms(layout, first[0], site.x);
-      if (tx.least == kFar) continue;
-      const AxisTerms ty = axis_terms(layout, first[1], site.y);
-      if (ty.least == kFar) continue;
-      const AxisTerms tz = axis_terms(layout, first[2], site.z);
-      if (tz.least == kFar) continue;
-      // No cell of the brick can get nearer than its worst current one.
-      const std::uint64_t least = std::uint64_t(tx.least) + ty.least + tz.least;
-      if (least >= worst || !layout.within_cap(std::uint32_t(std::min<std::uint64_t>(least, kFar)))) continue;
-      bool lowered = false;
-      for (int z = 0; z < kBrickCells; ++z) {
-        if (tz.squared[std::size_t(z)] == kFar) continue;
-        for (int y = 0; y < kBrickCells; ++y) {
-          if (ty.squared[std::size_t(y)] == kFar) continue;
-          const std::uint32_t yz = ty.squared[std::size_t(y)] + tz.squared[std::size_t(z)];
-          for (int x = 0; x < kBrickCells; ++x) {
-            if (tx.squared[std::size_t(x)] == kFar) continue;
-            const std::uint32_t s = yz + tx.squared[std::size_t(x)];
-            const int i = x + kBrickCells * y + kBrickCells * kBrickCells * z;
-            if (s >= current[std::size_t(i)] || !layout.within_cap(s)) continue;  // a tie keeps the old site
-            current[std::size_t(i)] = s;
-            const SiteOffset o{tx.offset[std::size_t(x)], ty.offset[std::size_t(y)], tz.offset[std::size_t(z)]};
-            (kind == 0 ? offsets[std::size_t(i)].occupied : offsets[std::size_t(i)].unknown) = o;
-            lowered = true;
-          }
-        }
+    CurrentDistances current(layout, offsets, kind);
+    for (const AddedSites& group : added[std::size_t(kind)]) {
+      // The whole changed brick first, then each of its sites.
+      const std::int64_t lo[3] = {std::int64_t(group.brick.x) * kBrickCells, std::int64_t(group.brick.y) * kBrickCells,
+                                  std::int64_t(group.brick.z) * kBrickCells};
+      const std::int64_t hi[3] = {lo[0] + kBrickCells - 1, lo[1] + kBrickCells - 1, lo[2] + kBrickCells - 1};
+      if (least_squared(layout, first, lo, hi) >= current.brick()) continue;
+      for (const CellCoord& site : group.sites) {
+        const std::int64_t at[3] = {site.x, site.y, site.z};
+        if (least_squared(layout, first, at, at) >= current.brick()) continue;
+        changed = lower_by_site(layout, first, site, kind, current, offsets) || changed;
       }
-      if (!lowered) continue;
-      changed = true;
-      worst = 0;
-      for (int i = 0; i < kBrickVolume; ++i) worst = std::max(worst, current[std::size_t(i)]);
     }
   }
   return changed;

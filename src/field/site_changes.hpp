@@ -48,10 +48,18 @@ struct BrickChange {
 /// unknown at every cell, no occupied site within max_distance.
 BrickOffsets trivial_offsets();
 
+/// The sites one changed brick added in one kind.
+struct AddedSites {
+  BrickIndex brick;
+  std::span<const CellCoord> sites;
+};
+
 /// Lowers `offsets` (brick `brick`) by the added sites of each kind
 /// (added[0] occupied, added[1] unknown; those out of reach are skipped).
-/// Returns whether any cell changed.
+/// Returns whether any cell changed. The bound on what a site can lower
+/// goes from the brick to its slabs and rows of cells, so a site that
+/// lowers nothing costs a few comparisons, not one per cell.
 bool lower_by_added_sites(const FieldLayout& layout, BrickIndex brick, BrickOffsets& offsets,
-                          const std::array<std::span<const CellCoord>, 2>& added);
+                          const std::array<std::vector<AddedSites>, 2>& added);
 
 }  // namespace umbra::detail
