@@ -149,6 +149,9 @@ void expect_field_matches(const OccupancyMap& map, const DistanceField& field, s
     const DistanceSample got = field.distance_and_gradient(p);
     ASSERT_NEAR(got.occupied, expected.occupied, 1e-9) << what << " at " << p.x << " " << p.y << " " << p.z;
     ASSERT_NEAR(got.unknown, expected.unknown, 1e-9) << what << " at " << p.x << " " << p.y << " " << p.z;
+    // The single distance() has its own path (no gradient).
+    ASSERT_NEAR(field.distance(p), std::min(expected.occupied, expected.unknown), 1e-9)
+        << what << " at " << p.x << " " << p.y << " " << p.z;
     if (expected.gradients.empty()) {
       ASSERT_EQ(got.gradient.x, 0.0) << what;
       ASSERT_EQ(got.gradient.y, 0.0) << what;
