@@ -451,7 +451,7 @@ void DistanceField::State::update() {
     const BrickIndex b = BrickIndex::unpack(key);
     const FieldBrick* stored = bricks.find(key);
     const detail::BrickOffsets& before = stored != nullptr ? stored->offsets : implicit_offsets;
-    const int transform_kinds = nearest_site_removed(b, before, changes, removes);
+    int transform_kinds = nearest_site_removed(b, before, changes, removes);
     const auto own = changes.find(key);
     auto brick = std::make_unique<FieldBrick>();
     brick->bits = own != changes.end() ? own->second.after : (stored != nullptr ? stored->bits : default_sites(b));
@@ -463,7 +463,9 @@ void DistanceField::State::update() {
         if (!added[c][std::size_t(kind)].empty()) near[std::size_t(kind)].push_back({changed[c], added[c][std::size_t(kind)]});
       }
     }
-    const bool lowered = detail::lower_by_added_sites(layout, b, brick->offsets, near);
+    const detail::LoweringResult result = detail::lower_by_added_sites(layout, b, brick->offsets, near);
+    const bool lowered = result.changed;
+    transform_kinds |= result.tied_kinds;
     if (transform_kinds != 0) {
       dirty_parts[worker].emplace_back(key, Partial{transform_kinds, std::move(brick)});
       return;

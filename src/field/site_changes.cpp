@@ -114,8 +114,9 @@ class CurrentDistances {
 };
 
 /// Lowers the cells of one kind by one site; returns whether any changed.
+/// Sets `tied` when the site is exactly as near to a cell as its nearest.
 bool lower_by_site(const FieldLayout& layout, const std::int64_t first[3], CellCoord site, int kind,
-                   CurrentDistances& current, BrickOffsets& offsets) {
+                   CurrentDistances& current, BrickOffsets& offsets, bool& tied) {
   const AxisTerms tx = axis_terms(layout, std::uint32_t(first[0]), site.x);
   const AxisTerms ty = axis_terms(layout, std::uint32_t(first[1]), site.y);
   const AxisTerms tz = axis_terms(layout, std::uint32_t(first[2]), site.z);
@@ -124,17 +125,21 @@ bool lower_by_site(const FieldLayout& layout, const std::int64_t first[3], CellC
   bool changed = false;
   for (int z = 0; z < kBrickCells; ++z) {
     const std::uint64_t sz = tz.squared[std::size_t(z)];
-    if (sz + least_y + least_x >= current.slab(z)) continue;
+    if (sz + least_y + least_x > current.slab(z)) continue;
     bool slab_changed = false;
     for (int y = 0; y < kBrickCells; ++y) {
       const int r = z * kBrickCells + y;
       const std::uint64_t yz = sz + ty.squared[std::size_t(y)];
-      if (yz + least_x >= current.row(r)) continue;
+      if (yz + least_x > current.row(r)) continue;
       bool row_changed = false;
       for (int x = 0; x < kBrickCells; ++x) {
         const std::uint64_t s = yz + tx.squared[std::size_t(x)];
         const int i = r * kBrickCells + x;
-        if (s >= current.cell(i) || !layout.within_cap(std::uint32_t(s))) continue;  // a tie keeps the old site
+        if (s > current.cell(i) || !layout.within_cap(std::uint32_t(s))) continue;
+        if (s == current.cell(i)) {
+          tied = true;
+          continue;
+        }
         current.set(i, std::uint32_t(s));
         const SiteOffset o{tx.offset[std::size_t(x)], ty.offset[std::size_t(y)], tz.offset[std::size_t(z)]};
         (kind == 0 ? offsets[std::size_t(i)].occupied : offsets[std::size_t(i)].unknown) = o;
@@ -156,9 +161,9 @@ bool lower_by_site(const FieldLayout& layout, const std::int64_t first[3], CellC
 
 }  // namespace
 
-bool lower_by_added_sites(const FieldLayout& layout, BrickIndex brick, BrickOffsets& offsets,
-                          const std::array<std::vector<AddedSites>, 2>& added) {
-  bool changed = false;
+LoweringResult lower_by_added_sites(const FieldLayout& layout, BrickIndex brick, BrickOffsets& offsets,
+                                   const std::array<std::vector<AddedSites>, 2>& added) {
+  LoweringResult result;
   const std::int64_t first[3] = {std::int64_t(brick.x) * kBrickCells, std::int64_t(brick.y) * kBrickCells,
                                  std::int64_t(brick.z) * kBrickCells};
   for (int kind = 0; kind < 2; ++kind) {
@@ -169,15 +174,17 @@ bool lower_by_added_sites(const FieldLayout& layout, BrickIndex brick, BrickOffs
       const std::int64_t lo[3] = {std::int64_t(group.brick.x) * kBrickCells, std::int64_t(group.brick.y) * kBrickCells,
                                   std::int64_t(group.brick.z) * kBrickCells};
       const std::int64_t hi[3] = {lo[0] + kBrickCells - 1, lo[1] + kBrickCells - 1, lo[2] + kBrickCells - 1};
-      if (least_squared(layout, first, lo, hi) >= current.brick()) continue;
+      if (least_squared(layout, first, lo, hi) > current.brick()) continue;
+      bool tied = false;
       for (const CellCoord& site : group.sites) {
         const std::int64_t at[3] = {site.x, site.y, site.z};
-        if (least_squared(layout, first, at, at) >= current.brick()) continue;
-        changed = lower_by_site(layout, first, site, kind, current, offsets) || changed;
+        if (least_squared(layout, first, at, at) > current.brick()) continue;
+        result.changed = lower_by_site(layout, first, site, kind, current, offsets, tied) || result.changed;
       }
+      if (tied) result.tied_kinds |= 1 << kind;
     }
   }
-  return changed;
+  return result;
 }
 
 }  // namespace umbra::detail

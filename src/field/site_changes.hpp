@@ -5,8 +5,8 @@
 // before it, less the removed ones, plus the added ones. So for a cell
 //   - whose nearest site was not removed, that site is still a nearest one
 //     among the old sites that remain, and the new nearest is the nearer of
-//     it and the nearest added site (an exact minimum; on a tie the old site
-//     stays, and both are nearest): lower_by_added_sites();
+//     it and the nearest added site (an exact minimum; on a tie the brick
+//     goes through the transform, see LoweringResult): lower_by_added_sites();
 //   - whose nearest site was removed, nothing local tells the new one: its
 //     brick goes through the full transform (distance_transform.hpp).
 // A brick none of whose cells falls in the second case never needs the
@@ -54,12 +54,22 @@ struct AddedSites {
   std::span<const CellCoord> sites;
 };
 
+struct LoweringResult {
+  bool changed = false;  ///< some cell got a nearer site
+  /// Kinds (bit 0 occupied, bit 1 unknown) where an added site is exactly
+  /// as near to some cell as the cell's nearest: such a brick goes through
+  /// the transform in that kind, so that an updated field answers as a
+  /// rebuilt one, gradients included (which of two equally near sites the
+  /// transform keeps is its own choice).
+  int tied_kinds = 0;
+};
+
 /// Lowers `offsets` (brick `brick`) by the added sites of each kind
 /// (added[0] occupied, added[1] unknown; those out of reach are skipped).
-/// Returns whether any cell changed. The bound on what a site can lower
-/// goes from the brick to its slabs and rows of cells, so a site that
-/// lowers nothing costs a few comparisons, not one per cell.
-bool lower_by_added_sites(const FieldLayout& layout, BrickIndex brick, BrickOffsets& offsets,
-                          const std::array<std::vector<AddedSites>, 2>& added);
+/// The bound on what a site can lower goes from the brick to its slabs and
+/// rows of cells, so a site that lowers nothing costs a few comparisons,
+/// not one per cell.
+LoweringResult lower_by_added_sites(const FieldLayout& layout, BrickIndex brick, BrickOffsets& offsets,
+                                    const std::array<std::vector<AddedSites>, 2>& added);
 
 }  // namespace umbra::detail
