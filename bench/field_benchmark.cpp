@@ -6,7 +6,8 @@
 //   - per-scan update: each further scan inserted into both maps, then
 //     DistanceField::update() against DynamicEDTOctomap::update();
 //   - queries: uniform random points in the box, umbra's batch
-//     distance_and_gradient against getDistance() in a loop, one thread;
+//     distance_and_gradient and single distance() calls (also cycling over
+//     1,000 points, in cache) against getDistance() in a loop, one thread;
 //   - memory: DistanceField::memory_bytes() against dynamicEDT3D's arrays
 //     (24-byte dataCell and a bool per cell), and the resident-set growth of
 //     each;
@@ -155,10 +156,11 @@ struct Row {
   std::vector<double> umbra_updates, edt_updates, umbra_parallel_updates;
   double umbra_parallel_build = 0;
   unsigned threads = 1;
-  double umbra_query_ns = 0, umbra_query_single_ns = 0, edt_query_ns = 0;
+  double umbra_query_ns = 0, umbra_query_single_ns = 0, umbra_query_hot_ns = 0, edt_query_ns = 0;
   std::size_t umbra_bytes = 0, umbra_rss = 0, edt_bytes = 0, edt_rss = 0;
   std::size_t umbra_known_bytes = 0;
   double umbra_known_build = 0;
+  std::size_t bricks_lowered = 0, bricks_transformed = 0;  // by all updates
 };
 
 void print_answers(const char* label, std::size_t n, std::size_t umbra_exact, double umbra_worst, std::size_t edt_exact,
@@ -257,12 +259,21 @@ Row run(const std::string& name, const Options& options) {
     start = Clock::now();
     field->update();
     row.umbra_updates.push_back(seconds_since(start));
+    const umbra::DistanceFieldStats st = field->stats();
+    row.bricks_lowered += st.bricks_recomputed - st.bricks_transformed;
+    row.bricks_transformed += st.bricks_transformed;
     start = Clock::now();
     parallel.update();
     row.umbra_parallel_updates.push_back(seconds_since(start));
     start = Clock::now();
     edt->update();
     row.edt_updates.push_back(seconds_since(start));
+  }
+
+  if (scans.size() > 1) {
+    std::printf("%s: updates lowered %.0f and transformed %.0f bricks a scan (of %zu stored)\n", name.c_str(),
+                double(row.bricks_lowered) / double(scans.size() - 1),
+                double(row.bricks_transformed) / double(scans.size() - 1), field->stats().bricks);
   }
 
   // Queries.
@@ -278,6 +289,13 @@ Row run(const std::string& name, const Options& options) {
   start = Clock::now();
   for (const umbra::Vec3d& p : points) sink += field->distance(p);
   row.umbra_query_single_ns = seconds_since(start) * 1e9 / double(points.size());
+  // The same single calls cycling over 1,000 points (their bricks stay in
+  // cache): the call's own cost (read gate, lookup, arithmetic) without the
+  // memory latency of a random point.
+  const std::size_t hot = std::min<std::size_t>(1000, points.size());
+  start = Clock::now();
+  for (std::size_t i = 0; i < points.size(); ++i) sink += field->distance(points[i % hot]);
+  row.umbra_query_hot_ns = seconds_since(start) * 1e9 / double(points.size());
   std::vector<octomap::point3d> octo_points;
   octo_points.reserve(points.size());
   for (const umbra::Vec3d& p : points) octo_points.emplace_back(float(p.x), float(p.y), float(p.z));
@@ -369,18 +387,18 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
   }
   std::printf("\n| dataset | box cells | build umbra / dynamicEDT3D (s) | update per scan umbra / dynamicEDT3D (ms) | "
-              "speed-up | query umbra batch / single / dynamicEDT3D (ns) | memory umbra / dynamicEDT3D (MB) | "
+              "speed-up | query umbra batch / single / single in cache / dynamicEDT3D (ns) | memory umbra / dynamicEDT3D (MB) | "
               "umbra without box: build (s), memory (MB) | umbra on all threads: build (s), update (ms) |\n"
               "|---|---|---|---|---|---|---|---|---|\n");
   for (const Row& r : rows) {
     const double uu = r.umbra_updates.empty() ? 0 : 1e3 * sum(r.umbra_updates) / double(r.umbra_updates.size());
     const double eu = r.edt_updates.empty() ? 0 : 1e3 * sum(r.edt_updates) / double(r.edt_updates.size());
-    std::printf("| %s (%.2f m) | %lld | %.3f / %.3f | %s | %s | %.1f / %.1f / %.1f | %.1f (rss %.1f) / %.1f (rss %.1f) "
+    std::printf("| %s (%.2f m) | %lld | %.3f / %.3f | %s | %s | %.1f / %.1f / %.1f / %.1f | %.1f (rss %.1f) / %.1f (rss %.1f) "
                 "| %.3f, %.1f | %u threads: %.3f, %.1f |\n",
                 r.dataset.c_str(), r.resolution, r.box_cells, r.umbra_build, r.edt_build,
                 r.umbra_updates.empty() ? "-" : (std::to_string(uu).substr(0, 7) + " / " + std::to_string(eu).substr(0, 7)).c_str(),
                 r.umbra_updates.empty() ? "-" : (std::to_string(eu / uu).substr(0, 5) + "x").c_str(), r.umbra_query_ns,
-                r.umbra_query_single_ns, r.edt_query_ns, double(r.umbra_bytes) / 1e6, double(r.umbra_rss) / 1e6,
+                r.umbra_query_single_ns, r.umbra_query_hot_ns, r.edt_query_ns, double(r.umbra_bytes) / 1e6, double(r.umbra_rss) / 1e6,
                 double(r.edt_bytes) / 1e6, double(r.edt_rss) / 1e6, r.umbra_known_build,
                 double(r.umbra_known_bytes) / 1e6, r.threads, r.umbra_parallel_build,
                 r.umbra_parallel_updates.empty()

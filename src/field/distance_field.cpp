@@ -22,6 +22,7 @@
 #include "field/brick_table.hpp"
 #include "core/thread_pool.hpp"
 #include "field/distance_transform.hpp"
+#include "field/site_changes.hpp"
 #include "map/map_access.hpp"
 #include "core/read_gate.hpp"
 #include "umbra/map/occupancy_map.hpp"
@@ -95,6 +96,7 @@ struct DistanceField::State {
   std::uint64_t version = 0;
   std::size_t bricks_recomputed = 0;
   std::size_t bricks_reread = 0;
+  std::size_t bricks_transformed = 0;
   std::mutex writer;
   detail::ReadGate gate;
   std::unique_ptr<ThreadPool> pool;  // options.threads != 1
@@ -102,6 +104,12 @@ struct DistanceField::State {
   void set_box(const std::optional<Aabb>& box);
   void rebuild();
   void update();
+  /// The kinds (bit 0 occupied, bit 1 unknown) in which some cell of brick
+  /// `b` (its offsets before the update) had its nearest site among those
+  /// `changes` removed (removes[kind]: any change removed sites of the kind).
+  [[nodiscard]] int nearest_site_removed(BrickIndex b, const BrickOffsets& offsets,
+                                          const std::unordered_map<std::uint64_t, detail::BrickChange>& changes,
+                                          const bool removes[2]) const;
 
   /// The result of compute(): bricks to store and bricks to drop (trivial).
   struct Computed {
@@ -110,9 +118,17 @@ struct DistanceField::State {
   };
   /// Recomputes `targets` from `new_sites`, then (with consult_live) the
   /// live bricks, then what a brick not stored holds.
+  /// A brick of an update whose transform is needed in some kinds only:
+  /// those in `kinds` (bit 0 occupied, bit 1 unknown) come from the
+  /// transform, the others from `lowered` (its sites already the new ones).
+  struct Partial {
+    int kinds = 3;
+    std::unique_ptr<FieldBrick> lowered;
+  };
+  using Partials = std::unordered_map<std::uint64_t, Partial>;
   [[nodiscard]] Computed compute(const std::vector<std::uint64_t>& targets,
                                  const std::unordered_map<std::uint64_t, BrickBits>& new_sites,
-                                 bool consult_live) const;
+                                 bool consult_live, const Partials* partials = nullptr) const;
 
   /// What a brick that is not stored holds: unknown everywhere (known space
   /// far away, or a trivial brick), or no sites at all outside the box.
@@ -163,13 +179,14 @@ struct DistanceField::State {
   }
   /// Swaps the computed bricks in, with readers kept out.
   void publish(Computed& computed, const std::vector<std::uint64_t>& removed, std::size_t recomputed,
-               std::size_t reread) {
+               std::size_t reread, std::size_t transformed) {
     detail::ClosedGate closed(gate);
     for (auto& [key, brick] : computed.store) bricks.insert_or_assign(key, std::move(brick));
     for (const std::uint64_t key : computed.drop) bricks.erase(key);
     for (const std::uint64_t key : removed) bricks.erase(key);
     bricks_recomputed = recomputed;
     bricks_reread = reread;
+    bricks_transformed = transformed;
   }
 
   /// The brick and cell of a point; throws std::out_of_range outside the map or the box.
@@ -213,7 +230,7 @@ void DistanceField::State::set_box(const std::optional<Aabb>& box) {
 
 DistanceField::State::Computed DistanceField::State::compute(
     const std::vector<std::uint64_t>& targets, const std::unordered_map<std::uint64_t, BrickBits>& new_sites,
-    bool consult_live) const {
+    bool consult_live, const Partials* partials) const {
   const auto sites = [&](BrickIndex b) -> const BrickBits* {
     const std::uint64_t key = b.packed();
     if (const auto it = new_sites.find(key); it != new_sites.end()) return &it->second;
@@ -224,12 +241,13 @@ DistanceField::State::Computed DistanceField::State::compute(
   };
   const std::unordered_set<std::uint64_t> wanted(targets.begin(), targets.end());
   const std::uint32_t n = std::uint32_t(detail::chunk_bricks(layout.window()));
-  std::unordered_set<std::uint64_t> chunk_set;
+  std::unordered_map<std::uint64_t, int> chunk_kinds;  // the kinds any of its targets needs
   for (const std::uint64_t key : targets) {
     const BrickIndex b = BrickIndex::unpack(key);
-    chunk_set.insert(BrickIndex{b.x / n * n, b.y / n * n, b.z / n * n}.packed());
+    chunk_kinds[BrickIndex{b.x / n * n, b.y / n * n, b.z / n * n}.packed()] |=
+        partials != nullptr ? partials->at(key).kinds : 3;
   }
-  const std::vector<std::uint64_t> chunks(chunk_set.begin(), chunk_set.end());
+  const std::vector<std::pair<std::uint64_t, int>> chunks(chunk_kinds.begin(), chunk_kinds.end());
   // One transform and one result per worker; chunks are independent.
   const unsigned workers = pool ? pool->size() : 1;
   std::vector<std::unique_ptr<detail::ChunkTransform>> transforms(workers);
@@ -238,17 +256,27 @@ DistanceField::State::Computed DistanceField::State::compute(
     if (!transforms[worker]) transforms[worker] = std::make_unique<detail::ChunkTransform>(layout);
     Computed& out = parts[worker];
     transforms[worker]->run(
-        BrickIndex::unpack(chunks[task]), sites, [&](BrickIndex b) { return wanted.contains(b.packed()); },
+        BrickIndex::unpack(chunks[task].first), sites, [&](BrickIndex b) { return wanted.contains(b.packed()); },
         [&](BrickIndex b, const BrickOffsets& offsets) {
-          if (trivial(offsets)) {
-            out.drop.push_back(b.packed());
-            return;
-          }
           auto brick = std::make_unique<FieldBrick>();
           brick->bits = *sites(b);
           brick->offsets = offsets;
+          if (partials != nullptr) {
+            const Partial& partial = partials->at(b.packed());
+            for (int i = 0; i < detail::kBrickVolume; ++i) {
+              detail::CellSites& cell = brick->offsets[std::size_t(i)];
+              const detail::CellSites& lowered = partial.lowered->offsets[std::size_t(i)];
+              if ((partial.kinds & 1) == 0) cell.occupied = lowered.occupied;
+              if ((partial.kinds & 2) == 0) cell.unknown = lowered.unknown;
+            }
+          }
+          if (trivial(brick->offsets)) {
+            out.drop.push_back(b.packed());
+            return;
+          }
           out.store.emplace_back(b.packed(), std::move(brick));
-        });
+        },
+        chunks[task].second);
   };
   if (pool && chunks.size() > 1) {
     pool->run(chunks.size(), work);
@@ -300,6 +328,7 @@ void DistanceField::State::rebuild() {
   detail::ClosedGate closed(gate);
   bricks.swap(fresh);
   bricks_recomputed = target_list.size();
+  bricks_transformed = target_list.size();
   bricks_reread = new_sites.size();
 }
 
@@ -340,14 +369,16 @@ void DistanceField::State::update() {
     return;
   }
   const std::size_t reread = new_sites.size();
-  // Only the bricks whose sites changed matter; the cells within reach of
-  // them are recomputed.
+  // Only the bricks whose sites changed matter: their sites before and after.
+  std::unordered_map<std::uint64_t, detail::BrickChange> changes;
   std::vector<BrickIndex> changed;
   for (auto it = new_sites.begin(); it != new_sites.end();) {
-    if (it->second == sites_of(it->first)) {
+    const BrickBits& before = sites_of(it->first);
+    if (it->second == before) {
       it = new_sites.erase(it);
     } else {
       changed.push_back(BrickIndex::unpack(it->first));
+      changes.emplace(it->first, detail::BrickChange{before, it->second});
       ++it;
     }
   }
@@ -355,18 +386,25 @@ void DistanceField::State::update() {
     if (const auto it = new_sites.find(key); it != new_sites.end()) return it->second.known;
     return sites_of(key).known;
   };
-  // Which bricks to recompute: those within reach of a change that the
+  // Which bricks a change may reach: those within reach of it that the
   // field keeps (in the box; without one, stored already or within reach
   // of known space now: a brick not stored is trivial, and only a change
-  // holding known space can make it otherwise).
-  std::unordered_set<std::uint64_t> targets;
+  // holding known space can make it otherwise). Each remembers the changes
+  // near it that add sites (for lower_by_added_sites).
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> targets;
   std::vector<std::uint64_t> removed;
   const int reach = layout.brick_reach();
-  for (const BrickIndex b : changed) {
+  for (std::uint32_t c = 0; c < changed.size(); ++c) {
+    const BrickIndex b = changed[c];
+    const detail::BrickChange& change = changes.at(b.packed());
+    const bool adds = change.adds(0) || change.adds(1);
     const bool known = known_after(b.packed());
     for_each_neighbour(b, reach, [&](BrickIndex n) {
       const std::uint64_t key = n.packed();
-      if (box_cells ? brick_meets_box(n) : (known || bricks.contains(key))) targets.insert(key);
+      if (box_cells ? brick_meets_box(n) : (known || bricks.contains(key))) {
+        std::vector<std::uint32_t>& adders = targets[key];
+        if (adds) adders.push_back(c);
+      }
     });
   }
   if (!box_cells) {
@@ -384,9 +422,114 @@ void DistanceField::State::update() {
       });
     }
   }
-  const std::vector<std::uint64_t> target_list(targets.begin(), targets.end());
-  Computed computed = compute(target_list, new_sites, /*consult_live=*/true);
-  publish(computed, removed, target_list.size(), reread);
+  // The sites each change adds, per kind.
+  std::vector<std::array<std::vector<detail::CellCoord>, 2>> added(changed.size());
+  bool removes[2] = {false, false};
+  for (std::size_t c = 0; c < changed.size(); ++c) {
+    const detail::BrickChange& change = changes.at(changed[c].packed());
+    for (int kind = 0; kind < 2; ++kind) {
+      change.append_added(kind, changed[c], added[c][std::size_t(kind)]);
+      const auto& b = kind == 0 ? change.before.occupied : change.before.unknown;
+      const auto& a = kind == 0 ? change.after.occupied : change.after.unknown;
+      for (std::size_t w = 0; w < 8; ++w) removes[kind] = removes[kind] || (b[w] & ~a[w]) != 0;
+    }
+  }
+  // A target whose cells all keep their nearest sites is lowered by the
+  // added ones; one with a cell whose nearest site went is transformed
+  // again (site_changes.hpp).
+  const detail::BrickOffsets implicit_offsets = detail::trivial_offsets();
+  std::vector<std::pair<std::uint64_t, const std::vector<std::uint32_t>*>> target_list(targets.size());
+  {
+    std::size_t i = 0;
+    for (const auto& [key, adders] : targets) target_list[i++] = {key, &adders};
+  }
+  const unsigned workers = pool ? pool->size() : 1;
+  std::vector<Computed> lowered_parts(workers);
+  std::vector<std::vector<std::pair<std::uint64_t, Partial>>> dirty_parts(workers);
+  const auto lower = [&](std::size_t task, unsigned worker) {
+    const auto& [key, adders] = target_list[task];
+    const BrickIndex b = BrickIndex::unpack(key);
+    const FieldBrick* stored = bricks.find(key);
+    const detail::BrickOffsets& before = stored != nullptr ? stored->offsets : implicit_offsets;
+    int transform_kinds = nearest_site_removed(b, before, changes, removes);
+    const auto own = changes.find(key);
+    auto brick = std::make_unique<FieldBrick>();
+    brick->bits = own != changes.end() ? own->second.after : (stored != nullptr ? stored->bits : default_sites(b));
+    brick->offsets = before;
+    std::array<std::vector<detail::AddedSites>, 2> near;
+    for (const std::uint32_t c : *adders) {
+      for (int kind = 0; kind < 2; ++kind) {
+        if ((transform_kinds >> kind & 1) != 0) continue;  // the transform gives that kind
+        if (!added[c][std::size_t(kind)].empty()) near[std::size_t(kind)].push_back({changed[c], added[c][std::size_t(kind)]});
+      }
+    }
+    const detail::LoweringResult result = detail::lower_by_added_sites(layout, b, brick->offsets, near);
+    const bool lowered = result.changed;
+    transform_kinds |= result.tied_kinds;
+    if (transform_kinds != 0) {
+      dirty_parts[worker].emplace_back(key, Partial{transform_kinds, std::move(brick)});
+      return;
+    }
+    if (!lowered && own == changes.end()) return;  // nothing to store
+    Computed& out = lowered_parts[worker];
+    if (trivial(brick->offsets)) {
+      if (stored != nullptr) out.drop.push_back(key);
+      return;
+    }
+    out.store.emplace_back(key, std::move(brick));
+  };
+  if (pool && target_list.size() > 1) {
+    pool->run(target_list.size(), lower);
+  } else {
+    for (std::size_t i = 0; i < target_list.size(); ++i) lower(i, 0);
+  }
+  std::vector<std::uint64_t> dirty;
+  Partials partials;
+  for (auto& part : dirty_parts) {
+    for (auto& [key, partial] : part) {
+      dirty.push_back(key);
+      partials.emplace(key, std::move(partial));
+    }
+  }
+  Computed computed = compute(dirty, new_sites, /*consult_live=*/true, &partials);
+  std::size_t lowered_count = 0;
+  for (Computed& part : lowered_parts) {
+    lowered_count += part.store.size() + part.drop.size();
+    for (auto& entry : part.store) computed.store.push_back(std::move(entry));
+    computed.drop.insert(computed.drop.end(), part.drop.begin(), part.drop.end());
+  }
+  publish(computed, removed, dirty.size() + lowered_count, reread, dirty.size());
+}
+
+int DistanceField::State::nearest_site_removed(BrickIndex b, const BrickOffsets& offsets,
+                                                const std::unordered_map<std::uint64_t, detail::BrickChange>& changes,
+                                                const bool removes[2]) const {
+  const std::int64_t first[3] = {std::int64_t(b.x) * kBrickCells, std::int64_t(b.y) * kBrickCells,
+                                 std::int64_t(b.z) * kBrickCells};
+  std::uint64_t last_key = ~std::uint64_t{0};
+  const detail::BrickChange* last = nullptr;
+  int kinds = 0;
+  for (int kind = 0; kind < 2; ++kind) {
+    if (!removes[kind]) continue;
+    for (int i = 0; i < detail::kBrickVolume; ++i) {
+      const SiteOffset o = kind == 0 ? offsets[std::size_t(i)].occupied : offsets[std::size_t(i)].unknown;
+      if (o.none()) continue;
+      const std::int64_t x = first[0] + (i & 7) + o.x, y = first[1] + ((i >> 3) & 7) + o.y,
+                         z = first[2] + (i >> 6) + o.z;
+      const std::uint64_t key = BrickIndex{std::uint32_t(x >> 3), std::uint32_t(y >> 3), std::uint32_t(z >> 3)}.packed();
+      if (key != last_key) {
+        const auto it = changes.find(key);
+        last = it != changes.end() ? &it->second : nullptr;
+        last_key = key;
+      }
+      if (last != nullptr &&
+          last->removed(kind, detail::cell_in_brick(std::uint32_t(x), std::uint32_t(y), std::uint32_t(z)))) {
+        kinds |= 1 << kind;
+        break;
+      }
+    }
+  }
+  return kinds;
 }
 
 DistanceField::State::Located DistanceField::State::locate(Vec3d point) const {
@@ -481,7 +624,20 @@ void DistanceField::rebuild() {
 
 const DistanceFieldOptions& DistanceField::options() const { return state_->options; }
 
-double DistanceField::distance(Vec3d point) const { return distance_and_gradient(point).blocking(); }
+double DistanceField::distance(Vec3d point) const {
+  // The blocking distance only: one square root, no gradient (a single
+  // query's time is mostly the cache miss on its cell; this is the rest).
+  detail::ReadLock lock(state_->gate);
+  const State& s = *state_;
+  const State::Located at = s.locate(point);
+  const FieldBrick* brick = s.bricks.find(at.brick);
+  if (brick == nullptr) return 0.0;  // unknown (see answer())
+  const detail::CellSites sites = brick->offsets[std::size_t(at.cell)];
+  if (sites.occupied.none()) return s.layout.metres(sites.unknown);
+  if (sites.unknown.none()) return s.layout.metres(sites.occupied);
+  return s.layout.metres(s.layout.squared(sites.occupied) <= s.layout.squared(sites.unknown) ? sites.occupied
+                                                                                             : sites.unknown);
+}
 
 DistanceSample DistanceField::distance_and_gradient(Vec3d point) const {
   detail::ReadLock lock(state_->gate);
@@ -548,6 +704,7 @@ DistanceFieldStats DistanceField::stats() const {
   out.memory_bytes = sizeof(State) + s.bricks.memory_bytes();
   out.bricks_recomputed = s.bricks_recomputed;
   out.bricks_reread = s.bricks_reread;
+  out.bricks_transformed = s.bricks_transformed;
   return out;
 }
 

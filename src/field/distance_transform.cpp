@@ -156,6 +156,7 @@ void ChunkTransform::transform(int kind) {
   // Pass y: along each column of the output's x, all z.
   for (std::size_t z = 0; z < span; ++z) {
     for (std::size_t x = 0; x < out; ++x) {
+      if (!wanted_x_[x / kBrickCells]) continue;  // no wanted brick in this slab
       for (std::size_t y = 0; y < span; ++y) {
         const std::int8_t dx = pass_x_[(z * span + y) * out + x];
         column_[y] = dx == SiteOffset::kNoSite ? kNone : layout_.squared_gap(dx);
@@ -175,6 +176,7 @@ void ChunkTransform::transform(int kind) {
   std::vector<SiteOffset>& result = result_[std::size_t(kind)];
   for (std::size_t y = 0; y < out; ++y) {
     for (std::size_t x = 0; x < out; ++x) {
+      if (!wanted_xy_[x / kBrickCells + std::size_t(bricks_) * (y / kBrickCells)]) continue;
       for (std::size_t z = 0; z < span; ++z) column_[z] = pass_y_[(z * out + y) * out + x];
       column(column_.data(), 1, best_.data(), from_.data());
       for (std::size_t t = 0; t < out; ++t) {
@@ -191,17 +193,34 @@ void ChunkTransform::transform(int kind) {
 }
 
 void ChunkTransform::run(BrickIndex first, SiteLookup sites, FunctionRef<bool(BrickIndex)> wanted,
-                         FunctionRef<void(BrickIndex, const BrickOffsets&)> write) {
+                         FunctionRef<void(BrickIndex, const BrickOffsets&)> write, int kinds) {
+  // Which bricks are wanted; the y and z passes skip the columns of none.
+  std::vector<bool> wanted_brick(std::size_t(bricks_) * std::size_t(bricks_) * std::size_t(bricks_));
+  wanted_x_.assign(std::size_t(bricks_), false);
+  wanted_xy_.assign(std::size_t(bricks_) * std::size_t(bricks_), false);
+  bool any = false;
+  for (std::uint32_t bz = 0; bz < std::uint32_t(bricks_); ++bz) {
+    for (std::uint32_t by = 0; by < std::uint32_t(bricks_); ++by) {
+      for (std::uint32_t bx = 0; bx < std::uint32_t(bricks_); ++bx) {
+        if (!wanted(BrickIndex{first.x + bx, first.y + by, first.z + bz})) continue;
+        wanted_brick[(bz * std::uint32_t(bricks_) + by) * std::uint32_t(bricks_) + bx] = true;
+        wanted_x_[bx] = true;
+        wanted_xy_[bx + std::size_t(bricks_) * by] = true;
+        any = true;
+      }
+    }
+  }
+  if (!any) return;
   load_sites(first, sites);
-  transform(0);
-  transform(1);
+  if ((kinds & 1) != 0) transform(0);
+  if ((kinds & 2) != 0) transform(1);
   BrickOffsets offsets;
   const std::size_t out = std::size_t(out_);
   for (std::uint32_t bz = 0; bz < std::uint32_t(bricks_); ++bz) {
     for (std::uint32_t by = 0; by < std::uint32_t(bricks_); ++by) {
       for (std::uint32_t bx = 0; bx < std::uint32_t(bricks_); ++bx) {
         const BrickIndex brick{first.x + bx, first.y + by, first.z + bz};
-        if (!wanted(brick)) continue;
+        if (!wanted_brick[(bz * std::uint32_t(bricks_) + by) * std::uint32_t(bricks_) + bx]) continue;
         for (int i = 0; i < kBrickVolume; ++i) {
           const std::size_t x = bx * kBrickCells + std::size_t(i & 7);
           const std::size_t y = by * kBrickCells + std::size_t((i >> 3) & 7);

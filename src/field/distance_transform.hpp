@@ -57,9 +57,11 @@ class ChunkTransform {
   [[nodiscard]] int bricks_per_axis() const { return bricks_; }
   /// Computes the chunk whose first brick is `first` (a multiple of
   /// bricks_per_axis() per axis) and calls write(brick, offsets) for each of
-  /// its bricks for which wanted(brick) holds.
+  /// its bricks for which wanted(brick) holds. Only the kinds in `kinds`
+  /// (bit 0 occupied, bit 1 unknown) are computed; the others' offsets in
+  /// `offsets` are meaningless.
   void run(BrickIndex first, SiteLookup sites, FunctionRef<bool(BrickIndex)> wanted,
-           FunctionRef<void(BrickIndex, const BrickOffsets&)> write);
+           FunctionRef<void(BrickIndex, const BrickOffsets&)> write, int kinds = 3);
 
  private:
   /// One column's minimum of (value at s + axis term of s - t) for the
@@ -86,6 +88,10 @@ class ChunkTransform {
   std::vector<double> bounds_;
   std::vector<std::uint32_t> best_;
   std::vector<std::int16_t> from_;
+  // The wanted bricks of the current run, by x and by (x, y) (the passes
+  // skip the columns where no brick is wanted).
+  std::vector<bool> wanted_x_;
+  std::vector<bool> wanted_xy_;
 };
 
 }  // namespace umbra::detail

@@ -149,6 +149,9 @@ void expect_field_matches(const OccupancyMap& map, const DistanceField& field, s
     const DistanceSample got = field.distance_and_gradient(p);
     ASSERT_NEAR(got.occupied, expected.occupied, 1e-9) << what << " at " << p.x << " " << p.y << " " << p.z;
     ASSERT_NEAR(got.unknown, expected.unknown, 1e-9) << what << " at " << p.x << " " << p.y << " " << p.z;
+    // The single distance() has its own path (no gradient).
+    ASSERT_NEAR(field.distance(p), std::min(expected.occupied, expected.unknown), 1e-9)
+        << what << " at " << p.x << " " << p.y << " " << p.z;
     if (expected.gradients.empty()) {
       ASSERT_EQ(got.gradient.x, 0.0) << what;
       ASSERT_EQ(got.gradient.y, 0.0) << what;
@@ -330,6 +333,84 @@ TEST(DistanceField, UpdatedAfterEveryScanAsBruteForce) {
       map.clear();
       field.update();
       expect_field_matches(map, field, 802, 50, "after clear");
+    }
+  }
+}
+
+TEST(DistanceField, UpdatedAsBruteForceWhenObstaclesComeAndGo) {
+  // Few obstacles in free space, so that removing one raises distances far
+  // around it (the cells whose nearest site went are transformed again),
+  // adding one lowers them (the others are lowered by the added sites
+  // only), and unknown space seen as free raises the unknown distances.
+  for (const bool boxed : {false, true}) {
+    OccupancyMap map(kResolution);
+    for (double z = -0.55; z < 0.6; z += kResolution) {
+      for (double y = -1.15; y < 1.2; y += kResolution) {
+        for (double x = -1.15; x < 1.2; x += kResolution) map.set_log_odds(Vec3d{x, y, z}, -1.0f);
+      }
+    }
+    DistanceFieldOptions options;
+    options.max_distance = 0.65;
+    options.threads = boxed ? 2 : 1;
+    if (boxed) options.box = Aabb{{-1.0, -1.3, -0.9}, {1.6, 0.9, 1.4}};
+    DistanceField field(map, options);
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> u(-1.15, 1.15);
+    std::vector<Vec3d> obstacles;
+    for (int step = 0; step < 8; ++step) {
+      // Half of the obstacles go (free again), new ones come, one more
+      // layer of unknown space becomes free.
+      std::shuffle(obstacles.begin(), obstacles.end(), rng);
+      for (std::size_t i = obstacles.size() / 2; i < obstacles.size(); ++i) map.set_log_odds(obstacles[i], -1.0f);
+      obstacles.resize(obstacles.size() / 2);
+      for (int i = 0; i < 6; ++i) {
+        obstacles.push_back({u(rng), u(rng), 0.5 * u(rng)});
+        map.set_log_odds(obstacles.back(), 2.0f);
+      }
+      const double layer = 0.65 + 0.1 * step;
+      for (double y = -1.15; y < 0.2; y += kResolution) {
+        for (double x = -0.55; x < 1.2; x += kResolution) map.set_log_odds(Vec3d{x, y, layer}, -1.0f);
+      }
+      field.update();
+      expect_field_matches(map, field, 900 + std::uint32_t(step), 250,
+                           boxed ? "obstacles come and go, boxed" : "obstacles come and go");
+    }
+  }
+}
+
+TEST(DistanceField, UpdatedAnswersAsARebuiltOne) {
+  // Bit for bit, gradients included: where two sites are equally near, an
+  // update must keep the one a rebuild keeps (readers and the Python
+  // tests compare an updated field with a fresh one).
+  for (const bool boxed : {true, false}) {
+    OccupancyMap map(kResolution);
+    DistanceFieldOptions options;
+    options.max_distance = 0.4;
+    if (boxed) options.box = Aabb{{-1.5, -1.5, -1.5}, {1.5, 1.5, 1.5}};
+    DistanceField field(map, options);
+    std::mt19937 rng(boxed ? 4 : 5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0), probe_coordinate(-1.4, 1.4), origin(-0.3, 0.3);
+    std::vector<Vec3d> probe(3000);
+    for (Vec3d& p : probe) p = {probe_coordinate(rng), probe_coordinate(rng), probe_coordinate(rng)};
+    for (int scan = 0; scan < 4; ++scan) {
+      std::vector<Vec3f> points(500);
+      for (Vec3f& p : points) {
+        double c[3] = {u(rng), u(rng), u(rng)};
+        c[scan % 3] = 1.05;  // a wall
+        p = Vec3f(float(c[0]), float(c[1]), float(c[2]));
+      }
+      map.insert_point_cloud(Vec3f(float(origin(rng)), float(origin(rng)), float(origin(rng))), points);
+      field.update();
+      const DistanceField fresh(map, options);
+      for (const Vec3d& p : probe) {
+        const DistanceSample a = field.distance_and_gradient(p);
+        const DistanceSample b = fresh.distance_and_gradient(p);
+        ASSERT_EQ(a.occupied, b.occupied) << "scan " << scan << " at " << p.x << " " << p.y << " " << p.z;
+        ASSERT_EQ(a.unknown, b.unknown) << "scan " << scan << " at " << p.x << " " << p.y << " " << p.z;
+        ASSERT_EQ(a.gradient.x, b.gradient.x) << "scan " << scan << " at " << p.x << " " << p.y << " " << p.z;
+        ASSERT_EQ(a.gradient.y, b.gradient.y) << "scan " << scan << " at " << p.x << " " << p.y << " " << p.z;
+        ASSERT_EQ(a.gradient.z, b.gradient.z) << "scan " << scan << " at " << p.x << " " << p.y << " " << p.z;
+      }
     }
   }
 }

@@ -27,8 +27,10 @@
 // has no occupied voxel within max_distance.
 //
 // Updates: update() reads the map's change journal (which nodes the scans
-// since the last update touched), re-reads those bricks, and recomputes the
-// distances only within max_distance of the cells whose state changed.
+// since the last update touched) and re-reads those bricks. Within
+// max_distance of the cells whose state changed, a brick none of whose
+// cells lost its nearest site is lowered by the added sites alone (an exact
+// minimum); one where some cell did is transformed again.
 // Threshold or sensor-model changes, clear() and loading make it start over.
 //
 // Concurrency: queries (const functions) run concurrently with each other
@@ -82,7 +84,10 @@ struct DistanceSample {
 struct DistanceFieldStats {
   std::size_t bricks = 0;        ///< bricks of 8^3 cells stored
   std::size_t memory_bytes = 0;  ///< everything the field allocated
-  std::size_t bricks_recomputed = 0;  ///< by the last build or update
+  std::size_t bricks_recomputed = 0;  ///< by the last build or update (transformed or lowered)
+  /// Of those, the bricks the last build or update ran the full transform
+  /// on (the rest were lowered by added sites only; see update()).
+  std::size_t bricks_transformed = 0;
   std::size_t bricks_reread = 0;      ///< bricks whose sites the last build or update read from the map
 };
 
