@@ -1,5 +1,5 @@
 // A distance field of the simulated office, and a picture of it: the
-// horizontal slice at 1.2 m coloured by the distance to the nearest
+// horizontal slice at 1.2 m colored by the distance to the nearest
 // blocking voxel (occupied black, unknown grey, free space from dark blue
 // near an obstacle to yellow at 1 m or more).
 //
@@ -43,14 +43,14 @@ int main(int argc, char** argv) {
   for (int row = 0; row < height; ++row) {
     for (int column = 0; column < width; ++column) {
       const umbra::DistanceSample& s = samples[std::size_t(row) * width + column];
-      umbra::Rgb colour{128, 128, 128};  // unknown
+      umbra::Rgb color{128, 128, 128};  // unknown
       if (s.occupied == 0.0) {
-        colour = {0, 0, 0};
+        color = {0, 0, 0};
       } else if (s.unknown > 0.0) {
         const double t = std::min(1.0, s.blocking() / options.max_distance);
-        colour = {std::uint8_t(40 + 215 * t), std::uint8_t(30 + 200 * t), std::uint8_t(140 * (1 - t))};
+        color = {std::uint8_t(40 + 215 * t), std::uint8_t(30 + 200 * t), std::uint8_t(140 * (1 - t))};
       }
-      image.set(column, row, colour);
+      image.set(column, row, color);
     }
   }
   const char* path = argc > 1 ? argv[1] : "distance_field_slice.png";

@@ -92,9 +92,9 @@ def main():
     print(f"looking at yaw {yaws[best]:.1f} deg would reveal {gains['unknown_voxels'][best]} unknown voxels "
           f"({gains['volume'][best]:.1f} m^3); the least, {gains['unknown_voxels'].min()}")
 
-    colours = np.array([[0.55, 0.55, 0.55], [1.0, 1.0, 1.0], [0.1, 0.1, 0.1]])  # unknown, free, occupied
+    colors = np.array([[0.55, 0.55, 0.55], [1.0, 1.0, 1.0], [0.1, 0.1, 0.1]])  # unknown, free, occupied
     figure, axes = plt.subplots(figsize=(10, 10 * len(ys) / max(len(xs), 1) + 1), dpi=100)
-    axes.imshow(colours[states], origin="lower", extent=(xs[0], xs[-1], ys[0], ys[-1]), interpolation="nearest")
+    axes.imshow(colors[states], origin="lower", extent=(xs[0], xs[-1], ys[0], ys[-1]), interpolation="nearest")
     axes.scatter(*centers[free, :2].T, s=1, c="tab:green", label="free 0.3 m balls")
     for end in hits.point[hits.hit]:
         axes.plot([sensor[0], end[0]], [sensor[1], end[1]], color="tab:orange", linewidth=0.3)

@@ -2,7 +2,7 @@
 // format is fixed at build time (UMBRA_FUZZ_FORMAT, e.g. "graph", "xyz",
 // "ply", "pcd", "kitti") and so is the name the input is held under
 // (UMBRA_FUZZ_SUFFIX, e.g. ".xyz.bz2" to reach the bz2 path). Every scan is
-// read to the end; a scan must have as many colours as points, or none, and
+// read to the end; a scan must have as many colors as points, or none, and
 // the origin the source announced at open (origins()), if it did.
 #include <cstdint>
 #include <memory>
@@ -23,7 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     umbra::Scan scan;
     for (std::size_t index = 0; source->next(scan); ++index) {
       umbra::fuzz::require(scan.colors.empty() || scan.colors.size() == scan.points.size(),
-                           "one colour per point, or none");
+                           "one color per point, or none");
       umbra::fuzz::require(origins.empty() || (index < origins.size() && origins[index] == scan.origin),
                            "the scan's origin is the one announced at open");
       const double progress = source->progress();

@@ -3,7 +3,7 @@
 // One folder per target (OUTDIR/octomap_bt, octomap_ot, umb, umb_body,
 // graph, xyz, xyz_bz2, ply, pcd, kitti, query_lines, insert) with a handful of small, valid files made by
 // umbra's own writers or spelled out here: empty maps, single voxels, a few
-// random voxels, colour, an unpruned tree, a coarse map of the simulated
+// random voxels, color, an unpruned tree, a coarse map of the simulated
 // office; point clouds in every encoding each reader supports; `umbra query`
 // input lines of every kind, good and bad. Nothing comes
 // from ../shared/data. Every file is a few bytes to ~10 KB so that the

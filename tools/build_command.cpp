@@ -284,7 +284,7 @@ int run_build(const BuildOptions& options) {
 
   std::vector<ScanRow> rows;
   InsertStats total;
-  std::size_t uncoloured = 0;
+  std::size_t uncolored = 0;
   std::size_t total_scans = 0;  // 0: some input does not say how many it holds
   for (const CheckedInput& entry : checked) {
     if (entry.skipped) continue;
@@ -326,16 +326,16 @@ int run_build(const BuildOptions& options) {
       try {
         if (insert.integrator == IntegratorKind::projective && scan.image) {
           // A depth image goes in as an image: the projective integrator reads it.
-          const bool coloured = options.color && !scan.image->colors.empty();
-          uncoloured += options.color && !coloured ? 1 : 0;
+          const bool colored = options.color && !scan.image->colors.empty();
+          uncolored += options.color && !colored ? 1 : 0;
           row.stats = map.insert_depth_image(scan.image->view(), scan.image->camera, scan.image->pose,
-                                             coloured ? std::span<const Rgb>(scan.image->colors)
+                                             colored ? std::span<const Rgb>(scan.image->colors)
                                                       : std::span<const Rgb>(),
                                              insert);
         } else if (options.color && !scan.colors.empty()) {
           row.stats = map.insert_point_cloud(scan.origin, scan.points, scan.colors, insert);
         } else {
-          uncoloured += options.color ? 1 : 0;
+          uncolored += options.color ? 1 : 0;
           row.stats = map.insert_point_cloud(scan.origin, scan.points, insert);
         }
       } catch (const std::exception&) {
@@ -393,7 +393,7 @@ int run_build(const BuildOptions& options) {
   }
   if (total.truncated > 0) std::printf("note: %zu rays were cut at --max-range %g m\n", total.truncated, options.max_range);
   if (total.outside_box > 0) std::printf("note: %zu rays missed the --bbox and were skipped\n", total.outside_box);
-  if (uncoloured > 0) std::printf("warning: --color, but %zu scans carry no colours\n", uncoloured);
+  if (uncolored > 0) std::printf("warning: --color, but %zu scans carry no colors\n", uncolored);
 
   const auto save_start = std::chrono::steady_clock::now();
   print_format_notes(map, std::nullopt, map_file_format_for(options.output));
@@ -453,7 +453,7 @@ Command add_build_command(CLI::App& app) {
       ->capture_default_str()
       ->check(not_nan());
   command->add_option("--bbox", options->bbox, "only map inside minx,miny,minz,maxx,maxy,maxz (rays are clipped)");
-  command->add_flag("--color", options->color, "keep an RGB colour per voxel (inputs with colours: xyz rgb, PLY, PCD, TUM)");
+  command->add_flag("--color", options->color, "keep an RGB color per voxel (inputs with colors: xyz rgb, PLY, PCD, TUM)");
   command->add_option("--origin", options->origin, "sensor origin x,y,z for files without poses (.xyz, .ply, .pcd, lone .bin)")
       ->capture_default_str();
   command->add_option("--format", options->format, "input format for every input (default: by name)")

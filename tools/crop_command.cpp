@@ -1,7 +1,7 @@
 // `umbra crop IN -o OUT --bbox minx,miny,minz,maxx,maxy,maxz`: the part of a
 // map inside a box, as a map file (OctoMap's edit_octree -bbx).
 //
-// The voxels the box meets keep their values and colours, the rest become
+// The voxels the box meets keep their values and colors, the rest become
 // unknown (umbra/map/map_crop.hpp; the box's voxels as voxel_box.hpp says).
 // IN and OUT may be .umb, .bt or .ot. Cost: one load, one walk over the
 // nodes in the box, one save.
@@ -56,7 +56,7 @@ int run_crop(const CropOptions& options) {
 Command add_crop_command(CLI::App& app) {
   auto options = std::make_shared<CropOptions>();
   CLI::App* command = app.add_subcommand(
-      "crop", "Keep the part of a map inside a box (voxel values and colours unchanged, the rest unknown)");
+      "crop", "Keep the part of a map inside a box (voxel values and colors unchanged, the rest unknown)");
   command->add_option("input", options->input, "map to read (.umb, .bt, .ot)")->required()->check(map_extension());
   command->add_option("-o,--output", options->output, "map to write (.umb, .bt, .ot); replaced atomically")
       ->required()

@@ -28,7 +28,7 @@ int run_export(const ExportOptions& options) {
   check_can_save(options.output);  // before the (maybe long) load
   const OccupancyMap map = load_any_map(options.input);
   if (options.color && !map.has_color()) {
-    throw std::runtime_error(options.input + ": the map has no colours (it was built without --color); export it "
+    throw std::runtime_error(options.input + ": the map has no colors (it was built without --color); export it "
                                              "without --color");
   }
   const PlyExportSummary summary = export_ply(map, options.output, PlyExportOptions{options.mesh, options.color});
@@ -40,9 +40,9 @@ int run_export(const ExportOptions& options) {
     std::printf("wrote %s: %llu points (occupied voxel centres), %llu bytes\n", options.output.c_str(),
                 static_cast<unsigned long long>(summary.vertices), static_cast<unsigned long long>(summary.bytes));
   }
-  if (summary.uncoloured > 0) {
-    std::fprintf(stderr, "note: %llu occupied voxels have no colour sample; they are grey (%d, %d, %d)\n",
-                 static_cast<unsigned long long>(summary.uncoloured), kNoColour.r, kNoColour.g, kNoColour.b);
+  if (summary.uncolored > 0) {
+    std::fprintf(stderr, "note: %llu occupied voxels have no color sample; they are grey (%d, %d, %d)\n",
+                 static_cast<unsigned long long>(summary.uncolored), kNoColor.r, kNoColor.g, kNoColor.b);
   }
   return kSuccess;
 }
@@ -71,8 +71,8 @@ Command add_export_command(CLI::App& app) {
   command->add_flag("--mesh", options->mesh,
                     "one cube per occupied node (8 vertices, 12 triangles) instead of one point per occupied voxel");
   command->add_flag("--color", options->color,
-                    "red, green, blue per vertex from the map's colours (maps built with --color; voxels without a "
-                    "colour are grey)");
+                    "red, green, blue per vertex from the map's colors (maps built with --color; voxels without a "
+                    "color are grey)");
   add_memory_option(*command);
   return [options] { return run_export(*options); };
 }

@@ -31,7 +31,7 @@ void print_format_notes(const OccupancyMap& map, std::optional<MapFileFormat> in
   if (output == MapFileFormat::bt && input != MapFileFormat::bt) {
     std::fprintf(stderr, "note: .bt keeps only free / occupied per leaf (OctoMap's maximum likelihood): every value "
                          "becomes the clamping minimum or maximum when read back%s\n",
-                 map.has_color() ? ", and colours are dropped" : "");
+                 map.has_color() ? ", and colors are dropped" : "");
   }
   if (input == MapFileFormat::umb && (!(map.sensor_model() == SensorModel{}) || !(map.thresholds() == Thresholds{}))) {
     std::fprintf(stderr, "note: OctoMap files store no sensor model or thresholds; reading the file back gives "

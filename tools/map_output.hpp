@@ -20,7 +20,7 @@ namespace umbra::cli {
 MapFileFormat check_map_output(const std::string& path, int depth_levels, const std::string& what);
 
 /// Notes on stderr, before writing, about what the output format drops:
-/// .bt keeps free / occupied only (and no colour); OctoMap files keep no
+/// .bt keeps free / occupied only (and no color); OctoMap files keep no
 /// sensor model or thresholds. `input`: the format the map was read from
 /// (none: it was built from scans).
 void print_format_notes(const OccupancyMap& map, std::optional<MapFileFormat> input, MapFileFormat output);

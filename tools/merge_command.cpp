@@ -4,7 +4,7 @@
 // The first map is the base: B, C, ... are added to it in order, each placed
 // by the same --offset (whole voxels) or --transform (metres and a unit
 // quaternion, the other maps' frame to the first's). The output keeps the
-// first map's sensor model, thresholds and colour. Inputs may be .umb, .bt or
+// first map's sensor model, thresholds and color. Inputs may be .umb, .bt or
 // .ot (OctoMap files carry no sensor model: the default one clamps them, as
 // when they are loaded anywhere else). Cost: each load, one walk over each
 // added map's known nodes, one save.

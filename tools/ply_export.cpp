@@ -70,7 +70,7 @@ std::string ply_header(std::uint64_t vertices, std::uint64_t faces, bool color, 
 PlyExportSummary export_ply(const OccupancyMap& map, const std::filesystem::path& path,
                             const PlyExportOptions& options) {
   if (options.color && !map.has_color()) {
-    throw std::invalid_argument("the map has no colours (it was built without --color): export it without --color");
+    throw std::invalid_argument("the map has no colors (it was built without --color): export it without --color");
   }
   // Pass 1: how much there is.
   std::uint64_t voxels = 0;
@@ -107,7 +107,7 @@ PlyExportSummary export_ply(const OccupancyMap& map, const std::filesystem::path
   const Grid& grid = map.grid();
   const auto put_color = [&](const Node& node) {
     if (!options.color) return;
-    const Rgb rgb = node.color.value_or(kNoColour);
+    const Rgb rgb = node.color.value_or(kNoColor);
     out.u8(rgb.r);
     out.u8(rgb.g);
     out.u8(rgb.b);
@@ -115,7 +115,7 @@ PlyExportSummary export_ply(const OccupancyMap& map, const std::filesystem::path
   map.for_each_leaf([&](const Node& node) {
     if (node.state != OccupancyState::occupied) return;
     const std::uint64_t node_voxels = std::uint64_t{1} << (3 * node.depth);
-    if (options.color && !node.color) summary.uncoloured += node_voxels;
+    if (options.color && !node.color) summary.uncolored += node_voxels;
     if (options.mesh) {
       const Vec3d low = node.min_corner();
       const Vec3d high = node.max_corner();

@@ -6,12 +6,12 @@
 // occupied node gives one per voxel it covers), as float x y z. Mesh: one
 // cube per occupied childless node (a pruned node is one larger cube): 8
 // vertices and 12 triangles wound counter-clockwise seen from outside
-// ("property list uchar int vertex_indices"). With colours, every vertex
-// carries uchar red, green, blue: the voxel's colour, or kNoColour grey for
-// an occupied voxel that received no colour sample. Binary little endian
+// ("property list uchar int vertex_indices"). With colors, every vertex
+// carries uchar red, green, blue: the voxel's color, or kNoColor grey for
+// an occupied voxel that received no color sample. Binary little endian
 // ("format binary_little_endian 1.0"), whatever the machine.
 //
-// The file is built in memory (15 bytes a point with colour, 276 bytes a
+// The file is built in memory (15 bytes a point with color, 276 bytes a
 // cube), so its size is checked against the memory limit first
 // (umbra/core/memory_limit.hpp), then written atomically like every file
 // umbra saves (umbra/io/file_saving.hpp). Cost: two passes over the
@@ -26,23 +26,23 @@
 
 namespace umbra::cli {
 
-/// The colour of an occupied voxel without one, in a coloured export.
-inline constexpr Rgb kNoColour{128, 128, 128};
+/// The color of an occupied voxel without one, in a colored export.
+inline constexpr Rgb kNoColor{128, 128, 128};
 
 struct PlyExportOptions {
   bool mesh = false;   ///< cubes instead of points
-  bool color = false;  ///< red, green, blue per vertex (the map must have colour)
+  bool color = false;  ///< red, green, blue per vertex (the map must have color)
 };
 
 struct PlyExportSummary {
   std::uint64_t vertices = 0;
   std::uint64_t faces = 0;       ///< triangles (mesh only)
-  std::uint64_t uncoloured = 0;  ///< occupied voxels given kNoColour
+  std::uint64_t uncolored = 0;  ///< occupied voxels given kNoColor
   std::uint64_t bytes = 0;       ///< the file's size
 };
 
 /// Writes the occupied voxels of `map` to `path`. Throws
-/// std::invalid_argument when `color` is asked of a map without colour,
+/// std::invalid_argument when `color` is asked of a map without color,
 /// MemoryLimitError (naming `path`, the need and the limit) when the file
 /// would need more than the memory limit, std::runtime_error when it cannot
 /// be written.

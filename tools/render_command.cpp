@@ -5,8 +5,8 @@
 // exit code 2, before anything is drawn) and writes the PNG atomically.
 // Its defaults are what a user of an indoor map expects (README, "Pictures"):
 // top and iso views cut the ceiling found by find_ceiling (render_cuts.hpp),
-// a top view coloured by state the floor too (find_floor), front
-// and side views cut the map in the middle and colour by distance, pictures
+// a top view colored by state the floor too (find_floor), front
+// and side views cut the map in the middle and color by distance, pictures
 // are annotated (title, axes, legend, scale bar).
 // Cost: loading the map, two or three query walks, the pixels; see
 // map_render.hpp and render_cuts.hpp.
@@ -37,7 +37,7 @@ struct RenderCommandOptions {
   std::string slice;  // "z=1.2"
   int depth = 0;
   int width = 1024;
-  std::string min_z;    // METRES, "auto" or "none"; empty: auto for a top view coloured by state, else none
+  std::string min_z;    // METRES, "auto" or "none"; empty: auto for a top view colored by state, else none
   std::string max_z;    // METRES, "auto" or "none"; empty: auto for top and iso views, else none
   std::string section;  // METRES, "middle" or "none"; empty: middle for front and side views
   bool bare = false;
@@ -106,10 +106,10 @@ RenderColor color_named(const std::string& name) {
   for (const RenderColor color : {RenderColor::height, RenderColor::rgb, RenderColor::state, RenderColor::depth}) {
     if (name == to_string(color)) return color;
   }
-  throw std::invalid_argument("unknown colour mode '" + name + "'");
+  throw std::invalid_argument("unknown color mode '" + name + "'");
 }
 
-/// The colour a picture gets unless told: state for a slice, distance for
+/// The color a picture gets unless told: state for a slice, distance for
 /// front and side views (height would repeat the row), else height.
 RenderColor default_color(const RenderOptions& options) {
   if (options.slice) return RenderColor::state;
@@ -145,7 +145,7 @@ RenderOptions render_options(const RenderCommandOptions& command) {
 }
 
 /// The cuts found in the map: the ceiling (--max-z auto, the default for
-/// top and iso views, which look from above), the floor (--min-z auto, the default for a top view coloured
+/// top and iso views, which look from above), the floor (--min-z auto, the default for a top view colored
 /// by state) and the middle section (--section middle, the default for front
 /// and side views). Returns what was cut, for the summary line.
 std::string apply_cuts(const OccupancyMap& map, const RenderCommandOptions& command, RenderOptions& options) {
@@ -251,7 +251,7 @@ Command add_render_command(CLI::App& app) {
   command->add_option("--view", options->view, "top, front (looking north), side (looking west) or iso; default iso")
       ->check(CLI::IsMember({"top", "front", "side", "iso"}));
   command->add_option("--color", options->color,
-                      "height (blue low to red high), depth (red near to blue far), rgb (the map's colours) or state "
+                      "height (blue low to red high), depth (red near to blue far), rgb (the map's colors) or state "
                       "(occupied cubes over free and unknown space); default depth for front and side views, state "
                       "for a slice, else height")
       ->check(CLI::IsMember({"height", "depth", "rgb", "state"}));
@@ -269,7 +269,7 @@ Command add_render_command(CLI::App& app) {
   command
       ->add_option("--min-z", options->min_z,
                    "a view draws only nodes reaching above this height (metres); auto: just above the floor, if the "
-                   "map has one (the default for a top view coloured by state); none: no cut")
+                   "map has one (the default for a top view colored by state); none: no cut")
       ->check(number_or("--min-z", "auto", "none"));
   command
       ->add_option("--max-z", options->max_z,

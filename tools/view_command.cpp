@@ -5,7 +5,7 @@
 // tools/viewer/package-lock.json, bundled at build time, so nothing is
 // fetched when the page opens). A build without node and npm has no page to
 // write: the command then says so. Cost: the layers (see viewer_data.hpp),
-// then one write of the page (about 2.3 base64 bytes per coloured occupied
+// then one write of the page (about 2.3 base64 bytes per colored occupied
 // node, 1-2 per free or unknown node; viewer_data.hpp).
 #include <cstdio>
 #include <filesystem>

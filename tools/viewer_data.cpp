@@ -16,7 +16,7 @@ namespace umbra::cli {
 namespace {
 
 constexpr std::array<ViewerState, 3> kStates{ViewerState::occupied, ViewerState::free, ViewerState::unknown};
-constexpr std::uint8_t kUncolouredGrey = 150;
+constexpr std::uint8_t kUncoloredGrey = 150;
 
 Predicate state_predicate(ViewerState state) {
   switch (state) {
@@ -64,7 +64,7 @@ std::vector<std::uint8_t> encode_layer(const OccupancyMap& map, const Predicate&
     entry.code = morton::encode(node.key.at_depth(depth));
     entry.depth = static_cast<std::uint8_t>(node.depth - depth);
     if (with_colors) {
-      const Rgb rgb = node.color.value_or(Rgb{kUncolouredGrey, kUncolouredGrey, kUncolouredGrey});
+      const Rgb rgb = node.color.value_or(Rgb{kUncoloredGrey, kUncoloredGrey, kUncoloredGrey});
       entry.rgb565 = {static_cast<std::uint8_t>(rgb.r >> 3), static_cast<std::uint8_t>(rgb.g >> 2),
                       static_cast<std::uint8_t>(rgb.b >> 3)};
     }

@@ -17,15 +17,15 @@
 //                 bit 2; each code minus the previous one (the first minus
 //                 0), 7 bits a byte, low bits first, high bit = more follows
 //   n bytes       node depth - d (the node's edge is 2^depth finest voxels)
-//   3 n bytes     occupied layers of maps with colour only: the colours in
-//                 5-6-5 bits (r >> 3, g >> 2, b >> 3; a node without a colour
+//   3 n bytes     occupied layers of maps with color only: the colors in
+//                 5-6-5 bits (r >> 3, g >> 2, b >> 3; a node without a color
 //                 is 150, 150, 150), red column, green, blue, each value
 //                 minus the previous one in its column, modulo 256
 // Codes of keys >> d fit 51 bits (17 per axis, as JavaScript numbers hold
 // 53 bits exactly) when d >= depth_levels - 17. Sorted codes, deltas and the
-// 5-6-5 colours make a layer compress to about 1.7 bytes per occupied
-// coloured node (4 mm TUM map, zlib level 9) where the previous format, six
-// 16-bit columns and 8-bit colours, took 3.7. The layer is compressed with
+// 5-6-5 colors make a layer compress to about 1.7 bytes per occupied
+// colored node (4 mm TUM map, zlib level 9) where the previous format, six
+// 16-bit columns and 8-bit colors, took 3.7. The layer is compressed with
 // zlib (the page inflates it with the browser's DecompressionStream
 // ("deflate")) and embedded as base64.
 //

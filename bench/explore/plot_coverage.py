@@ -16,7 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 LABELS = {"umbra": "umbra", "octomap": "OctoMap"}
-COLOURS = {"umbra": "#1f6fb4", "octomap": "#d1495b"}
+COLORS = {"umbra": "#1f6fb4", "octomap": "#d1495b"}
 
 
 def main():
@@ -32,7 +32,7 @@ def main():
     fig, ax = plt.subplots(figsize=(8, 4.5), dpi=120)
     for name in names:
         ax.plot(times, [float(r[f"{name}_coverage_percent"]) for r in rows], label=LABELS.get(name, name),
-                color=COLOURS.get(name), linewidth=2)
+                color=COLORS.get(name), linewidth=2)
     ax.axhline(95.0, color="grey", linestyle="--", linewidth=1)
     ax.text(times[-1], 95.5, "95%", ha="right", va="bottom", color="grey")
     ax.set_xlabel("simulated time (s)")

@@ -1,7 +1,7 @@
 // Depth images (umbra/map/depth_image.hpp): umbra.PinholeCamera,
 // umbra.back_project and OccupancyMap.insert_depth_image, with numpy
 // images: depth (H, W) as uint16 raw units (with depth_scale, units per
-// metre) or float metres, colours (H, W, 3) uint8, poses (4, 4) or (3, 4)
+// metre) or float metres, colors (H, W, 3) uint8, poses (4, 4) or (3, 4)
 // camera-to-map (the optical frame: x right, y down, z forward).
 //
 // As insert(), insertion converts the arguments with the GIL held, then
@@ -35,7 +35,7 @@ InsertStats insert_depth_image(OccupancyMap& map, py::handle depth_object, py::h
     py::gil_scoped_release released;
     return map.insert_depth_image(depth.view(), camera, pose, {}, options);
   }
-  if (!map.has_color()) throw py::value_error("colors given, but the map was made without colour (color=False)");
+  if (!map.has_color()) throw py::value_error("colors given, but the map was made without color (color=False)");
   const ColorArray colors = image_colors(colors_object, "colors", depth.height(), depth.width());
   py::gil_scoped_release released;
   return map.insert_depth_image(depth.view(), camera, pose, colors.span(), options);
@@ -102,7 +102,7 @@ void bind_depth(py::module_& m, MapClass& map) {
           "metre, e.g. 1000 for millimetres) or float metres (0, negative, NaN or infinite: no reading); camera a "
           "PinholeCamera or (fx, fy, cx, cy); pose (4, 4) or (3, 4) camera-to-map, a rotation and a translation "
           "(the optical frame: x right, y down, z forward); colors (H, W, 3) uint8, one per pixel (the map needs "
-          "colour). Returns InsertStats. integrator 'projective': free space from the image itself, a voxel cleared "
+          "color). Returns InsertStats. integrator 'projective': free space from the image itself, a voxel cleared "
           "when it lies more than surface_margin voxels in front of the reading it projects onto, hits from the "
           "image's points as 'discrete' gives them; any other integrator inserts back_project's points from the "
           "camera's position as insert() does. max_range <= 0: unlimited. threads: 0 for all cores.");

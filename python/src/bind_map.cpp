@@ -87,7 +87,7 @@ void bind_settings(MapClass& map) {
       .def_property_readonly(
           "half_extent", [](const OccupancyMap& m) { return m.grid().half_extent(); },
           "The map spans [-half_extent, half_extent) metres on every axis.")
-      .def_property_readonly("has_color", &OccupancyMap::has_color, "Whether the map keeps a colour per voxel.")
+      .def_property_readonly("has_color", &OccupancyMap::has_color, "Whether the map keeps a color per voxel.")
       .def_property("sensor_model", released(&OccupancyMap::sensor_model), released(&OccupancyMap::set_sensor_model),
                     "The SensorModel of future updates; setting it clamps stored values into its range.")
       .def_property("thresholds", released(&OccupancyMap::thresholds), released(&OccupancyMap::set_thresholds),
@@ -183,14 +183,14 @@ void bind_insertion_and_updates(MapClass& map) {
           "add_color",
           [](OccupancyMap& m, py::handle points, py::handle colors) {
             // The library says std::logic_error here (RuntimeError); insert() says invalid_argument.
-            if (!m.has_color()) throw py::value_error("the map was made without colour (MapConfig::color)");
+            if (!m.has_color()) throw py::value_error("the map was made without color (MapConfig::color)");
             const PointArray p(points, "points");
             const ColorArray c(colors, "colors");
             batch_count({{"points", std::optional(p.size())}, {"colors", std::optional(c.span().size())}});
             for_each_point(p, [&](std::size_t i) { m.add_color(p[i], c.span()[i]); });
           },
           py::arg("points"), py::arg("colors"),
-          "One more colour sample (N, 3) uint8 for the voxel of each point (running average).");
+          "One more color sample (N, 3) uint8 for the voxel of each point (running average).");
 }
 
 void bind_point_lookups(MapClass& map) {
@@ -277,7 +277,7 @@ MapClass bind_map(py::module_& m) {
           py::arg("sensor_model") = py::none(), py::arg("thresholds") = py::none(),
           "An empty map, everything unknown: finest voxels of resolution metres, depth_levels levels (1..21; the "
           "map spans [-resolution * 2**(depth_levels - 1), resolution * 2**(depth_levels - 1)) on every axis), a "
-          "colour per voxel when color, and a SensorModel and Thresholds (None: OctoMap's defaults).");
+          "color per voxel when color, and a SensorModel and Thresholds (None: OctoMap's defaults).");
   bind_settings(map);
   bind_insertion_and_updates(map);
   bind_point_lookups(map);

@@ -48,7 +48,7 @@ void bind_merge(py::module_& m, MapClass& map) {
           "Adds other's log-odds to this map's, voxel by voxel, clamped to this map's sensor model; voxels other "
           "never observed change nothing. offset (3 ints): other's voxel k lands on k + offset. transform ((4, 4) "
           "or (3, 4), other's frame to this map's, rigid): each voxel takes other's voxel its centre maps back "
-          "into. Colours average by their sample counts where both maps have colour. ValueError for other "
+          "into. Colors average by their sample counts where both maps have color. ValueError for other "
           "resolutions or depth levels, a transform that is not rigid, or both offset and transform; IndexError "
           "when a known voxel of other lands outside this map (the map is unchanged then). Returns MergeStats.");
 }

@@ -90,7 +90,7 @@ void bind_node(py::module_& m) {
       .def_readonly("contains_unknown", &Node::contains_unknown, "Some voxel in the node is unknown.")
       .def_readonly("has_children", &Node::has_children,
                     "The node has children in the map; a childless node's value holds for all its voxels.")
-      .def_property_readonly("color", color_of, "The (r, g, b) colour of a coloured node, else None.")
+      .def_property_readonly("color", color_of, "The (r, g, b) color of a colored node, else None.")
       .def_property_readonly(
           "min_corner", [](const Node& n) { return to_tuple(n.min_corner()); }, "Lowest corner in metres.")
       .def_property_readonly(

@@ -40,7 +40,7 @@ struct NodeRecord {
   bool contains_unknown;
   bool has_children;
   bool has_color;
-  std::uint8_t color[3];  ///< (0, 0, 0) without colour
+  std::uint8_t color[3];  ///< (0, 0, 0) without color
 };
 
 /// Writes the node into a row (all of it, padding included).

@@ -55,7 +55,7 @@ Array as_array(py::handle object, const char* name) {
   return converted(name, refusal, [&] { return Array(any); });
 }
 
-/// Integer colours of any integer dtype as a new uint8 array, each checked
+/// Integer colors of any integer dtype as a new uint8 array, each checked
 /// against [0, 255] as the integer it is (a uint64 above 2^63 is no
 /// negative number).
 template <typename Wide>
@@ -271,7 +271,7 @@ ColorArray image_colors(py::handle object, const char* name, int height, int wid
   py::array any = any_array(object, name, std::string(name) + " must be an array of integers in [0, 255]");
   if (any.ndim() != 3 || any.shape(0) != height || any.shape(1) != width || any.shape(2) != 3) {
     throw py::value_error(std::string(name) + " must be an array of shape (" + std::to_string(height) + ", " +
-                          std::to_string(width) + ", 3), one colour per pixel, got shape " + shape_text(any));
+                          std::to_string(width) + ", 3), one color per pixel, got shape " + shape_text(any));
   }
   return ColorArray(any.reshape({py::ssize_t(height) * width, py::ssize_t{3}}), name);
 }

@@ -119,7 +119,7 @@ class ScanPoints {
   std::size_t count_ = 0;
 };
 
-/// Colours, (N, 3) of integers in [0, 255] (uint8 is read in place).
+/// Colors, (N, 3) of integers in [0, 255] (uint8 is read in place).
 /// Throws ValueError for another shape or a value out of range (named as
 /// the integer it is, whatever its dtype), TypeError for a non-integer dtype.
 class ColorArray {
@@ -162,7 +162,7 @@ PinholeCamera camera_of(py::handle object, const char* name);
 /// 1), or a (3, 4) array [R | t] (ValueError otherwise).
 Pose pose_of(py::handle object, const char* name);
 
-/// Colours of an image, (H, W, 3) of integers in [0, 255] as ColorArray
+/// Colors of an image, (H, W, 3) of integers in [0, 255] as ColorArray
 /// reads them, one per pixel of an image of `height` x `width` (ValueError
 /// for another shape).
 ColorArray image_colors(py::handle object, const char* name, int height, int width);

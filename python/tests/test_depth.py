@@ -171,14 +171,14 @@ def test_other_integrators_insert_the_back_projected_points(integrator):
     assert image.leaves()["has_color"].any()
 
 
-def test_projective_colours_and_options():
+def test_projective_colors_and_options():
     pose = yawed(ALONG_X, 0.2)
     colors = np.zeros((HEIGHT, WIDTH, 3), dtype=np.uint8)
     colors[..., 0] = np.arange(WIDTH)[None, :] * 4
     colors[..., 1] = np.arange(HEIGHT)[:, None] * 5
     m = umbra.OccupancyMap(0.05, color=True)
     m.insert_depth_image(scene(), CAMERA, pose, colors)
-    # Occupied voxels carry the colours of their points, as the discrete integrator gives them.
+    # Occupied voxels carry the colors of their points, as the discrete integrator gives them.
     points, pixels = umbra.back_project(scene(), CAMERA, pose, return_pixels=True)
     discrete = umbra.OccupancyMap(0.05, color=True)
     discrete.insert(points, pose[:3, 3], colors.reshape(-1, 3)[pixels], integrator="discrete")
@@ -222,7 +222,7 @@ def test_projective_colours_and_options():
         (lambda m: m.insert_depth_image(wall(), CAMERA, ALONG_X * np.array([[2.0], [2.0], [2.0], [1.0]])), ValueError,
          "the camera pose must be a rotation and a translation"),
         (lambda m: m.insert_depth_image(wall(), CAMERA, ALONG_X, np.zeros((HEIGHT, WIDTH, 3), np.uint8)), ValueError,
-         "colors given, but the map was made without colour (color=False)"),
+         "colors given, but the map was made without color (color=False)"),
         (lambda m: m.insert_depth_image(wall(), CAMERA, ALONG_X, integrator="rays"), ValueError, "rays"),
         (lambda m: m.insert_depth_image(wall(), CAMERA, ALONG_X, surface_margin=-1.0), ValueError,
          "surface_margin must be finite and >= 0, got -1"),
@@ -239,9 +239,9 @@ def test_insertion_errors_name_the_argument(call, error, message):
     assert m.node_counts().total == 1, "the map is unchanged after an error"
 
 
-def test_colour_errors_name_the_argument():
+def test_color_errors_name_the_argument():
     m = umbra.OccupancyMap(0.1, color=True)
-    with pytest.raises(ValueError, match=r"colors must be an array of shape \(48, 64, 3\), one colour per pixel, "
+    with pytest.raises(ValueError, match=r"colors must be an array of shape \(48, 64, 3\), one color per pixel, "
                                          r"got shape \(48, 63, 3\)"):
         m.insert_depth_image(wall(), CAMERA, ALONG_X, np.zeros((HEIGHT, WIDTH - 1, 3), np.uint8))
     with pytest.raises(TypeError, match="colors must hold integers"):

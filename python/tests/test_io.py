@@ -97,7 +97,7 @@ def test_read_xyz(tmp_path):
     assert "cloud.xyz" in reader.name
 
 
-def test_read_coloured_ply(tmp_path):
+def test_read_colored_ply(tmp_path):
     rng = np.random.default_rng(4)
     points = rng.uniform(-5, 5, size=(50, 3)).astype(np.float32)
     colors = rng.integers(0, 256, size=(50, 3), dtype=np.uint8)
@@ -110,7 +110,7 @@ def test_read_coloured_ply(tmp_path):
     (origin, read, read_colors), = umbra.read_scans(str(path))
     np.testing.assert_array_equal(read, points)
     np.testing.assert_array_equal(read_colors, colors)
-    # Straight into a coloured map.
+    # Straight into a colored map.
     m = umbra.OccupancyMap(0.1, color=True)
     m.insert(read, origin, read_colors)
     assert m.nodes(read)["has_color"].all()
@@ -129,7 +129,7 @@ def test_read_errors(tmp_path):
     with pytest.raises(ValueError):
         umbra.read_scans(tmp_path / "cloud.abc")
     with pytest.raises(TypeError):
-        umbra.read_scans(bad, colour=True)  # not a reader option
+        umbra.read_scans(bad, color=True)  # not a reader option
 
 
 def test_read_the_3dtk_graph(shared_data):

@@ -20,7 +20,7 @@ def logit(p):
 
 
 def leaves_equal(a, b):
-    """Same leaves in the same order: keys, depths, log-odds bit for bit, colours."""
+    """Same leaves in the same order: keys, depths, log-odds bit for bit, colors."""
     la, lb = a.leaves(), b.leaves()
     assert len(la) == len(lb)
     for field in ("key", "depth", "log_odds", "state", "has_color", "color"):
@@ -199,7 +199,7 @@ def test_insert_stats_and_input_dtypes():
     leaves_equal(m32, m64)
 
 
-def test_insertion_with_colours_averages_per_voxel():
+def test_insertion_with_colors_averages_per_voxel():
     m = umbra.OccupancyMap(0.1, color=True)
     # Three points in voxel (1.05, 0.05, 0.05), one in (2.05, 0.05, 0.05); sensor at the origin.
     points = np.array([[1.01, 0.01, 0.01], [1.02, 0.02, 0.02], [1.03, 0.03, 0.03], [2.05, 0.05, 0.05]])
@@ -209,10 +209,10 @@ def test_insertion_with_colours_averages_per_voxel():
     assert nodes["has_color"].all()
     np.testing.assert_array_equal(nodes["color"][0], [60, 90, 120])
     np.testing.assert_array_equal(nodes["color"][3], [1, 2, 3])
-    # A voxel passed by rays only has no colour.
+    # A voxel passed by rays only has no color.
     assert not m.nodes([[0.55, 0.05, 0.05]])["has_color"][0]
 
-    # Integer colours of another dtype are accepted when in range.
+    # Integer colors of another dtype are accepted when in range.
     m.insert(points[:1], (0.05, 0.05, 0.05), colors[:1].astype(np.int64))
 
 
@@ -226,7 +226,7 @@ def test_insertion_with_colours_averages_per_voxel():
         (lambda m: m.insert(np.zeros((4, 3)), (0, 0, 0), threads=-2), ValueError, "threads must be >= 0"),
         (lambda m: m.insert(np.zeros((4, 3)), (1e9, 0, 0)), IndexError, "outside the map"),
         (lambda m: m.insert(np.zeros((4, 3)), (np.nan, 0, 0)), ValueError, "origin"),
-        (lambda m: m.insert(np.zeros((2, 3)), (0, 0, 0), np.zeros((2, 3), dtype=np.uint8)), ValueError, "made without colour"),
+        (lambda m: m.insert(np.zeros((2, 3)), (0, 0, 0), np.zeros((2, 3), dtype=np.uint8)), ValueError, "made without color"),
         (lambda m: m.insert("points", (0, 0, 0)), TypeError, "points must be an array of numbers"),
         (lambda m: m.insert(np.zeros((4, 3), dtype=np.complex128), (0, 0, 0)), TypeError,
          "points must hold real numbers, got dtype complex128"),
@@ -244,7 +244,7 @@ def test_insertion_errors(call, error, message):
     assert m.node_counts().total == 1, "the map is unchanged after an error"
 
 
-def test_colour_errors():
+def test_color_errors():
     m = umbra.OccupancyMap(0.1, color=True)
     points = np.zeros((2, 3))
     with pytest.raises(TypeError, match="colors must hold integers"):
@@ -310,7 +310,7 @@ def test_add_color_averages():
     p = np.array([[0.05, 0.05, 0.05], [0.05, 0.05, 0.05]])
     m.add_color(p, np.array([[10, 20, 30], [30, 40, 50]], dtype=np.uint8))
     np.testing.assert_array_equal(m.nodes(p[:1])["color"][0], [20, 30, 40])
-    with pytest.raises(ValueError, match="the map was made without colour"):
+    with pytest.raises(ValueError, match="the map was made without color"):
         umbra.OccupancyMap(0.1).add_color(p, np.zeros((2, 3), dtype=np.uint8))
 
 

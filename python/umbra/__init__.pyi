@@ -66,7 +66,7 @@ class Node:
         """The node has children in the map; a childless node's value holds for all its voxels."""
     @property
     def color(self) -> Optional[Tuple[int, int, int]]:
-        """The (r, g, b) colour of a coloured node, else None."""
+        """The (r, g, b) color of a colored node, else None."""
     @property
     def min_corner(self) -> Vec3:
         """Lowest corner in metres."""
@@ -389,7 +389,7 @@ class OccupancyMap:
         sensor_model: Optional[SensorModel] = None,
         thresholds: Optional[Thresholds] = None,
     ) -> None:
-        """An empty map, everything unknown: finest voxels of resolution metres, depth_levels levels (1..21; the map spans [-resolution * 2**(depth_levels - 1), resolution * 2**(depth_levels - 1)) on every axis), a colour per voxel when color, and a SensorModel and Thresholds (None: OctoMap's defaults)."""
+        """An empty map, everything unknown: finest voxels of resolution metres, depth_levels levels (1..21; the map spans [-resolution * 2**(depth_levels - 1), resolution * 2**(depth_levels - 1)) on every axis), a color per voxel when color, and a SensorModel and Thresholds (None: OctoMap's defaults)."""
     @property
     def resolution(self) -> float:
         """Edge of a finest voxel, metres."""
@@ -401,7 +401,7 @@ class OccupancyMap:
         """The map spans [-half_extent, half_extent) metres on every axis."""
     @property
     def has_color(self) -> bool:
-        """Whether the map keeps a colour per voxel."""
+        """Whether the map keeps a color per voxel."""
     @property
     def sensor_model(self) -> SensorModel:
         """The SensorModel of future updates; setting it clamps stored values into its range."""
@@ -457,7 +457,7 @@ class OccupancyMap:
         offset: Optional[Sequence[int]] = None,
         transform: Optional[ArrayLike] = None,
     ) -> MergeStats:
-        """Adds other's log-odds to this map's, voxel by voxel, clamped to this map's sensor model; voxels other never observed change nothing. offset (3 ints): other's voxel k lands on k + offset. transform ((4, 4) or (3, 4), other's frame to this map's, rigid): each voxel takes other's voxel its centre maps back into. Colours average by their sample counts where both maps have colour. ValueError for other resolutions or depth levels, a transform that is not rigid, or both offset and transform; IndexError when a known voxel of other lands outside this map (the map is unchanged then). Returns MergeStats."""
+        """Adds other's log-odds to this map's, voxel by voxel, clamped to this map's sensor model; voxels other never observed change nothing. offset (3 ints): other's voxel k lands on k + offset. transform ((4, 4) or (3, 4), other's frame to this map's, rigid): each voxel takes other's voxel its centre maps back into. Colors average by their sample counts where both maps have color. ValueError for other resolutions or depth levels, a transform that is not rigid, or both offset and transform; IndexError when a known voxel of other lands outside this map (the map is unchanged then). Returns MergeStats."""
 
     # --- inserting and changing voxels
     def insert(
@@ -489,7 +489,7 @@ class OccupancyMap:
         fine_steps: int = 2,
         threads: int = 0,
     ) -> InsertStats:
-        """Integrates one depth image taken from pose: depth (H, W) uint16 raw units (depth_scale units per metre, e.g. 1000 for millimetres) or float metres (0, negative, NaN or infinite: no reading); camera a PinholeCamera or (fx, fy, cx, cy); pose (4, 4) or (3, 4) camera-to-map, a rotation and a translation (the optical frame: x right, y down, z forward); colors (H, W, 3) uint8, one per pixel (the map needs colour). Returns InsertStats. integrator 'projective': free space from the image itself, a voxel cleared when it lies more than surface_margin voxels in front of the reading it projects onto, hits from the image's points as 'discrete' gives them; any other integrator inserts back_project's points from the camera's position as insert() does. max_range <= 0: unlimited. threads: 0 for all cores."""
+        """Integrates one depth image taken from pose: depth (H, W) uint16 raw units (depth_scale units per metre, e.g. 1000 for millimetres) or float metres (0, negative, NaN or infinite: no reading); camera a PinholeCamera or (fx, fy, cx, cy); pose (4, 4) or (3, 4) camera-to-map, a rotation and a translation (the optical frame: x right, y down, z forward); colors (H, W, 3) uint8, one per pixel (the map needs color). Returns InsertStats. integrator 'projective': free space from the image itself, a voxel cleared when it lies more than surface_margin voxels in front of the reading it projects onto, hits from the image's points as 'discrete' gives them; any other integrator inserts back_project's points from the camera's position as insert() does. max_range <= 0: unlimited. threads: 0 for all cores."""
     def update_hit(self, points: ArrayLike) -> None:
         """One hit for the voxel of each point (..., 3)."""
     def update_miss(self, points: ArrayLike) -> None:
@@ -499,7 +499,7 @@ class OccupancyMap:
     def set_log_odds(self, points: ArrayLike, values: ArrayLike) -> None:
         """Sets the voxels' log-odds (clamped) to values (N,) or one number."""
     def add_color(self, points: ArrayLike, colors: ArrayLike) -> None:
-        """One more colour sample (N, 3) uint8 for the voxel of each point (running average)."""
+        """One more color sample (N, 3) uint8 for the voxel of each point (running average)."""
 
     # --- reading the nodes that hold points
     def states(self, points: ArrayLike, depth: int = 0) -> NDArray[np.uint8]:

@@ -27,7 +27,7 @@ RigidTransform to_rigid_transform(const geometry_msgs::Transform& transform);
 /// and launch files).
 std::string tf2_frame(const std::string& frame);
 
-/// Decodes `cloud` into `scan` (points, and colours when `want_colors` and the cloud has rgb) in the map
+/// Decodes `cloud` into `scan` (points, and colors when `want_colors` and the cloud has rgb) in the map
 /// frame. `decoded` is scratch space kept by the caller; returns the number of NaN/infinite points (kept in
 /// the scan: the integrator skips and counts them). Errors: FormatError "NAME: what is wrong".
 std::size_t cloud_to_scan(const PointCloud2View& cloud, const RigidTransform& sensor_to_map, bool want_colors,

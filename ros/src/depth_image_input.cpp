@@ -7,7 +7,7 @@ namespace umbra::ros_io {
 namespace {
 
 constexpr std::uint32_t kImageQueue = 5;  // depth images waiting for their transform, as the clouds
-/// Messages each synchronizer keeps per topic: CameraInfos and colour images arrive while their depth image
+/// Messages each synchronizer keeps per topic: CameraInfos and color images arrive while their depth image
 /// still waits for its transform.
 constexpr std::uint32_t kMatchQueue = 10;
 constexpr double kMatchingCheckSeconds = 10.0;
@@ -73,7 +73,7 @@ std::string DepthImageInput::describe(Drop why) const {
 
 std::string DepthImageInput::topics() const {
   std::string text = "'" + depth_subscriber_.getTopic() + "' with '" + info_subscriber_.getTopic() + "'";
-  if (nearest_) text += " and colours from '" + color_subscriber_.getTopic() + "'";
+  if (nearest_) text += " and colors from '" + color_subscriber_.getTopic() + "'";
   return text;
 }
 
@@ -85,7 +85,7 @@ void DepthImageInput::matched(const sensor_msgs::Image::ConstPtr& depth, const s
 
 void DepthImageInput::check_matching(const ros::WallTimerEvent&) {
   if (depth_count_ > 0 && matched_count_ == 0) {
-    const std::string colors = nearest_ ? ", " + std::to_string(color_count_) + " colour images on '" +
+    const std::string colors = nearest_ ? ", " + std::to_string(color_count_) + " color images on '" +
                                               color_subscriber_.getTopic() + "'"
                                         : std::string();
     ROS_WARN("umbra_server: in the last %.0f s %zu depth images came on '%s', %zu CameraInfo on '%s'%s, but no depth "

@@ -1,5 +1,5 @@
 // DepthImageInput: the depth images umbra_server subscribes to, each handed
-// on with its CameraInfo (and its colour image) once tf2 can place it.
+// on with its CameraInfo (and its color image) once tf2 can place it.
 //
 // Topics:
 //   depth/image        sensor_msgs/Image, 16UC1 or 32FC1 (image_message.hpp)
@@ -8,14 +8,14 @@
 //                      rule, so that remapping the image alone,
 //                      depth/image:=/camera/depth/image_rect_raw, finds
 //                      /camera/depth/camera_info as depth_image_proc does
-//   rgb/image          sensor_msgs/Image, rgb8 / bgr8 (only with colours on)
+//   rgb/image          sensor_msgs/Image, rgb8 / bgr8 (only with colors on)
 // A depth image waits in a tf2 message filter (queue of 5, as the clouds)
 // until the transform from its frame to the map frame at its stamp is
 // known; then it is matched with the CameraInfo of the same stamp
 // (message_filters' ExactTime, as image_transport's CameraSubscriber pairs
-// them) or, with colours, with the CameraInfo and the colour image nearest
+// them) or, with colors, with the CameraInfo and the color image nearest
 // in time (ApproximateTime, as depth_image_proc's point_cloud_xyzrgb pairs
-// colour and depth: drivers stamp the two streams separately). An image
+// color and depth: drivers stamp the two streams separately). An image
 // tf2 drops (no frame_id, or no transform while 5 newer images came) and an
 // image without a CameraInfo of its stamp (dropped by ExactTime once a newer
 // image is matched, or 10 newer ones wait) go to the `dropped` callback
@@ -45,7 +45,7 @@ namespace umbra::ros_io {
 
 class DepthImageInput {
  public:
-  /// Receives a depth image, its CameraInfo and its colour image (null without colours).
+  /// Receives a depth image, its CameraInfo and its color image (null without colors).
   using Callback = std::function<void(const sensor_msgs::Image::ConstPtr& depth,
                                       const sensor_msgs::CameraInfo::ConstPtr& info,
                                       const sensor_msgs::Image::ConstPtr& color)>;
@@ -62,7 +62,7 @@ class DepthImageInput {
   /// The reason in words ("tf2 had no transform from its frame to the map frame at its stamp").
   [[nodiscard]] std::string describe(Drop why) const;
 
-  /// The resolved topics, for the start-up line: "'/depth/image' with '/depth/camera_info'" (and the colour images').
+  /// The resolved topics, for the start-up line: "'/depth/image' with '/depth/camera_info'" (and the color images').
   [[nodiscard]] std::string topics() const;
 
   /// Depth images received since the start.

@@ -139,14 +139,14 @@ void decode_color_image(const sensor_msgs::Image& image, int width, int height, 
   const bool rgb = encoding == "rgb8" || encoding == "rgba8";
   const bool bgr = encoding == "bgr8" || encoding == "bgra8";
   if (!rgb && !bgr) {
-    throw FormatError(name, "colour image has encoding '" + encoding + "'; umbra reads rgb8, bgr8, rgba8 and bgra8");
+    throw FormatError(name, "color image has encoding '" + encoding + "'; umbra reads rgb8, bgr8, rgba8 and bgra8");
   }
   const std::uint32_t channels = encoding.size() == 5 ? 4 : 3;  // "rgba8", "bgra8"
-  check_layout(image, channels, "colour image", name);
+  check_layout(image, channels, "color image", name);
   if (image.width != std::uint32_t(width) || image.height != std::uint32_t(height)) {
-    throw FormatError(name, "colour image is " + size_text(image.width, image.height) +
+    throw FormatError(name, "color image is " + size_text(image.width, image.height) +
                                 " pixels, the depth image " + size_text(std::uint64_t(width), std::uint64_t(height)) +
-                                "; umbra needs a colour image registered to the depth image, pixel for pixel");
+                                "; umbra needs a color image registered to the depth image, pixel for pixel");
   }
   colors.resize(std::size_t{image.width} * image.height);
   std::size_t index = 0;

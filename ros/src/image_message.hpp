@@ -1,7 +1,7 @@
 // ROS depth images to umbra: a sensor_msgs/Image of depths with its
-// sensor_msgs/CameraInfo (and, optionally, a colour image registered to it)
+// sensor_msgs/CameraInfo (and, optionally, a color image registered to it)
 // become what OccupancyMap::insert_depth_image takes: a DepthImage, a
-// PinholeCamera and one colour per pixel.
+// PinholeCamera and one color per pixel.
 //
 // Depth encodings (REP 118): 16UC1, unsigned millimetres, 0 = no reading;
 // 32FC1, float metres, NaN (or 0, a negative value, infinity) = no reading.
@@ -15,14 +15,14 @@
 // roi.height, or width x height without a region, divided by the binning).
 // The image must be rectified: the distortion D is not applied.
 //
-// Colour encodings: rgb8, bgr8, rgba8, bgra8 (alpha ignored), the same size
+// Color encodings: rgb8, bgr8, rgba8, bgra8 (alpha ignored), the same size
 // as the depth image (registered to it, pixel for pixel, as a driver's
 // aligned or registered depth is).
 //
 // Errors throw umbra::FormatError "NAME: what is wrong" naming the image
 // (e.g. "depth image in frame 'camera' at 12.300000"): another encoding, no
 // pixels, a step shorter than a row, data shorter than its rows, an image
-// of another size than its CameraInfo (or its colour image) describes, a
+// of another size than its CameraInfo (or its color image) describes, a
 // CameraInfo without a calibration (fx or fy not finite and > 0).
 //
 // Cost: one copy of the pixels (into vectors kept by the caller, so that no
@@ -60,7 +60,7 @@ void decode_depth_image(const sensor_msgs::Image& image, DecodedDepthImage& out,
 PinholeCamera camera_of(const sensor_msgs::CameraInfo& info, int width, int height, const std::string& name);
 
 /// Decodes an rgb8 / bgr8 / rgba8 / bgra8 image of width x height pixels
-/// into one colour per pixel, row by row (`colors` is reused).
+/// into one color per pixel, row by row (`colors` is reused).
 void decode_color_image(const sensor_msgs::Image& image, int width, int height, std::vector<Rgb>& colors,
                         const std::string& name);
 

@@ -10,7 +10,7 @@
 namespace umbra::ros_io {
 namespace {
 
-/// A fully saturated, fully bright colour of hue `h` (0..1 around the colour wheel).
+/// A fully saturated, fully bright color of hue `h` (0..1 around the color wheel).
 std_msgs::ColorRGBA hue_color(double h) {
   const double sector = std::clamp(h, 0.0, 1.0) * 6.0;
   const int i = std::min(static_cast<int>(sector), 5);

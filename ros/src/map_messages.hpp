@@ -7,8 +7,8 @@
 // one CUBE_LIST marker per OctoMap depth 0..16 (id = depth, namespace
 // "map"), cube edge = the node size at that depth, action ADD when it holds
 // cubes and DELETE when empty (so stale cubes disappear); occupied cells are
-// coloured by height (a hue over the cells' z range, scaled by
-// color_factor) or with one colour. Cells whose centre z is outside
+// colored by height (a hue over the cells' z range, scaled by
+// color_factor) or with one color. Cells whose centre z is outside
 // (min_z, max_z) are left out of markers and centres (not of the map).
 //
 // Cost: one pass over the map's leaves for the cells; encoding a tree
@@ -39,7 +39,7 @@ OccupancyMap map_from_message(const octomap_msgs::Octomap& message, const std::s
 struct CellStyle {
   double min_z = -std::numeric_limits<double>::infinity();  ///< occupancy_min_z
   double max_z = std::numeric_limits<double>::infinity();   ///< occupancy_max_z
-  bool height_map = true;                                   ///< colour occupied cells by height
+  bool height_map = true;                                   ///< color occupied cells by height
   double color_factor = 0.8;                                ///< hue range used by the height map
   std_msgs::ColorRGBA color;                                ///< occupied cells without height map
   std_msgs::ColorRGBA free_color;                           ///< free cells

@@ -124,7 +124,7 @@ void MapServer::insert_cloud(const sensor_msgs::PointCloud2::ConstPtr& cloud) {
     if (cloud_frame != settings_.frame) {
       to_map = to_rigid_transform(tf_buffer_.lookupTransform(settings_.frame, cloud_frame, cloud->header.stamp).transform);
     }
-    // Colours only when the map keeps them: otherwise the rgb field is not even looked at.
+    // Colors only when the map keeps them: otherwise the rgb field is not even looked at.
     const std::size_t non_finite = cloud_to_scan(*cloud, to_map, settings_.color, decoded_, scan_, name);
     const std::size_t total = scan_.points.size();
     if (std::isfinite(settings_.pointcloud_min_z) || std::isfinite(settings_.pointcloud_max_z)) {

@@ -105,8 +105,8 @@ ServerSettings read_settings(const ros::NodeHandle& node) {
   check("~image_max_range", [&] { s.image_insert.validate(16); });
   s.image_colors = param(node, "image_colors", s.image_colors);
   if (s.image_colors && !s.color) {
-    throw std::invalid_argument("bad parameter ~image_colors: true needs ~keep_colors true (a map without colour "
-                                "cannot take the colour images)");
+    throw std::invalid_argument("bad parameter ~image_colors: true needs ~keep_colors true (a map without color "
+                                "cannot take the color images)");
   }
 
   // Decay toward unknown (off by default).

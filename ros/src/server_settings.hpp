@@ -17,7 +17,7 @@
 // rgb; then the full map is a ColorOcTree); for depth images (the topics
 // depth/image and depth/camera_info): image_integrator (projective by
 // default: free space from the image itself), image_max_range (default:
-// sensor_model/max_range), image_colors (colour the voxels from rgb/image);
+// sensor_model/max_range), image_colors (color the voxels from rgb/image);
 // for the projected map: projected_map_rule (any_free, octomap_server's, by
 // default; or all_known) and projected_map_depth (0: cells of one voxel).
 // Decay toward unknown: decay/occupied_per_second, decay/free_per_second
@@ -56,7 +56,7 @@ struct ServerSettings {
   InsertOptions insert;  ///< clouds: max_range from sensor_model/max_range; integrator, clear_depth, ...
   /// Depth images: integrator from image_integrator, max_range from image_max_range, the rest as `insert`.
   InsertOptions image_insert;
-  bool image_colors = false;  ///< image_colors: colours from rgb/image (needs keep_colors)
+  bool image_colors = false;  ///< image_colors: colors from rgb/image (needs keep_colors)
   // --- decay toward unknown ---
   DecayRates decay;  ///< decay/{occupied,free}_per_second; off by default
 

@@ -1,4 +1,4 @@
-// Colour samples: the colours a scan's points add to the map (after its
+// Color samples: the colors a scan's points add to the map (after its
 // occupancy update, OccupancyTree::add_colors).
 //
 // The points that give a hit, stably sorted by voxel, so that each voxel
@@ -11,7 +11,7 @@
 // of the scan; their stable sort (parallel_radix_sort); the hit decisions
 // over parts of the sorted samples that begin at a voxel's first sample.
 // Serially these steps were 2% of the one-thread time of the TUM frames at
-// 4 mm with colour (fast integrator), which two threads could not share.
+// 4 mm with color (fast integrator), which two threads could not share.
 #pragma once
 
 #include <optional>
@@ -26,7 +26,7 @@
 
 namespace umbra {
 
-/// The colour samples of a scan from `origin` (one colour per point), of the
+/// The color samples of a scan from `origin` (one color per point), of the
 /// points inside `box` (when given); `pool`: null for one thread. `codes`:
 /// the points' voxel codes (voxel_codes) when the caller has them, or empty.
 std::vector<OccupancyTree::ColorSample> color_samples(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,

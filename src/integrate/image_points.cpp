@@ -94,11 +94,11 @@ void ImagePoints::build(const Grid& grid, const DepthImage& depth, const Pinhole
   }
   points_.resize(total);
   pixels_.resize(total);
-  // The codes are kept for the colours only (2.5 MB for a Kinect frame).
+  // The codes are kept for the colors only (2.5 MB for a Kinect frame).
   codes_.resize(colors.empty() ? 0 : total);
   colors_.resize(colors.empty() ? 0 : total);
 
-  // 2. The bands' points, codes, colours and candidate voxels, with
+  // 2. The bands' points, codes, colors and candidate voxels, with
   //    `alongside` as the first task (it starts first).
   const auto band_work = [&](std::size_t task) {
     if (task == 0) {

@@ -3,7 +3,7 @@
 //
 // A depth image's points are needed by every integrator (as a point cloud)
 // and by the projective integrator for its hits (the voxels holding a
-// point, each once) and colours. Done on one thread this front end was a
+// point, each once) and colors. Done on one thread this front end was a
 // third of a TUM frame's insertion at 2 cm and capped two threads at 1.2x
 // one on a 16-core machine, so the image is cut into bands of rows, each
 // band back-projected, its points' voxel codes computed and its candidate
@@ -48,7 +48,7 @@ void back_project_rows(const DepthImage& depth, const PinholeCamera& camera, con
 class ImagePoints {
  public:
   /// Finds the points of `depth` (as back_project gives them), their voxel
-  /// codes, their colours (one per point, from `colors`: empty or one per
+  /// codes, their colors (one per point, from `colors`: empty or one per
   /// pixel) and the voxels they fall in; on `pool`'s workers when given.
   /// `alongside` runs on one worker meanwhile (work that needs the image but
   /// not its points).
@@ -59,7 +59,7 @@ class ImagePoints {
   [[nodiscard]] std::span<const std::uint32_t> pixels() const { return pixels_; }
   [[nodiscard]] std::span<const Rgb> colors() const { return colors_; }
   /// Each point's voxel code (kNonFiniteCode, kOutsideCode: none) when
-  /// colours were given (for their samples), else empty.
+  /// colors were given (for their samples), else empty.
   [[nodiscard]] std::span<const std::uint64_t> codes() const { return codes_; }
   /// Calls visit(code) for each voxel that holds a point, in increasing
   /// code order, each once (a merge of the bands' sorted voxels: run it

@@ -167,10 +167,10 @@ InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f
   discard();
   options.validate(grid.depth_levels());
   if (!colors.empty() && colors.size() != points.size()) {
-    throw std::invalid_argument("one colour per point expected: " + std::to_string(colors.size()) + " colours, " +
+    throw std::invalid_argument("one color per point expected: " + std::to_string(colors.size()) + " colors, " +
                                 std::to_string(points.size()) + " points");
   }
-  if (!colors.empty() && !tree.has_color()) throw std::invalid_argument("colours given to a map without colour");
+  if (!colors.empty() && !tree.has_color()) throw std::invalid_argument("colors given to a map without color");
   if (!origin.is_finite()) {
     throw std::invalid_argument("sensor origin is not finite: (" + std::to_string(origin.x) + ", " +
                                 std::to_string(origin.y) + ", " + std::to_string(origin.z) + ")");
@@ -352,10 +352,10 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   options.validate(grid.depth_levels());
   camera.validate();
   if (!colors.empty() && colors.size() != image.pixel_count()) {
-    throw std::invalid_argument("one colour per pixel expected: " + std::to_string(colors.size()) + " colours, " +
+    throw std::invalid_argument("one color per pixel expected: " + std::to_string(colors.size()) + " colors, " +
                                 std::to_string(image.pixel_count()) + " pixels");
   }
-  if (!colors.empty() && !tree.has_color()) throw std::invalid_argument("colours given to a map without colour");
+  if (!colors.empty() && !tree.has_color()) throw std::invalid_argument("colors given to a map without color");
   if (!pose.is_rigid()) {
     throw std::invalid_argument("the camera pose must be a rotation and a translation (an orthonormal 3x3 part with "
                                 "determinant 1, all finite)");
@@ -388,7 +388,7 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   stats.threads = threads > 1 ? pool_->size() : 1;
   for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
   // The hits (the discrete integrator's: the voxels holding a point) and the
-  // colour samples are side jobs, each on one worker while the others trace
+  // color samples are side jobs, each on one worker while the others trace
   // misses (serial, but off the critical path). A depth image's rays are as
   // dense as its pixels: the rule alone decides its misses, known obstacles
   // included (projective_frame.hpp).
@@ -412,7 +412,7 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
 void Integrator::queue_end_voxel_colors(const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
                                         std::span<const Rgb> colors, std::span<const std::uint64_t> codes,
                                         const InsertOptions& options, const std::optional<KeyBox>& box_keys) {
-  // The projective integrator's hits are the discrete integrator's: so are its colours.
+  // The projective integrator's hits are the discrete integrator's: so are its colors.
   InsertOptions discrete = options;
   discrete.integrator = IntegratorKind::discrete;
   pending_colors_ = color_samples(grid, origin, points, colors, discrete, box_keys, nullptr, codes);
@@ -429,7 +429,7 @@ InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const G
   ensure_workers(threads);
   stats.threads = threads > 1 ? pool_->size() : 1;
   for (unsigned w = 0; w < threads; ++w) tracers_[w]->start(grid.depth_levels());
-  // The hits and the colour samples are side jobs, each on one worker while
+  // The hits and the color samples are side jobs, each on one worker while
   // the others trace misses.
   const auto side_job = [&](std::size_t job, UpdateBatch& batch) {
     if (job == 0) {

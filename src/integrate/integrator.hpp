@@ -26,7 +26,7 @@
 // (begin and end move towards each other; a clipped end gives no hit), and
 // only voxels in the box change; points outside still clear space inside.
 //
-// Colours: every point that gives a hit adds its colour to its voxel (for the
+// Colors: every point that gives a hit adds its color to its voxel (for the
 // discrete and fast integrators: every point of an end voxel whose ray gives
 // a hit).
 //
@@ -73,7 +73,7 @@ class Integrator {
 
   /// Traces one scan against `tree` (which it only reads: queries may run
   /// meanwhile) into the pending update; apply() then writes it. `colors` is
-  /// empty or holds one colour per point (the tree must have colour then).
+  /// empty or holds one color per point (the tree must have color then).
   /// `box`: clip rays to it. Throws std::invalid_argument for a non-finite
   /// origin or bad options and std::out_of_range for an origin outside the
   /// map; nothing is pending then.
@@ -81,12 +81,12 @@ class Integrator {
                     std::span<const Rgb> colors, const InsertOptions& options,
                     const std::optional<Aabb>& box = std::nullopt);
   /// The same for a depth image taken from `pose` (camera to map) with
-  /// `camera`; `colors` is empty or holds one colour per pixel. The
+  /// `camera`; `colors` is empty or holds one color per pixel. The
   /// projective integrator takes its misses from the image
   /// (projective_tracer.hpp) and its hits from the image's points, as the
   /// discrete integrator would; the other integrators get the points
   /// (back_project). Throws as trace(), and std::invalid_argument for bad
-  /// intrinsics, a pose that is not rigid or a colour count that is not the
+  /// intrinsics, a pose that is not rigid or a color count that is not the
   /// pixel count.
   InsertStats trace_image(const OccupancyTree& tree, const Grid& grid, const DepthImage& image,
                           const PinholeCamera& camera, const Pose& pose, std::span<const Rgb> colors,
@@ -104,7 +104,7 @@ class Integrator {
 
  private:
   void ensure_workers(unsigned threads);
-  /// Colour samples of the end voxels, as the discrete integrator takes
+  /// Color samples of the end voxels, as the discrete integrator takes
   /// them, for the next apply (on this thread). `codes`: the points' voxel
   /// codes, or empty.
   void queue_end_voxel_colors(const Grid& grid, Vec3f origin, std::span<const Vec3f> points, std::span<const Rgb> colors,
@@ -119,7 +119,7 @@ class Integrator {
   /// batches (merged into tracers_[0]'s); with `tree`, its obstacles are
   /// cleared only where the frames' rays cross them. side_job(0 ..
   /// side_jobs - 1, a batch) run first, each on one worker while the others
-  /// trace (the hits, into that worker's batch, and the colours).
+  /// trace (the hits, into that worker's batch, and the colors).
   void trace_projective_misses(const OccupancyTree* tree, const Grid& grid, const InsertOptions& options,
                                const std::optional<KeyBox>& box_keys, std::span<const ProjectiveFrame> frames,
                                unsigned threads, std::size_t side_jobs,

@@ -32,7 +32,7 @@
 // seeing: at the image's edges and around pixels without readings, whose
 // cones run from the camera to the surface. Voxel by voxel those borders
 // cost the map a leaf group per few voxels of their area: at 4 mm the ten
-// TUM frames' map held 75 million nodes (794 MiB with colour), three times
+// TUM frames' map held 75 million nodes (794 MiB with color), three times
 // the map with whole bricks. At 5 mm and finer a brick (2 cm and less) is
 // seen whole or not at all; at coarser resolutions the borders stay exact
 // (a brick of 8 cm at 2 cm would leave 7% of the simple integrator's free

@@ -24,7 +24,7 @@ class CropCopy {
     const bool whole = inside == std::uint64_t{1} << (3 * depth);
     const bool source_split = from_.has_children(source);
     if (!source_split) {
-      if (is_blank(source)) return;  // unknown and uncoloured: what the new tree holds already
+      if (is_blank(source)) return;  // unknown and uncolored: what the new tree holds already
       if (whole) {
         to_.set_childless_value(target, from_.log_odds(source));
         if (from_.has_color()) {

@@ -36,10 +36,10 @@ struct SourceNode {
   int depth;
   float log_odds;
   Rgb rgb;
-  std::uint8_t weight;  // colour samples behind rgb, 0: no colour
+  std::uint8_t weight;  // color samples behind rgb, 0: no color
 };
 
-/// A colour for one finest voxel of this map.
+/// A color for one finest voxel of this map.
 struct ColorDelta {
   std::uint64_t code;
   Rgb rgb;
@@ -76,7 +76,7 @@ std::vector<SourceNode> known_nodes(const OccupancyTree& tree) {
   tree.for_each_leaf([&](NodeRef node, std::uint64_t code) {
     const float value = tree.log_odds(node);
     if (value == 0.0f) return;  // never observed: adds nothing
-    const std::uint8_t weight = tree.color_weight(node);  // 0 without colour
+    const std::uint8_t weight = tree.color_weight(node);  // 0 without color
     nodes.push_back({morton::decode(code), node.depth, value, weight != 0 ? *tree.color(node) : Rgb{}, weight});
   });
   return nodes;
@@ -149,7 +149,7 @@ MergePlan plan_offset(const std::vector<SourceNode>& nodes, const Grid& grid, Vo
     }
     plan.voxels += std::uint64_t(size * size * size);
     if (colors && node.weight != 0) {
-      // Colour lives on voxels: every voxel of the landed cube.
+      // Color lives on voxels: every voxel of the landed cube.
       for (std::size_t i = before; i < plan.regions.size(); ++i) {
         const NodeDelta& region = plan.regions[i];
         const std::uint64_t count = std::uint64_t{1} << (3 * region.depth);
@@ -275,7 +275,7 @@ void coarsen(std::vector<NodeDelta>& regions) {
   regions.swap(out);
 }
 
-/// The weighted average of a voxel's colour and the other map's.
+/// The weighted average of a voxel's color and the other map's.
 std::pair<Rgb, std::uint8_t> blend_colors(std::optional<Rgb> own, std::uint8_t own_weight, Rgb add,
                                           std::uint8_t add_weight) {
   if (!own || own_weight == 0) return {add, add_weight};

@@ -3,7 +3,7 @@
 // largest first key of a known node on each axis, turned into metres once at
 // the end with Grid::min_corner's own arithmetic (rounding is monotonic, so
 // the bounds are those of the node-by-node computation to the bit). Going
-// through the public for_each_leaf instead (a Node with centre and colour
+// through the public for_each_leaf instead (a Node with centre and color
 // for every leaf) took 66 ms on the 3DTK map at 5 cm, as long as saving it;
 // this takes 18 ms.
 #include "umbra/map/map_statistics.hpp"

@@ -49,7 +49,7 @@ void require_finite(float value, const char* what) {
 }
 
 void require_color(bool has_color) {
-  if (!has_color) throw std::logic_error("the map was made without colour (MapConfig::color)");
+  if (!has_color) throw std::logic_error("the map was made without color (MapConfig::color)");
 }
 
 void check_depth(const Grid& grid, int depth) {
@@ -173,7 +173,7 @@ void OccupancyMap::set_key_log_odds(Key key, float log_odds) {
   });
 }
 
-// --- colour -------------------------------------------------------------------------
+// --- color -------------------------------------------------------------------------
 
 std::optional<Rgb> OccupancyMap::color(Vec3d coordinate, int depth) const { return node(coordinate, depth).color; }
 
@@ -238,10 +238,10 @@ InsertStats insert_scan(detail::MapState& state, const std::optional<double>& st
 InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
                                              std::span<const Rgb> colors, const InsertOptions& options) {
   if (!colors.empty() && !color_) {
-    throw std::invalid_argument("colours given, but the map was made without colour (MapConfig::color)");
+    throw std::invalid_argument("colors given, but the map was made without color (MapConfig::color)");
   }
   if (!colors.empty() && colors.size() != points.size()) {
-    throw std::invalid_argument("colours given for " + std::to_string(colors.size()) + " points, the scan has " +
+    throw std::invalid_argument("colors given for " + std::to_string(colors.size()) + " points, the scan has " +
                                 std::to_string(points.size()));
   }
   detail::MapState& state = *state_;
@@ -258,14 +258,14 @@ InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f
 InsertStats OccupancyMap::insert_depth_image(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose,
                                              std::span<const Rgb> colors, const InsertOptions& options) {
   if (!colors.empty() && !color_) {
-    throw std::invalid_argument("colours given, but the map was made without colour (MapConfig::color)");
+    throw std::invalid_argument("colors given, but the map was made without color (MapConfig::color)");
   }
   detail::MapState& state = *state_;
   const auto check = [&] {
     options.validate(grid_.depth_levels());
     camera.validate();
     if (!colors.empty() && colors.size() != depth.pixel_count()) {
-      throw std::invalid_argument("one colour per pixel expected: " + std::to_string(colors.size()) + " colours, " +
+      throw std::invalid_argument("one color per pixel expected: " + std::to_string(colors.size()) + " colors, " +
                                   std::to_string(depth.pixel_count()) + " pixels");
     }
     if (!pose.is_rigid()) throw std::invalid_argument("the camera pose must be a rotation and a translation");

@@ -9,11 +9,11 @@
 // bytes, not a whole block; later blocks are full sized from the start. Released groups go to a free list and are handed out again.
 //
 // Attached records (optional, chosen at construction: a node group's
-// colours): a pool built with_attached keeps an `Attached` record per group
+// colors): a pool built with_attached keeps an `Attached` record per group
 // in blocks parallel to the groups' blocks, grown and copied with them, so
 // attached(i) belongs to group i by construction. There is no second
 // allocation order or free list that could drift from the groups' (the
-// OccupancyTree's colours were once a pool of their own, allocated in
+// OccupancyTree's colors were once a pool of their own, allocated in
 // lockstep, which a parallel phase cannot keep). A pool without them holds
 // an empty block table for them and nothing else.
 //

@@ -19,7 +19,7 @@ void assign_bit(std::uint8_t& mask, unsigned slot, bool value) {
   mask = static_cast<std::uint8_t>(value ? (mask | bit(slot)) : (mask & ~bit(slot)));
 }
 
-/// Rounded average of the coloured entries of a colour group (weight 0: none).
+/// Rounded average of the colored entries of a color group (weight 0: none).
 std::pair<Rgb, std::uint8_t> average_color(const OccupancyTree::ColorGroup& colors) {
   unsigned r = 0;
   unsigned g = 0;
@@ -90,7 +90,7 @@ std::uint32_t OccupancyTree::new_inner_group(int depth, float value) {
 }
 
 void OccupancyTree::release_group(int depth, std::uint32_t group) {
-  // A group's colours are attached to it: they go with it.
+  // A group's colors are attached to it: they go with it.
   if (concurrent_) {
     if (depth == 0) {
       leaves_.release(t_worker, group);
@@ -298,7 +298,7 @@ void OccupancyTree::add_color(std::uint64_t code, Rgb rgb) {
 }
 
 void OccupancyTree::set_color(std::uint64_t code, Rgb rgb, std::uint8_t weight) {
-  if (!has_color()) throw std::logic_error("set_color: the tree has no colour");
+  if (!has_color()) throw std::logic_error("set_color: the tree has no color");
   if (weight == 0) throw std::invalid_argument("set_color: weight must be at least 1");
   Path path;
   ColorGroup& leaf_colors = colors(0, descend_splitting(code, path));
@@ -308,7 +308,7 @@ void OccupancyTree::set_color(std::uint64_t code, Rgb rgb, std::uint8_t weight) 
 }
 
 void OccupancyTree::add_colors(std::span<const ColorSample> samples, ThreadPool* pool) {
-  if (!has_color()) throw std::logic_error("add_colors: the tree has no colour");
+  if (!has_color()) throw std::logic_error("add_colors: the tree has no color");
   if (samples.empty()) return;
   UMBRA_ASSERT(std::is_sorted(samples.begin(), samples.end(),
                               [](const ColorSample& a, const ColorSample& b) { return a.code < b.code; }));
@@ -634,7 +634,7 @@ void OccupancyTree::set_childless_value(NodeRef node, float log_odds) {
 }
 
 void OccupancyTree::set_childless_color(NodeRef node, Rgb rgb, std::uint8_t weight) {
-  if (!has_color()) throw std::logic_error("set_childless_color: the tree has no colour");
+  if (!has_color()) throw std::logic_error("set_childless_color: the tree has no color");
   if (has_children(node)) throw std::logic_error("set_childless_color: node has children");
   ColorGroup& group = colors(node.depth, node.group);
   group.rgb[node.slot] = weight == 0 ? Rgb{} : rgb;
@@ -658,7 +658,7 @@ NodeCounts OccupancyTree::count_nodes() const {
 }
 
 std::size_t OccupancyTree::memory_bytes() const {
-  // The pools count their attached colours.
+  // The pools count their attached colors.
   std::size_t bytes = sizeof(*this) + leaves_.memory_bytes() + inner_.capacity() * sizeof(inner_[0]);
   for (const auto& pool : inner_) bytes += pool.memory_bytes();
   return bytes;
@@ -726,7 +726,7 @@ std::string OccupancyTree::check_node(int depth, std::uint32_t group_index, unsi
     const auto [rgb, weight] = average_color(child_colors);
     const ColorGroup& own = colors(depth, group_index);
     if (own.weight[slot] != weight || (weight != 0 && own.rgb[slot] != rgb)) {
-      return where() + "colour is not the average of the coloured children";
+      return where() + "color is not the average of the colored children";
     }
   }
   if (value != max) return where() + "value is not the maximum of the children";

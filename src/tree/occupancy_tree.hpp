@@ -21,17 +21,17 @@
 // childless node F and U describe its own value and S is 0. Leaves carry no
 // bits: their state is their value. "Contains occupied" is max > threshold.
 //
-// Colour (optional, chosen at construction): every node group carries a
+// Color (optional, chosen at construction): every node group carries a
 // ColorGroup attached to it in its pool (GroupPool's attached records), so a
-// node's colour sits at the same (depth, group, slot) with no allocation of
-// its own. A voxel's colour is the running
+// node's color sits at the same (depth, group, slot) with no allocation of
+// its own. A voxel's color is the running
 // average of the samples it received (`weight` counts them, saturating at
 // 255, after which each new sample weighs 1/256); a node with children has
-// the rounded average of its coloured children. Equal children merge only if
-// their colours and weights are equal too.
+// the rounded average of its colored children. Equal children merge only if
+// their colors and weights are equal too.
 //
 // Invariants (check_invariants() verifies them all): every value lies in the
-// clamping range; inner values, F, U, S and colours equal a recomputation
+// clamping range; inner values, F, U, S and colors equal a recomputation
 // from the children; with automatic pruning on, no node has S set (eight
 // equal childless children are merged into their parent at once).
 //
@@ -39,7 +39,7 @@
 // depth_levels ancestors on the way back; apply(UpdateBatch) updates a whole
 // scan in one depth-first walk that visits each touched node once and
 // never expands an inner leaf whose whole region gets the same update;
-// add_colors() likewise walks a scan's sorted colour samples once. With a
+// add_colors() likewise walks a scan's sorted color samples once. With a
 // thread pool both split the walk into disjoint subtrees, one worker each.
 //
 // Thread safety: const member functions may run concurrently with each
@@ -107,13 +107,13 @@ class OccupancyTree {
   };
   struct ColorGroup {
     std::array<Rgb, 8> rgb;
-    std::array<std::uint8_t, 8> weight;  // 0: no colour
+    std::array<std::uint8_t, 8> weight;  // 0: no color
   };
   static_assert(sizeof(LeafGroup) == 32, "a leaf group is 8 floats");
   static_assert(sizeof(InnerGroup) == 68, "an inner group is 8 floats, 8 indices, 3 bit masks");
-  static_assert(sizeof(ColorGroup) == 32, "a colour group is 8 RGB triples and 8 weights");
+  static_assert(sizeof(ColorGroup) == 32, "a color group is 8 RGB triples and 8 weights");
 
-  /// One colour observation of a finest voxel.
+  /// One color observation of a finest voxel.
   struct ColorSample {
     std::uint64_t code;
     Rgb rgb;
@@ -144,9 +144,9 @@ class OccupancyTree {
     return node.depth == 0 ? leaves_[node.group].log_odds[node.slot]
                            : inner_[node.depth][node.group].log_odds[node.slot];
   }
-  /// The node's colour; nothing when it has none or the tree has no colour.
+  /// The node's color; nothing when it has none or the tree has no color.
   [[nodiscard]] std::optional<Rgb> color(NodeRef node) const;
-  /// Samples behind a voxel's colour (0: none); 1 for a coloured inner node.
+  /// Samples behind a voxel's color (0: none); 1 for a colored inner node.
   [[nodiscard]] std::uint8_t color_weight(NodeRef node) const {
     return has_color() ? colors(node.depth, node.group).weight[node.slot] : 0;
   }
@@ -211,14 +211,14 @@ class OccupancyTree {
   /// the regions and the nodes they meet, not the voxels (tree/node_deltas.cpp;
   /// merging maps uses it).
   void add_to_nodes(std::span<const NodeDelta> regions);
-  /// Adds one colour sample to finest voxel `code` (the tree must have colour).
+  /// Adds one color sample to finest voxel `code` (the tree must have color).
   void add_color(std::uint64_t code, Rgb rgb);
-  /// Adds colour samples in one walk; sorted by code, each voxel's samples
+  /// Adds color samples in one walk; sorted by code, each voxel's samples
   /// in the order they were observed (a stable sort keeps it). With a
   /// thread pool, independent subtrees get their samples in parallel; the
   /// result is the same, bit for bit.
   void add_colors(std::span<const ColorSample> samples, ThreadPool* pool = nullptr);
-  /// Sets the colour of finest voxel `code` with `weight` samples behind it (>= 1).
+  /// Sets the color of finest voxel `code` with `weight` samples behind it (>= 1).
   void set_color(std::uint64_t code, Rgb rgb, std::uint8_t weight = 1);
   /// Empties the tree (everything unknown).
   void clear();
@@ -265,7 +265,7 @@ class OccupancyTree {
     return 0.0f;
   }
   /// Applies `step` to every finest voxel (inside `region` when given); a
-  /// voxel reaching 0 becomes unknown as if never observed (its colour is
+  /// voxel reaching 0 becomes unknown as if never observed (its color is
   /// dropped). Walks only subtrees where some value can change; inner
   /// values, indicators and pruning are refreshed on the way back. With
   /// `changes`, appends the nodes of depth >= `change_depth` (childless
@@ -288,7 +288,7 @@ class OccupancyTree {
   /// Sets a childless node's value without touching its ancestors; call
   /// refresh_all() when done.
   void set_childless_value(NodeRef node, float log_odds);
-  /// Sets a childless node's colour (weight 0: no colour); then refresh_all().
+  /// Sets a childless node's color (weight 0: no color); then refresh_all().
   void set_childless_color(NodeRef node, Rgb rgb, std::uint8_t weight);
   /// Recomputes every inner value and indicator bottom up (no pruning).
   void refresh_all();
@@ -318,9 +318,9 @@ class OccupancyTree {
     return depth == 0 ? leaves_.attached(group) : inner_[depth].attached(group);
   }
   void release_group(int depth, std::uint32_t group);
-  /// Value and indicator bits of a childless slot (its colour is kept).
+  /// Value and indicator bits of a childless slot (its color is kept).
   void set_childless(InnerGroup& group, unsigned slot, float value) const;
-  /// Gives a childless node eight children with its value and colour.
+  /// Gives a childless node eight children with its value and color.
   void expand(int depth, std::uint32_t group, unsigned slot);
   /// What a node with children takes from them (the child group `child` one depth below).
   struct ChildrenSummary {
@@ -365,13 +365,13 @@ class OccupancyTree {
   /// The samples of group `group` at `depth` (all in it), slot by slot.
   void add_colors_to_group(int depth, std::uint32_t group, std::span<const ColorSample> samples);
   void add_colors_in_parallel(std::span<const ColorSample> samples, ThreadPool& pool);
-  /// Running average of a voxel's colour with one more sample.
+  /// Running average of a voxel's color with one more sample.
   static void blend(Rgb& rgb, std::uint8_t& weight, Rgb sample);
   /// decay() below node (depth, group, slot) whose first voxel is `code`;
   /// true when some voxel below changed state.
   bool decay_below(int depth, std::uint32_t group, unsigned slot, std::uint64_t code, DecayStep step,
                    const std::optional<KeyBox>& region, std::vector<DecayChange>* changes, int change_depth);
-  /// Drops a node's colour (no-op without colour).
+  /// Drops a node's color (no-op without color).
   void forget_color(int depth, std::uint32_t group, unsigned slot);
   std::string check_node(int depth, std::uint32_t group, unsigned slot, std::vector<std::vector<bool>>& seen) const;
 
@@ -381,7 +381,7 @@ class OccupancyTree {
   bool auto_prune_ = true;
   bool with_color_;
   bool concurrent_ = false;  // inside run_concurrently: pools allocate per worker
-  // With colour every group has its ColorGroup attached (colors()).
+  // With color every group has its ColorGroup attached (colors()).
   GroupPool<LeafGroup, ColorGroup> leaves_;
   std::vector<GroupPool<InnerGroup, ColorGroup>> inner_;  // index = depth; [0] is unused
 };

@@ -1,7 +1,7 @@
 // TreeBuilder: fills an empty tree node by node, for the file readers.
 //
 // A file describes a tree top down: subdivide a node, set the values (and
-// colours) of childless nodes. Inner values and indicators are left stale
+// colors) of childless nodes. Inner values and indicators are left stale
 // meanwhile and recomputed once by finish(); nothing else may read the tree
 // before that (MapAccess::build keeps the map to the builder until then).
 // This is the only way to reach OccupancyTree's building functions.
@@ -29,7 +29,7 @@ class TreeBuilder {
   void subdivide(NodeRef node) { tree_.subdivide(node); }
   /// Sets a childless node's value.
   void set_childless_value(NodeRef node, float log_odds) { tree_.set_childless_value(node, log_odds); }
-  /// Sets a childless node's colour (weight 0: no colour).
+  /// Sets a childless node's color (weight 0: no color).
   void set_childless_color(NodeRef node, Rgb rgb, std::uint8_t weight) {
     tree_.set_childless_color(node, rgb, weight);
   }

@@ -7,7 +7,7 @@
 // region. A childless node (a pruned block) is one value however many voxels
 // it covers, so a step costs the stored nodes that can change, not the
 // voxels or the map's volume. On the way back each node is refreshed from
-// its children (value, indicators, colour, pruning), as apply() does.
+// its children (value, indicators, color, pruning), as apply() does.
 #include <optional>
 #include <vector>
 
@@ -36,7 +36,7 @@ Overlap overlap(std::uint64_t code, int depth, const std::optional<OccupancyTree
 }  // namespace
 
 void OccupancyTree::forget_color(int depth, std::uint32_t group, unsigned slot) {
-  // A voxel decayed to unknown is as if never observed: no colour either.
+  // A voxel decayed to unknown is as if never observed: no color either.
   if (!has_color()) return;
   ColorGroup& own = colors(depth, group);
   own.rgb[slot] = Rgb{};

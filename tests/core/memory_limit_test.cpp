@@ -98,14 +98,14 @@ TEST(MemoryLimit, DefaultIsHalfOfWhatTheMachineAllowsAndCanBeChanged) {
 TEST(MemoryLimit, UmbLoadStatesTheTreesNeedAndRefusesItBeforeAllocating) {
   const fs::path dir = test::scratch_dir();
   for (const bool color : {false, true}) {
-    SCOPED_TRACE(color ? "colour" : "no colour");
+    SCOPED_TRACE(color ? "color" : "no color");
     const int depth_levels = color ? 5 : 6;
     const fs::path path = dir / (color ? "full_color.umb" : "full.umb");
     const OccupancyMap saved = full_unpruned_map(depth_levels, color);
     save_map(saved, path);
     const std::uint64_t file_bytes = fs::file_size(path);
     EXPECT_LT(file_bytes, 16'000u) << "the point of the test is a small file";
-    // Inner nodes at depths >= 2 have 68-byte groups of children, those at depth 1 32-byte ones; colour adds 32.
+    // Inner nodes at depths >= 2 have 68-byte groups of children, those at depth 1 32-byte ones; color adds 32.
     const std::uint64_t above_finest = sum_of_powers_of_eight(depth_levels - 1);
     const std::uint64_t at_finest = std::uint64_t{1} << (3 * (depth_levels - 1));
     const std::uint64_t tree = above_finest * (68 + (color ? 32 : 0)) + at_finest * (32 + (color ? 32 : 0));

@@ -1,4 +1,4 @@
-// The colour samples of a scan, found with any number of threads, are those
+// The color samples of a scan, found with any number of threads, are those
 // of a brute-force reference: every point in the map (and the box) that
 // gives a hit, stably sorted by voxel. Few voxels get many points, so every
 // part of the parallel steps begins inside a voxel, and the maximum range

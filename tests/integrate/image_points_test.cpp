@@ -1,6 +1,6 @@
 // A depth image's points found band by band on several workers are the ones
 // the public back_project gives, in the same order, with their own voxel
-// codes and colours, and the hit voxels are the sorted distinct voxels of
+// codes and colors, and the hit voxels are the sorted distinct voxels of
 // those points, whatever the number of workers.
 #include <algorithm>
 #include <atomic>
@@ -94,7 +94,7 @@ TEST(ImagePoints, AnyNumberOfWorkersGivesBackProjectsPointsAndTheirVoxels) {
       std::vector<std::uint64_t> voxels;
       found.for_each_voxel([&](std::uint64_t code) { voxels.push_back(code); });
       EXPECT_TRUE(voxels == expected_voxels);
-      // Without colours: the same points and voxels, no codes kept.
+      // Without colors: the same points and voxels, no codes kept.
       ImagePoints plain;
       plain.build(grid, image, camera, pose, {}, threads > 1 ? &pool : nullptr, [] {});
       EXPECT_TRUE(plain.codes().empty() && plain.colors().empty());

@@ -157,7 +157,7 @@ INSTANTIATE_TEST_SUITE_P(Configurations, IntegratorOracle, testing::ValuesIn(ora
 
 class ColorOracle : public testing::TestWithParam<OracleCase> {};
 
-TEST_P(ColorOracle, EveryVoxelAndNodeColourMatchesTheDenseGrid) {
+TEST_P(ColorOracle, EveryVoxelAndNodeColorMatchesTheDenseGrid) {
   const OracleCase c = GetParam();
   std::mt19937 rng(c.seed);
   MapConfig config{c.resolution, c.depth_levels, SensorModel{}, Thresholds{}, true};
@@ -171,7 +171,7 @@ TEST_P(ColorOracle, EveryVoxelAndNodeColourMatchesTheDenseGrid) {
   options.integrator = c.integrator;
   options.max_range = c.max_range > 0 ? c.max_range * half : c.max_range;
   const test::DenseScanOptions dense_options{c.integrator == IntegratorKind::discrete, options.max_range};
-  // Few colours, so that equal neighbours (and merges) happen.
+  // Few colors, so that equal neighbours (and merges) happen.
   const Rgb palette[] = {{255, 0, 0}, {0, 255, 0}, {10, 20, 30}, {200, 200, 200}};
   for (int scan = 0; scan < 4; ++scan) {
     const Vec3f origin{inside(rng), inside(rng), inside(rng)};
@@ -182,7 +182,7 @@ TEST_P(ColorOracle, EveryVoxelAndNodeColourMatchesTheDenseGrid) {
     oracle.insert_scan(origin, points, dense_options, sensor.hit_log_odds(), sensor.miss_log_odds(), colors);
     ASSERT_EQ(test::check_invariants(map), "") << "after scan " << scan;
   }
-  std::size_t coloured = 0;
+  std::size_t colored = 0;
   for (int depth = 0; depth <= c.depth_levels; ++depth) {
     const std::uint32_t nodes = oracle.size() >> depth;
     for (std::uint32_t z = 0; z < nodes; ++z) {
@@ -193,7 +193,7 @@ TEST_P(ColorOracle, EveryVoxelAndNodeColourMatchesTheDenseGrid) {
           const std::optional<Rgb> actual = map.color(key, depth);
           ASSERT_EQ(actual.has_value(), expected.weight != 0) << "depth " << depth << " key " << x << "," << y << "," << z;
           if (!actual) continue;
-          ++coloured;
+          ++colored;
           ASSERT_EQ(*actual, expected.rgb) << "depth " << depth << " key " << x << "," << y << "," << z;
           if (depth == 0) {
             ASSERT_EQ(map.node(key, 0).log_odds, oracle.at(key));
@@ -202,7 +202,7 @@ TEST_P(ColorOracle, EveryVoxelAndNodeColourMatchesTheDenseGrid) {
       }
     }
   }
-  EXPECT_GT(coloured, 50u);
+  EXPECT_GT(colored, 50u);
 }
 
 std::vector<OracleCase> color_cases() {

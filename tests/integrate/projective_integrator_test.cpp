@@ -356,7 +356,7 @@ TEST(ProjectiveIntegrator, SameMapForAnyThreadCount) {
     scan_origins.push_back(Vec3f{0.3f * i, 0.1f * i, 0.05f});
     scans.push_back(random_room_scan(rng, scan_origins.back()));
   }
-  // With colour too: its samples are a side job of one worker (several
+  // With color too: its samples are a side job of one worker (several
   // points per voxel, blended in point order).
   std::vector<std::vector<Rgb>> frame_colors(frames.size());
   for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -371,7 +371,7 @@ TEST(ProjectiveIntegrator, SameMapForAnyThreadCount) {
   }
   using Leaf = std::tuple<std::uint64_t, int, float, std::uint8_t, std::uint8_t, std::uint8_t>;
   for (const bool with_color : {false, true}) {
-    SCOPED_TRACE(with_color ? "with colour" : "without colour");
+    SCOPED_TRACE(with_color ? "with color" : "without color");
     std::vector<std::vector<Leaf>> results;
     for (const unsigned threads : {1u, 2u, 3u, 16u}) {
       MapConfig config;

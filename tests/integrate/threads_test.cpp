@@ -1,11 +1,11 @@
 // Insertion with several threads gives exactly the map of one thread, for
-// every integrator, with colour and with a bounding box, at 5 cm on random
-// clouds, at 4 mm on a coloured wall, and at 4 mm, 2 mm and 2 cm on depth
+// every integrator, with color and with a bounding box, at 5 cm on random
+// clouds, at 4 mm on a colored wall, and at 4 mm, 2 mm and 2 cm on depth
 // camera frames (where the fast integrator splits its coarse nodes). The
 // parallel paths covered: end voxels found and sorted per part and merged,
 // the hits added while the rays are grouped, the rays traced per worker, the
-// batches merged, the tree updated in parallel (with and without colour),
-// the colour samples found, sorted and added to the tree in parallel.
+// batches merged, the tree updated in parallel (with and without color),
+// the color samples found, sorted and added to the tree in parallel.
 #include <algorithm>
 #include <bit>
 #include <cstdlib>
@@ -32,11 +32,11 @@ struct Leaf {
   int depth;
   std::uint32_t bits;
   std::optional<Rgb> color;
-  std::uint8_t color_weight;  // samples behind the colour
+  std::uint8_t color_weight;  // samples behind the color
   friend bool operator==(const Leaf&, const Leaf&) = default;
 };
 
-/// Every childless node of the map's tree: value, colour and weight.
+/// Every childless node of the map's tree: value, color and weight.
 std::vector<Leaf> contents(const OccupancyMap& map) {
   std::vector<Leaf> out;
   const OccupancyTree& tree = test::tree_of(map);
@@ -62,15 +62,15 @@ TEST(Threads, EveryThreadCountBuildsTheSameMap) {
   for (const auto [kind, clear_depth] : {Case{IntegratorKind::simple, -1}, Case{IntegratorKind::discrete, -1},
                                          Case{IntegratorKind::fast, -1}, Case{IntegratorKind::fast, 5}}) {
     for (const int variant : {0, 1, 2, 3}) {
-      // 0: plain (the tree is updated in parallel too), 1: with a box, 2: with colour, 3: both.
+      // 0: plain (the tree is updated in parallel too), 1: with a box, 2: with color, 3: both.
       const bool with_box = variant == 1 || variant == 3;
       const bool with_color = variant >= 2;
-      SCOPED_TRACE(std::string(to_string(kind)) + " clear depth " + std::to_string(clear_depth) + (with_box ? " with box" : "") + (with_color ? " with colour" : ""));
+      SCOPED_TRACE(std::string(to_string(kind)) + " clear depth " + std::to_string(clear_depth) + (with_box ? " with box" : "") + (with_color ? " with color" : ""));
       std::vector<std::vector<Leaf>> results;
       for (const unsigned threads : thread_counts()) {
         MapConfig config{0.05, 12, SensorModel{}, Thresholds{}, with_color};
         OccupancyMap map(config);
-        // Variant 1's box holds none of the walls, variant 3's part of them (colours there).
+        // Variant 1's box holds none of the walls, variant 3's part of them (colors there).
         if (variant == 1) map.set_bounding_box(Aabb{{-2.0, -1.5, -1.0}, {1.7, 2.2, 1.3}});
         if (variant == 3) map.set_bounding_box(Aabb{{-3.2, -1.5, -1.0}, {1.7, 3.2, 1.3}});
         std::mt19937 rng(7);
@@ -114,15 +114,15 @@ TEST(Threads, EveryThreadCountBuildsTheSameMap) {
   }
 }
 
-// A coloured map at 4 mm in a box: the parallel apply and colour walk split
+// A colored map at 4 mm in a box: the parallel apply and color walk split
 // the tree far below the root, through inner leaves that earlier scans
 // cleared whole, and every
 // voxel gets several samples, some from the first and some from the last
-// part of a scan (their order decides the blended colour). Clear depth 5
+// part of a scan (their order decides the blended color). Clear depth 5
 // (automatic: 12.8 cm nodes) clears nodes whole and splits them near the
 // wall, 3 (3.2 cm) walks its rays through smaller nodes.
-TEST(Threads, ColouredMapAtFineResolutionIsTheSameForEveryThreadCount) {
-  // The first test covers every integrator with colour; this one the fast
+TEST(Threads, ColoredMapAtFineResolutionIsTheSameForEveryThreadCount) {
+  // The first test covers every integrator with color; this one the fast
   // integrator as it runs at millimetres (the discrete one walks every ray
   // voxel by voxel: seconds and 700 MB here).
   for (const int clear_depth : {-1, 3}) {
@@ -167,7 +167,7 @@ TEST(Threads, ColouredMapAtFineResolutionIsTheSameForEveryThreadCount) {
     }
     const auto weighed = std::count_if(results[0].begin(), results[0].end(),
                                        [](const Leaf& l) { return l.color_weight >= 3; });
-    EXPECT_GT(weighed, 500) << "voxels with three colour samples or more";
+    EXPECT_GT(weighed, 500) << "voxels with three color samples or more";
     for (std::size_t i = 1; i < results.size(); ++i) {
       EXPECT_TRUE(results[i] == results[0]) << "thread count #" << i;
       EXPECT_EQ(counts[i].total(), counts[0].total()) << "thread count #" << i;
@@ -257,11 +257,11 @@ Aabb box_around_the_middle(const Frame& frame, double edge) {
 // Not under ThreadSanitizer (tests/map/run_tsan_stress.sh sets UMBRA_TSAN):
 // these check that the workers decide alike, which needs no race detector,
 // and cost over two minutes there; the same parallel paths, splitting
-// included, run under it in ColouredMapAtFineResolutionIsTheSameForEveryThreadCount.
+// included, run under it in ColoredMapAtFineResolutionIsTheSameForEveryThreadCount.
 bool under_thread_sanitizer() { return std::getenv("UMBRA_TSAN") != nullptr; }
 
 TEST(Threads, SameMapForAnyThreadCountWhereLargeClearNodesAreSplit) {
-  if (under_thread_sanitizer()) GTEST_SKIP() << "slow under ThreadSanitizer; the coloured test runs these paths";
+  if (under_thread_sanitizer()) GTEST_SKIP() << "slow under ThreadSanitizer; the colored test runs these paths";
   // Millimetre resolutions: 12.8 cm clear nodes are split down to nodes of
   // 2^3 voxels where they may not be cleared whole. A bounding box keeps the
   // exact integrators' maps small; the fast integrator's mistake needs whole
@@ -288,7 +288,7 @@ TEST(Threads, SameMapForAnyThreadCountAt2cmWithoutMaxRange) {
   // 7 alone showed it. Every integrator but the projective one in a box of
   // 1 m around the middle of the image, to keep the exact integrators' maps
   // small (the projective walk is not narrowed by a box: 1.5 s per map).
-  if (under_thread_sanitizer()) GTEST_SKIP() << "slow under ThreadSanitizer; the coloured test runs these paths";
+  if (under_thread_sanitizer()) GTEST_SKIP() << "slow under ThreadSanitizer; the colored test runs these paths";
   UMBRA_REQUIRE_SHARED_DATA(path, "tum_fr2_pioneer_slam2");
   const auto source = open_scan_source(path);
   Scan scan;

@@ -173,8 +173,8 @@ std::vector<std::uint64_t> shape(const OccupancyTree& tree) {
   return out;
 }
 
-/// Every node's colour and weight in depth-first order (empty without colour).
-std::vector<std::uint32_t> colours(const OccupancyTree& tree) {
+/// Every node's color and weight in depth-first order (empty without color).
+std::vector<std::uint32_t> colors(const OccupancyTree& tree) {
   std::vector<std::uint32_t> out;
   if (!tree.has_color()) return out;
   auto walk = [&](auto& self, NodeRef node) -> void {
@@ -206,7 +206,7 @@ void expect_same_map(const OccupancyMap& saved, const OccupancyMap& loaded) {
   EXPECT_EQ(a.leaf, b.leaf);
   EXPECT_TRUE(leaves(saved) == leaves(loaded)) << "childless nodes differ";
   EXPECT_TRUE(shape(test::tree_of(saved)) == shape(test::tree_of(loaded))) << "tree shape, inner values or indicators differ";
-  EXPECT_TRUE(colours(test::tree_of(saved)) == colours(test::tree_of(loaded))) << "colours differ";
+  EXPECT_TRUE(colors(test::tree_of(saved)) == colors(test::tree_of(loaded))) << "colors differ";
   EXPECT_EQ(test::check_invariants(loaded), "");
 }
 
@@ -941,7 +941,7 @@ TEST(MapFile, ReadMapInfoReadsTheHeaderOfALargeFileWithoutTheBody) {
 namespace umbra {
 namespace {
 
-OccupancyMap coloured_map(int depth_levels, bool auto_prune, std::uint32_t seed) {
+OccupancyMap colored_map(int depth_levels, bool auto_prune, std::uint32_t seed) {
   MapConfig config = depth_config(depth_levels);
   config.color = true;
   OccupancyMap map(config);
@@ -962,30 +962,30 @@ OccupancyMap coloured_map(int depth_levels, bool auto_prune, std::uint32_t seed)
   return map;
 }
 
-TEST(MapFile, ColouredMapsRoundTripExactly) {
+TEST(MapFile, ColoredMapsRoundTripExactly) {
   const fs::path dir = test::scratch_dir();
   for (const int depth_levels : {1, 3, 8, 16}) {
     for (const bool auto_prune : {true, false}) {
       SCOPED_TRACE("depth levels " + std::to_string(depth_levels) + (auto_prune ? " pruned" : " unpruned"));
-      const OccupancyMap map = coloured_map(depth_levels, auto_prune, static_cast<std::uint32_t>(depth_levels));
+      const OccupancyMap map = colored_map(depth_levels, auto_prune, static_cast<std::uint32_t>(depth_levels));
       ASSERT_TRUE(map.has_color());
-      const fs::path path = dir / "coloured.umb";
+      const fs::path path = dir / "colored.umb";
       save_map(map, path);
       const OccupancyMap loaded = load_map(path);
       EXPECT_TRUE(loaded.has_color());
       EXPECT_TRUE(read_map_info(path).config.color);
       expect_same_map(map, loaded);
       if (depth_levels == 8) {
-        EXPECT_GT(colours(test::tree_of(map)).size(), 100u);
+        EXPECT_GT(colors(test::tree_of(map)).size(), 100u);
       }
     }
   }
 }
 
-/// A coloured map whose values and colour streams are several MiB each, so
+/// A colored map whose values and color streams are several MiB each, so
 /// that saving with helper threads cuts them into several 1 MiB zstd jobs:
-/// a 100^3 block of voxels with random values and colours.
-OccupancyMap large_coloured_map() {
+/// a 100^3 block of voxels with random values and colors.
+OccupancyMap large_colored_map() {
   MapConfig config = depth_config(8);
   config.color = true;
   OccupancyMap map(config);
@@ -1004,7 +1004,7 @@ OccupancyMap large_coloured_map() {
 
 TEST(MapFile, SavingWithAnyNumberOfThreadsWritesTheSameBytes) {
   const fs::path dir = test::scratch_dir();
-  const OccupancyMap map = large_coloured_map();
+  const OccupancyMap map = large_colored_map();
   const MapFileInfo one_job = [&] {
     save_map(map, dir / "t1.umb", MapSaveOptions{1});
     return read_map_info(dir / "t1.umb");
@@ -1037,9 +1037,9 @@ TEST(MapFile, TooManySaveThreadsAreRefusedBeforeAnyFileExists) {
   EXPECT_NO_THROW(save_map(map, path, MapSaveOptions{max_threads()}));
 }
 
-TEST(MapFile, EveryTruncationOfAColouredFileIsReported) {
+TEST(MapFile, EveryTruncationOfAColoredFileIsReported) {
   const fs::path dir = test::scratch_dir();
-  const OccupancyMap map = coloured_map(3, true, 5);
+  const OccupancyMap map = colored_map(3, true, 5);
   save_map(map, dir / "whole.umb");
   const Bytes whole = read_bytes(dir / "whole.umb");
   for (std::size_t length = 0; length < whole.size(); ++length) {

@@ -157,7 +157,7 @@ TEST(MapRender, VoxelsLandOnThePredictedPixels) {
     Vec3d normal{};
     normal[facing_axis] = axes.toward[facing_axis] > 0 ? 1.0 : -1.0;
     for (const Vec3d& c : centres) {
-      // Height colours: the voxels' centres are at z 0.05, 0.55 and 1.05.
+      // Height colors: the voxels' centres are at z 0.05, 0.55 and 1.05.
       const Rgb expected = shaded(height_ramp((c.z - 0.05) / 1.0), documented_shade(axes, normal));
       const Vec3d face_centre = c + normal * (0.5 * kResolution);
       const auto [column, row] = frame.pixel(axes, face_centre);
@@ -236,7 +236,7 @@ TEST(MapRender, CoarserDepthDrawsParentCubes) {
   EXPECT_EQ(picture.nodes_drawn, 2u);
   EXPECT_EQ(picture.depth, 2);
   EXPECT_NEAR(picture.camera.metres_per_pixel, 1.2 / 80, 1e-12);  // nodes at x 0..0.4 and 0.8..1.2
-  // A depth-2 node covers the whole 0.4 m square: 32 x 32 pixels of one colour.
+  // A depth-2 node covers the whole 0.4 m square: 32 x 32 pixels of one color.
   std::size_t drawn = 0;
   for (std::size_t i = 0; i < picture.image.rgb.size(); i += 3) drawn += picture.image.rgb[i] != 255 ? 1 : 0;
   const double side = 0.4 / picture.camera.metres_per_pixel;
@@ -310,13 +310,13 @@ TEST(MapRenderSlice, ThroughAKnownFreeBoxIsFreeInsideAndUnknownAround) {
           const bool inside = p.x > 0 && p.x < 1.0 && p.y > 0 && p.y < 0.6 && p.z > 0 && p.z < 0.4;
           const bool on_obstacle = layer == occupied_layer && std::floor(p.x / kResolution) == 3 &&
                                    std::floor(p.y / kResolution) == 2 && std::floor(p.z / kResolution) == 1;
-          const Rgb expected = on_obstacle ? options.occupied_colour : (inside ? options.free_colour : options.unknown_colour);
+          const Rgb expected = on_obstacle ? options.occupied_color : (inside ? options.free_color : options.unknown_color);
           const Rgb got = picture.image.at(column, row);
           ASSERT_EQ(got, expected) << "axis " << axis << " at " << position << ", pixel " << column << ", " << row
                                    << " (" << p.x << ", " << p.y << ", " << p.z << ") is " << text(got);
-          free += got == options.free_colour ? 1 : 0;
-          unknown += got == options.unknown_colour ? 1 : 0;
-          occupied += got == options.occupied_colour ? 1 : 0;
+          free += got == options.free_color ? 1 : 0;
+          unknown += got == options.unknown_color ? 1 : 0;
+          occupied += got == options.occupied_color ? 1 : 0;
         }
       }
       EXPECT_GT(free, 0u);
@@ -338,16 +338,16 @@ TEST(MapRenderSlice, CoarseLayerShowsTheMaximumOfItsVoxels) {
   const MapPicture picture = render_map(map, options);
   // The depth-1 node over voxel (3, 2, 1) covers x 0.2..0.4, y 0.2..0.4: occupied.
   const auto [x, y] = picture.camera.pixel({0.25, 0.25, 0.1});
-  EXPECT_EQ(picture.image.at(int(x), int(y)), options.occupied_colour);
+  EXPECT_EQ(picture.image.at(int(x), int(y)), options.occupied_color);
   const auto [x2, y2] = picture.camera.pixel({0.35, 0.35, 0.1});
-  EXPECT_EQ(picture.image.at(int(x2), int(y2)), options.occupied_colour);
+  EXPECT_EQ(picture.image.at(int(x2), int(y2)), options.occupied_color);
   const auto [x3, y3] = picture.camera.pixel({0.45, 0.35, 0.1});
-  EXPECT_EQ(picture.image.at(int(x3), int(y3)), options.free_colour);
+  EXPECT_EQ(picture.image.at(int(x3), int(y3)), options.free_color);
 }
 
-// --- colour by depth, sections, state views -------------------------------------------
+// --- color by depth, sections, state views -------------------------------------------
 
-TEST(MapRender, DepthColoursRunFromNearRedToFarBlue) {
+TEST(MapRender, DepthColorsRunFromNearRedToFarBlue) {
   OccupancyMap map(kResolution);
   map.set_log_odds(voxel(0, 0, 0), 2.0f);   // nearest to a viewer in the south (front view)
   map.set_log_odds(voxel(5, 10, 0), 2.0f);  // farthest
@@ -412,9 +412,9 @@ TEST(MapRender, StateViewPaintsFreeAndUnknownSpaceBehindTheCubes) {
     return picture.image.at(static_cast<int>(std::floor(x)), static_cast<int>(std::floor(y)));
   };
   const double shade = documented_shade(documented_axes(RenderView::top), {0, 0, 1});
-  EXPECT_EQ(at(voxel(3, 2, 3)), shaded(options.occupied_colour, shade)) << "the obstacle, shaded";
-  EXPECT_EQ(at(voxel(5, 1, 3)), options.free_colour) << "free space seen from above";
-  EXPECT_EQ(at(voxel(7, 4, 3)), options.unknown_colour) << "a column nothing was seen in";
+  EXPECT_EQ(at(voxel(3, 2, 3)), shaded(options.occupied_color, shade)) << "the obstacle, shaded";
+  EXPECT_EQ(at(voxel(5, 1, 3)), options.free_color) << "free space seen from above";
+  EXPECT_EQ(at(voxel(7, 4, 3)), options.unknown_color) << "a column nothing was seen in";
   // The frame is the known space (10 x 6 voxels), not the one obstacle.
   EXPECT_NEAR(picture.camera.metres_per_pixel, 1.0 / (options.width - 2 * options.margin_pixels), 1e-12);
   EXPECT_EQ(picture.image.at(0, 0), options.background);
@@ -422,9 +422,9 @@ TEST(MapRender, StateViewPaintsFreeAndUnknownSpaceBehindTheCubes) {
   for (int row = 0; row < picture.image.height; ++row) {
     for (int column = 0; column < picture.image.width; ++column) {
       const Rgb c = picture.image.at(column, row);
-      counts[0] += c == shaded(options.occupied_colour, shade) ? 1 : 0;
-      counts[1] += c == options.free_colour ? 1 : 0;
-      counts[2] += c == options.unknown_colour ? 1 : 0;
+      counts[0] += c == shaded(options.occupied_color, shade) ? 1 : 0;
+      counts[1] += c == options.free_color ? 1 : 0;
+      counts[2] += c == options.unknown_color ? 1 : 0;
     }
   }
   // Pixel areas: one voxel each for the obstacle and the hole, the rest free.
@@ -572,8 +572,8 @@ TEST(MapRenderReference, SlicesOfTheDemoBuildingMatchPerVoxelStates) {
         p[std::size_t(slice.axis)] = plane;
         const OccupancyState state = map.state(p);
         const Rgb expected = state == OccupancyState::occupied
-                                 ? options.occupied_colour
-                                 : (state == OccupancyState::free ? options.free_colour : options.unknown_colour);
+                                 ? options.occupied_color
+                                 : (state == OccupancyState::free ? options.free_color : options.unknown_color);
         ++counts[static_cast<int>(state == OccupancyState::occupied ? 0 : (state == OccupancyState::free ? 1 : 2))];
         if (picture.image.at(column, row) != expected && ++mismatches <= 5) {
           ADD_FAILURE() << "slice " << slice.axis << " pixel " << column << ", " << row << " is "
@@ -618,7 +618,7 @@ TEST(MapRender, BadOptionsAreNamed) {
   expect_named(options, "depth");
   options = {};
   options.color = RenderColor::rgb;
-  expect_named(options, "no colour");
+  expect_named(options, "no color");
   options = {};
   options.slice = RenderSlice{3, 0.0};
   expect_named(options, "slice->axis");
@@ -652,18 +652,18 @@ TEST(MapRender, BadOptionsAreNamed) {
 // Small pictures of the simulated demo building (16-ring LiDAR, 10 cm
 // voxels, fixed seeds), compared with PNGs in tests/io/golden/. Tolerance,
 // for harmless differences between compilers and libm versions (a ramp
-// colour rounding the other way, a face edge moving by a pixel): per
+// color rounding the other way, a face edge moving by a pixel): per
 // channel, the mean absolute difference over the picture is at most 1.0,
 // and at most 0.5% of the pixels differ by more than 24 in any channel. A
-// real change (a view turned, colours swapped, faces missing) exceeds both.
+// real change (a view turned, colors swapped, faces missing) exceeds both.
 // On a mismatch the new picture is written next to the test's temporary
 // folder and its path printed. To accept new pictures after a deliberate
 // change, run
 //   UMBRA_UPDATE_GOLDEN=1 build/tests/io/umbra_io_tests --gtest_filter='RenderGolden.*'
 // and commit tests/io/golden/*.png after looking at them.
 
-/// The demo building mapped in colour: each point coloured by its position.
-const OccupancyMap& coloured_demo_map() {
+/// The demo building mapped in color: each point colored by its position.
+const OccupancyMap& colored_demo_map() {
   static const OccupancyMap map = [] {
     MapConfig config;
     config.resolution = 0.2;
@@ -760,11 +760,11 @@ TEST(RenderGolden, SliceByState) {
   expect_matches_golden(render_map(demo_map(), options).image, "demo_slice_z1.2_state");
 }
 
-TEST(RenderGolden, ColouredMapIsoByRgb) {
+TEST(RenderGolden, ColoredMapIsoByRgb) {
   RenderOptions options;
   options.color = RenderColor::rgb;
   options.width = 200;
-  expect_matches_golden(render_map(coloured_demo_map(), options).image, "demo_colour_iso_rgb");
+  expect_matches_golden(render_map(colored_demo_map(), options).image, "demo_color_iso_rgb");
 }
 
 }  // namespace

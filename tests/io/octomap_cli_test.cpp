@@ -1,6 +1,6 @@
 // `umbra convert` and `umbra info` with OctoMap files, run as a user would:
 // .umb -> .bt -> .ot -> .umb keeps every voxel's class (and .umb -> .ot ->
-// .umb every value and colour), info reads all three formats, and bad names
+// .umb every value and color), info reads all three formats, and bad names
 // are usage errors (exit code 2) with a message; info's OctoMap node count
 // is liboctomap's. Cost: a few runs of the program on a small simulated map,
 // well under a second.
@@ -35,7 +35,7 @@ using test::cli;
 using test::quoted;
 using test::contains;
 
-/// A coloured map of the simulated office from two poses, 20 cm voxels.
+/// A colored map of the simulated office from two poses, 20 cm voxels.
 OccupancyMap office_map() {
   MapConfig config;
   config.resolution = 0.2;
@@ -60,7 +60,7 @@ TEST(OctoMapCli, ConvertChainKeepsTheMap) {
 
   const CommandResult to_bt = run(cli() + " convert " + quoted(dir / "a.umb") + " " + quoted(dir / "b.bt"));
   ASSERT_EQ(to_bt.exit_code, 0) << to_bt.output;
-  EXPECT_TRUE(contains(to_bt.output, "colours are dropped")) << to_bt.output;
+  EXPECT_TRUE(contains(to_bt.output, "colors are dropped")) << to_bt.output;
   const CommandResult to_ot = run(cli() + " convert " + quoted(dir / "b.bt") + " " + quoted(dir / "c.ot"));
   ASSERT_EQ(to_ot.exit_code, 0) << to_ot.output;
   const CommandResult to_umb = run(cli() + " convert " + quoted(dir / "c.ot") + " " + quoted(dir / "d.umb"));
@@ -77,7 +77,7 @@ TEST(OctoMapCli, ConvertChainKeepsTheMap) {
     ASSERT_EQ(test::log_odds_thresholds(chained).classify(chained.node(leaf.key, leaf.depth).log_odds), leaf.state);
   });
 
-  // Through .ot alone every value and colour is kept.
+  // Through .ot alone every value and color is kept.
   ASSERT_EQ(run(cli() + " convert " + quoted(dir / "a.umb") + " " + quoted(dir / "e.ot")).exit_code, 0);
   ASSERT_EQ(run(cli() + " convert " + quoted(dir / "e.ot") + " " + quoted(dir / "f.umb")).exit_code, 0);
   const OccupancyMap exact = load_map(dir / "f.umb");

@@ -2,7 +2,7 @@
 //
 // Both directions are checked leaf by leaf: maps umbra writes are read by
 // liboctomap and must hold the same leaves (key, depth, float log-odds,
-// colour), and — after liboctomap recomputes its inner nodes (.ot) or
+// color), and — after liboctomap recomputes its inner nodes (.ot) or
 // converts and prunes (.bt) — liboctomap must write back the very bytes
 // umbra wrote; trees liboctomap builds from simulated scans (OcTree,
 // ColorOcTree, OcTreeStamped, unpruned, empty) are read by umbra with the
@@ -64,7 +64,7 @@ std::string decode_error(const Bytes& bytes, const std::string& name = "bad.ot")
 
 // --- leaves, both sides ---------------------------------------------------------------
 
-/// A childless node OctoMap has: where it starts, its umbra depth, value, colour.
+/// A childless node OctoMap has: where it starts, its umbra depth, value, color.
 struct Leaf {
   std::uint64_t code = 0;  // Morton code of its first finest voxel
   int depth = 0;           // umbra depth (0 = finest)
@@ -82,7 +82,7 @@ std::ostream& operator<<(std::ostream& out, const Leaf& leaf) {
   return out << "}";
 }
 
-/// umbra's known childless nodes (value != 0): OctoMap's leaves (white is "no colour" there).
+/// umbra's known childless nodes (value != 0): OctoMap's leaves (white is "no color" there).
 std::vector<Leaf> umbra_leaves(const OccupancyMap& map) {
   std::vector<Leaf> leaves;
   map.for_each_leaf([&](const Node& leaf) {
@@ -180,7 +180,7 @@ std::vector<SimulatedScan> office_scans(int count) {
 }
 
 Rgb color_of(const Vec3f& p) {
-  // A colour that varies over the scene and is never white.
+  // A color that varies over the scene and is never white.
   auto channel = [](float v) { return static_cast<std::uint8_t>(static_cast<int>(std::floor(v * 37.0f)) & 0xFE); };
   return {channel(p.x), channel(p.y), channel(p.z + 3.0f)};
 }
@@ -194,7 +194,7 @@ void insert_into_octomap(Tree& tree, const std::vector<SimulatedScan>& scans, bo
   }
 }
 
-/// A random umbra map: observed voxels in a few clusters (some with colour),
+/// A random umbra map: observed voxels in a few clusters (some with color),
 /// some solid blocks that prune into inner leaves, values from real hit/miss sequences.
 OccupancyMap random_map(std::uint32_t seed, bool color, bool auto_prune = true, double resolution = 0.1) {
   MapConfig config;
@@ -206,7 +206,7 @@ OccupancyMap random_map(std::uint32_t seed, bool color, bool auto_prune = true, 
   std::uniform_int_distribution<int> offset(-20, 20);
   std::uniform_int_distribution<int> updates(1, 6);
   std::uniform_int_distribution<int> coin(0, 1);
-  std::uniform_int_distribution<int> byte(0, 254);  // never 255: white means "no colour" in OctoMap
+  std::uniform_int_distribution<int> byte(0, 254);  // never 255: white means "no color" in OctoMap
   const std::uint32_t centre = map.grid().key_offset();
   for (int cluster = 0; cluster < 4; ++cluster) {
     const Key base{centre + static_cast<std::uint32_t>(offset(rng) * 50), centre - 700u + static_cast<std::uint32_t>(cluster * 300),
@@ -248,7 +248,7 @@ void check_ot_read_by_octomap(const OccupancyMap& map) {
     auto* color_tree = dynamic_cast<octomap::ColorOcTree*>(tree.get());
     ASSERT_NE(color_tree, nullptr) << tree->getTreeType();
     expect_same_leaves(umbra_leaves(map), octomap_leaves(*color_tree));
-    // Inner values and colours are what liboctomap computes itself.
+    // Inner values and colors are what liboctomap computes itself.
     color_tree->updateInnerOccupancy();
     EXPECT_EQ(octomap_ot_bytes(*color_tree), bytes);
   } else {
@@ -362,7 +362,7 @@ TEST(OctoMapWrite, EdgeCasesOfTheRoot) {
   }
 }
 
-TEST(OctoMapWrite, WhiteIsNoColourAndInnerColoursTruncate) {
+TEST(OctoMapWrite, WhiteIsNoColorAndInnerColorsTruncate) {
   MapConfig config;
   config.resolution = 0.1;
   config.color = true;
@@ -373,7 +373,7 @@ TEST(OctoMapWrite, WhiteIsNoColourAndInnerColoursTruncate) {
   for (const Key& key : {a, b, c}) map.update_log_odds(key, 0.85f);
   map.set_color(a, Rgb{10, 20, 31});
   map.set_color(b, Rgb{11, 20, 30});
-  map.set_color(c, Rgb{255, 255, 255});  // white: "no colour" to OctoMap, left out of averages
+  map.set_color(c, Rgb{255, 255, 255});  // white: "no color" to OctoMap, left out of averages
   check_ot_read_by_octomap(map);
   const auto tree = octomap_read_ot(encode_octomap(map, OctoMapFormat::ot));
   auto* color_tree = dynamic_cast<octomap::ColorOcTree*>(tree.get());
@@ -528,7 +528,7 @@ TEST(OctoMapRead, EmptyTreesOfEveryKind) {
   }
   EXPECT_EQ(decode_octomap(octomap_ot_bytes(colored)).resolution(), 0.25);
   EXPECT_TRUE(decode_octomap(octomap_ot_bytes(colored)).has_color());
-  EXPECT_FALSE(decode_octomap(octomap_bt_bytes(colored)).has_color());  // a .bt carries no colour
+  EXPECT_FALSE(decode_octomap(octomap_bt_bytes(colored)).has_color());  // a .bt carries no color
   EXPECT_EQ(encode_octomap(decode_octomap(octomap_ot_bytes(plain)), OctoMapFormat::ot), octomap_ot_bytes(plain));
   EXPECT_EQ(encode_octomap(decode_octomap(octomap_ot_bytes(colored)), OctoMapFormat::ot), octomap_ot_bytes(colored));
   EXPECT_EQ(encode_octomap(decode_octomap(octomap_bt_bytes(plain)), OctoMapFormat::bt), octomap_bt_bytes(plain));
@@ -656,7 +656,7 @@ void expect_exact_round_trip(const OccupancyMap& map) {
   EXPECT_EQ(encode_octomap(back, OctoMapFormat::ot), encode_octomap(map, OctoMapFormat::ot));
 }
 
-TEST(OctoMapRoundTrip, OtKeepsLogOddsAndColoursExactly) {
+TEST(OctoMapRoundTrip, OtKeepsLogOddsAndColorsExactly) {
   for (std::uint32_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     expect_exact_round_trip(random_map(seed, false));
@@ -752,7 +752,7 @@ Bytes with_data(const std::string& head, const Bytes& data) {
   return bytes;
 }
 
-/// One ot node: float log-odds, optional colour, child mask.
+/// One ot node: float log-odds, optional color, child mask.
 void append_ot_node(Bytes& out, float value, std::uint8_t mask, const Rgb* rgb = nullptr) {
   const auto bits = std::bit_cast<std::uint32_t>(value);
   for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(bits >> (8 * i)));
@@ -1034,9 +1034,9 @@ TEST(OctoMapTreeData, DecodesLiboctomapsDataLikeItsFiles) {
   insert_into_octomap(color_tree, office_scans(2));
   for (auto it = color_tree.begin_leafs(), end = color_tree.end_leafs(); it != end; ++it) it->setColor(10, 20, 30);
   color_tree.updateInnerOccupancy();
-  const OccupancyMap coloured = decode_octomap_tree(OctoMapFormat::ot, "ColorOcTree", 0.1, octomap_ot_data(color_tree));
-  EXPECT_TRUE(coloured.has_color());
-  expect_same_leaves(octomap_leaves(color_tree), umbra_leaves(coloured));
+  const OccupancyMap colored = decode_octomap_tree(OctoMapFormat::ot, "ColorOcTree", 0.1, octomap_ot_data(color_tree));
+  EXPECT_TRUE(colored.has_color());
+  expect_same_leaves(octomap_leaves(color_tree), umbra_leaves(colored));
 
   // An empty tree is no bytes.
   EXPECT_TRUE(umbra_leaves(decode_octomap_tree(OctoMapFormat::bt, "OcTree", 0.1, Bytes{})).empty());

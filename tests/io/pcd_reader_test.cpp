@@ -156,9 +156,9 @@ const std::vector<PcdPoint>& pcd_points() {
 
 enum class PcdData { ascii, binary, compressed };
 
-std::string pcd_file(PcdData data, bool colours, const std::string& viewpoint = "0 0 0 1 0 0 0") {
+std::string pcd_file(PcdData data, bool colors, const std::string& viewpoint = "0 0 0 1 0 0 0") {
   std::string header = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n";
-  header += colours ? "FIELDS x y z intensity normal rgb\nSIZE 4 8 4 2 4 4\nTYPE F F F U F F\nCOUNT 1 1 1 1 3 1\n"
+  header += colors ? "FIELDS x y z intensity normal rgb\nSIZE 4 8 4 2 4 4\nTYPE F F F U F F\nCOUNT 1 1 1 1 3 1\n"
                     : "FIELDS x y z intensity normal\nSIZE 4 8 4 2 4\nTYPE F F F U F\nCOUNT 1 1 1 1 3\n";
   header += "WIDTH 3\nHEIGHT 1\nVIEWPOINT " + viewpoint + "\nPOINTS 3\n";
   const std::vector<PcdPoint>& points = pcd_points();
@@ -171,21 +171,21 @@ std::string pcd_file(PcdData data, bool colours, const std::string& viewpoint = 
       line << float_text(p.x) << ' ' << p.y << ' ' << float_text(p.z) << ' ' << p.intensity << ' ' << p.normal[0]
            << ' ' << p.normal[1] << ' ' << p.normal[2];
       // Point 0 as PCL >= 1.8 writes rgb (the bits as an integer), point 2
-      // as older PCL did (the float whose bits hold the colour).
-      if (colours) line << ' ' << (i == 2 ? float_text(std::bit_cast<float>(p.rgb)) : std::to_string(p.rgb));
+      // as older PCL did (the float whose bits hold the color).
+      if (colors) line << ' ' << (i == 2 ? float_text(std::bit_cast<float>(p.rgb)) : std::to_string(p.rgb));
       body += line.str() + "\n";
     }
     return header + body;
   }
   // Cells[field][point] as little-endian bytes.
-  std::vector<std::vector<std::string>> cells(colours ? 6 : 5);
+  std::vector<std::vector<std::string>> cells(colors ? 6 : 5);
   for (const PcdPoint& p : points) {
     cells[0].push_back(Bytes().put(p.x).str());
     cells[1].push_back(Bytes().put(p.y).str());
     cells[2].push_back(Bytes().put(p.z).str());
     cells[3].push_back(Bytes().put(p.intensity).str());
     cells[4].push_back(Bytes().put(p.normal[0]).put(p.normal[1]).put(p.normal[2]).str());
-    if (colours) cells[5].push_back(Bytes().put(p.rgb).str());
+    if (colors) cells[5].push_back(Bytes().put(p.rgb).str());
   }
   std::string payload;
   if (data == PcdData::binary) {
@@ -203,12 +203,12 @@ std::string pcd_file(PcdData data, bool colours, const std::string& viewpoint = 
   return header + "DATA binary_compressed\n" + sizes.str() + std::string(compressed.begin(), compressed.end());
 }
 
-void expect_pcd_points(const Scan& scan, bool colours, const std::string& what) {
+void expect_pcd_points(const Scan& scan, bool colors, const std::string& what) {
   ASSERT_EQ(scan.points.size(), 3u) << what;
   EXPECT_EQ(scan.points[0], (Vec3f{1.5f, -2.25f, 3.0f})) << what;
   EXPECT_TRUE(std::isnan(scan.points[1].x) && std::isnan(scan.points[1].y) && std::isnan(scan.points[1].z)) << what;
   EXPECT_EQ(scan.points[2], (Vec3f{-0.125f, 1e-3f, 250.75f})) << what;
-  if (colours) {
+  if (colors) {
     ASSERT_EQ(scan.colors.size(), 3u) << what;
     EXPECT_EQ(scan.colors[0], (Rgb{0xff, 0x80, 0x40})) << what;
     EXPECT_EQ(scan.colors[2], (Rgb{0x0a, 0x14, 0x1e})) << what;
@@ -217,20 +217,20 @@ void expect_pcd_points(const Scan& scan, bool colours, const std::string& what) 
   }
 }
 
-TEST(PcdReader, AsciiBinaryAndCompressedWithAndWithoutColours) {
+TEST(PcdReader, AsciiBinaryAndCompressedWithAndWithoutColors) {
   const fs::path dir = test::scratch_dir();
   for (const PcdData data : {PcdData::ascii, PcdData::binary, PcdData::compressed}) {
-    for (const bool colours : {true, false}) {
-      const std::string what = "data " + std::to_string(static_cast<int>(data)) + (colours ? " rgb" : "");
-      const fs::path path = dir / ("cloud" + std::to_string(static_cast<int>(data)) + (colours ? "c" : "") + ".pcd");
-      write_file(path, pcd_file(data, colours));
+    for (const bool colors : {true, false}) {
+      const std::string what = "data " + std::to_string(static_cast<int>(data)) + (colors ? " rgb" : "");
+      const fs::path path = dir / ("cloud" + std::to_string(static_cast<int>(data)) + (colors ? "c" : "") + ".pcd");
+      write_file(path, pcd_file(data, colors));
       ScanSourceOptions options;
       options.origin = {7, 8, 9};
       const auto source = open_scan_source(path, options);
       EXPECT_EQ(source->scan_count(), 1u);
       Scan scan;
       ASSERT_TRUE(source->next(scan)) << what;
-      expect_pcd_points(scan, colours, what);
+      expect_pcd_points(scan, colors, what);
       EXPECT_EQ(scan.origin, (Vec3f{7, 8, 9})) << what << ": an identity viewpoint leaves the origin to the caller";
       EXPECT_EQ(scan.name, path.filename().string());
       EXPECT_FALSE(source->next(scan));

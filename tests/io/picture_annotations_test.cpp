@@ -3,7 +3,7 @@
 // drawing inside is the plain picture, the tick values (read with the
 // font's own glyphs, matched cell by cell) are the coordinates at their
 // ticks, the scale bar is as long as its label says, the legend shows the
-// colours it names.
+// colors it names.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -54,15 +54,15 @@ TEST(BitmapFont, EveryCharacterHasItsOwnGlyph) {
 
 // --- reading text back ------------------------------------------------------------------
 
-/// Whether the glyph of `c` is drawn at (left, top) in `colour`: every cell
-/// pixel is `colour` exactly where the glyph is set, and not where it is clear.
-bool glyph_at(const Image& image, int left, int top, char c, Rgb colour, int scale) {
+/// Whether the glyph of `c` is drawn at (left, top) in `color`: every cell
+/// pixel is `color` exactly where the glyph is set, and not where it is clear.
+bool glyph_at(const Image& image, int left, int top, char c, Rgb color, int scale) {
   if (left < 0 || top < 0 || left + kGlyphWidth * scale > image.width || top + kGlyphHeight * scale > image.height) {
     return false;
   }
   for (int row = 0; row < kGlyphHeight * scale; ++row) {
     for (int column = 0; column < kGlyphWidth * scale; ++column) {
-      const bool ink = image.at(left + column, top + row) == colour;
+      const bool ink = image.at(left + column, top + row) == color;
       if (ink != glyph_pixel(c, column / scale, row / scale)) return false;
     }
   }
@@ -77,12 +77,12 @@ struct Word {
 
 /// The words written with cell tops at row `top` between columns [from, to):
 /// glyphs found left to right, a space wherever a cell advance holds none.
-std::vector<Word> read_words(const Image& image, int top, int from, int to, Rgb colour, int scale) {
+std::vector<Word> read_words(const Image& image, int top, int from, int to, Rgb color, int scale) {
   std::vector<Word> words;
   for (int x = from; x < to;) {
     char found = 0;
     for (const char c : kCharacters) {
-      if (glyph_at(image, x, top, c, colour, scale)) {
+      if (glyph_at(image, x, top, c, color, scale)) {
         found = c;
         break;
       }
@@ -111,13 +111,13 @@ std::optional<double> as_number(const std::string& text) {
   return value;
 }
 
-/// The rows of `image` in [from, to) holding any pixel of `colour`, grouped in runs: their first rows.
-std::vector<int> text_line_tops(const Image& image, int from, int to, Rgb colour) {
+/// The rows of `image` in [from, to) holding any pixel of `color`, grouped in runs: their first rows.
+std::vector<int> text_line_tops(const Image& image, int from, int to, Rgb color) {
   std::vector<int> tops;
   bool previous = false;
   for (int row = from; row < to; ++row) {
     bool any = false;
-    for (int column = 0; column < image.width && !any; ++column) any = image.at(column, row) == colour;
+    for (int column = 0; column < image.width && !any; ++column) any = image.at(column, row) == color;
     if (any && !previous) tops.push_back(row);
     previous = any;
   }
@@ -211,17 +211,17 @@ TEST(PictureAnnotations, AnnotatedSliceReadsBackAsItsCoordinatesLegendAndScale) 
     ASSERT_EQ(up_name.size(), 1u);
     EXPECT_EQ(up_name[0].text, "y (m)");
 
-    // The legend: a swatch of each state colour, and the names.
+    // The legend: a swatch of each state color, and the names.
     const std::vector<Word> legend = read_words(annotated.image, lines[2], 0, width, kText, s);
     std::string names;
     for (const Word& word : legend) names += word.text + "|";
     EXPECT_EQ(names, "occupied|free|unknown|");
-    for (const Rgb colour : {options.occupied_colour, options.free_colour, options.unknown_colour}) {
+    for (const Rgb color : {options.occupied_color, options.free_color, options.unknown_color}) {
       std::size_t swatch = 0;
       for (int row = lines[2]; row < lines[2] + kGlyphHeight * s; ++row) {
-        for (int column = 0; column < width; ++column) swatch += annotated.image.at(column, row) == colour ? 1 : 0;
+        for (int column = 0; column < width; ++column) swatch += annotated.image.at(column, row) == color ? 1 : 0;
       }
-      EXPECT_GE(swatch, std::size_t(4 * s * s)) << "no swatch of a state colour in the legend";
+      EXPECT_GE(swatch, std::size_t(4 * s * s)) << "no swatch of a state color in the legend";
     }
 
     // The scale bar: "L m", then a bar of L metres.

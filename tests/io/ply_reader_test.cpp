@@ -1,6 +1,6 @@
 // Tests of the PLY reader (ply_file.hpp).
 //
-// Fixtures in all three encodings (with and without colours, extra vertex
+// Fixtures in all three encodings (with and without colors, extra vertex
 // properties, list properties, elements before and after the vertices);
 // every truncation of a binary file, bad headers, hostile counts under a
 // lowered address-space limit.
@@ -67,8 +67,8 @@ const std::vector<PlyVertex>& ply_vertices() {
 enum class PlyFormat { ascii, little, big };
 
 /// A PLY file with an element before the vertices (with a list), vertices
-/// with normals, colours (optional), alpha and intensity, and faces after.
-std::string rich_ply(PlyFormat format, bool colours) {
+/// with normals, colors (optional), alpha and intensity, and faces after.
+std::string rich_ply(PlyFormat format, bool colors) {
   std::string header = "ply\n";
   header += format == PlyFormat::ascii ? "format ascii 1.0\n"
                                        : (format == PlyFormat::little ? "format binary_little_endian 1.0\n"
@@ -86,7 +86,7 @@ std::string rich_ply(PlyFormat format, bool colours) {
       "property float nx\n"
       "property float ny\n"
       "property float nz\n";
-  if (colours) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  if (colors) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   header +=
       "property uchar alpha\n"
       "property float intensity\n"
@@ -101,7 +101,7 @@ std::string rich_ply(PlyFormat format, bool colours) {
       line.precision(17);
       line << v.x << ' ' << float_text(v.y) << ' ' << v.z << ' ' << v.normal[0] << ' ' << v.normal[1] << ' '
            << v.normal[2] << ' ';
-      if (colours) line << int{v.rgba[0]} << ' ' << int{v.rgba[1]} << ' ' << int{v.rgba[2]} << ' ';
+      if (colors) line << int{v.rgba[0]} << ' ' << int{v.rgba[1]} << ' ' << int{v.rgba[2]} << ' ';
       line << int{v.rgba[3]} << ' ' << float_text(v.intensity) << '\n';
       body += line.str();
     }
@@ -112,7 +112,7 @@ std::string rich_ply(PlyFormat format, bool colours) {
   body.put(std::uint8_t{2}).put(1.5f).put(2.5f).put(std::uint8_t{7});
   for (const PlyVertex& v : ply_vertices()) {
     body.put(v.x).put(v.y).put(v.z).put(v.normal[0]).put(v.normal[1]).put(v.normal[2]);
-    if (colours) body.put(v.rgba[0]).put(v.rgba[1]).put(v.rgba[2]);
+    if (colors) body.put(v.rgba[0]).put(v.rgba[1]).put(v.rgba[2]);
     body.put(v.rgba[3]).put(v.intensity);
   }
   body.put(std::uint8_t{3}).put(std::int32_t{0}).put(std::int32_t{1}).put(std::int32_t{2}).put(std::uint8_t{1});
@@ -121,13 +121,13 @@ std::string rich_ply(PlyFormat format, bool colours) {
   return header + body.str();
 }
 
-void expect_rich_ply_scan(const Scan& scan, bool colours, const std::string& what) {
+void expect_rich_ply_scan(const Scan& scan, bool colors, const std::string& what) {
   ASSERT_EQ(scan.points.size(), 3u) << what;
   for (std::size_t i = 0; i < 3; ++i) {
     const PlyVertex& v = ply_vertices()[i];
     EXPECT_EQ(scan.points[i], (Vec3f{static_cast<float>(v.x), v.y, static_cast<float>(v.z)})) << what << " vertex " << i;
   }
-  if (colours) {
+  if (colors) {
     ASSERT_EQ(scan.colors.size(), 3u) << what;
     for (std::size_t i = 0; i < 3; ++i) {
       const PlyVertex& v = ply_vertices()[i];
@@ -138,13 +138,13 @@ void expect_rich_ply_scan(const Scan& scan, bool colours, const std::string& wha
   }
 }
 
-TEST(PlyReader, EveryEncodingWithAndWithoutColours) {
+TEST(PlyReader, EveryEncodingWithAndWithoutColors) {
   const fs::path dir = test::scratch_dir();
   for (const PlyFormat format : {PlyFormat::ascii, PlyFormat::little, PlyFormat::big}) {
-    for (const bool colours : {true, false}) {
-      const std::string what = "format " + std::to_string(static_cast<int>(format)) + (colours ? " rgb" : " plain");
-      const fs::path path = dir / ("cloud" + std::to_string(static_cast<int>(format)) + (colours ? "c" : "") + ".ply");
-      write_file(path, rich_ply(format, colours));
+    for (const bool colors : {true, false}) {
+      const std::string what = "format " + std::to_string(static_cast<int>(format)) + (colors ? " rgb" : " plain");
+      const fs::path path = dir / ("cloud" + std::to_string(static_cast<int>(format)) + (colors ? "c" : "") + ".ply");
+      write_file(path, rich_ply(format, colors));
       ScanSourceOptions options;
       options.origin = {0.5f, -1, 2};
       const auto source = open_scan_source(path, options);
@@ -152,7 +152,7 @@ TEST(PlyReader, EveryEncodingWithAndWithoutColours) {
       EXPECT_LT(source->progress(), 1.0);
       Scan scan;
       ASSERT_TRUE(source->next(scan)) << what;
-      expect_rich_ply_scan(scan, colours, what);
+      expect_rich_ply_scan(scan, colors, what);
       EXPECT_EQ(scan.origin, (Vec3f{0.5f, -1, 2})) << what;
       EXPECT_EQ(scan.name, path.filename().string());
       EXPECT_FALSE(source->next(scan));
@@ -163,7 +163,7 @@ TEST(PlyReader, EveryEncodingWithAndWithoutColours) {
 
 TEST(PlyReader, EveryScalarTypeListsInsideVerticesAndCrLf) {
   const fs::path dir = test::scratch_dir();
-  // x as char, y as ushort, z as uint, a list between them, float colours.
+  // x as char, y as ushort, z as uint, a list between them, float colors.
   for (const bool big : {false, true}) {
     Bytes bytes(big);
     bytes.text(std::string("ply\r\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
@@ -249,7 +249,7 @@ TEST(PlyReader, BadHeadersAreReportedClearly) {
       {"ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int idx\nend_header\n3 0 1 2\n", "no 'vertex'"},
       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
        "property uchar red\nend_header\n0 0 0 1\n",
-       "some of the colour"},
+       "some of the color"},
       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty list float int x\nend_header\n", "not an integer type"},
       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar float x\nproperty float y\nproperty float z\n"
        "end_header\n1 0 0 0\n",

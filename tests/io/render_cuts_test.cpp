@@ -88,7 +88,7 @@ TEST(RenderCuts, TopViewOfTheRoomCutAtItsCeilingShowsTheFloorAndTheTable) {
   EXPECT_NEAR(cut.ramp_high, 2.35, 1e-9);
   EXPECT_EQ(pixel_at(cut, floor_point), shaded(height_ramp(0.0)));
   EXPECT_EQ(pixel_at(cut, table_point), shaded(height_ramp((0.75 - 0.05) / 2.3)));
-  // The floor colour fills the room's inside less the table.
+  // The floor color fills the room's inside less the table.
   std::size_t floor_pixels = 0;
   for (int row = 0; row < cut.image.height; ++row) {
     for (int column = 0; column < cut.image.width; ++column) floor_pixels += cut.image.at(column, row) == shaded(height_ramp(0.0));
@@ -96,13 +96,13 @@ TEST(RenderCuts, TopViewOfTheRoomCutAtItsCeilingShowsTheFloorAndTheTable) {
   const double pixels_per_m2 = 1.0 / (cut.camera.metres_per_pixel * cut.camera.metres_per_pixel);
   EXPECT_NEAR(double(floor_pixels), (3.8 * 2.8 - 0.5) * pixels_per_m2, 0.03 * 3.8 * 2.8 * pixels_per_m2);
 
-  // Coloured by state and cut at the floor too: free floor space between the walls.
+  // Colored by state and cut at the floor too: free floor space between the walls.
   options.color = RenderColor::state;
   options.min_z = find_floor(room)->min_z;
   const MapPicture state = render_map(room, options);
-  EXPECT_EQ(pixel_at(state, floor_point), options.free_colour);
-  EXPECT_EQ(pixel_at(state, table_point), shaded(options.occupied_colour));
-  EXPECT_EQ(pixel_at(state, room_voxel(0, 15, 10) + Vec3d{0, 0, 1.2}), shaded(options.occupied_colour)) << "a wall";
+  EXPECT_EQ(pixel_at(state, floor_point), options.free_color);
+  EXPECT_EQ(pixel_at(state, table_point), shaded(options.occupied_color));
+  EXPECT_EQ(pixel_at(state, room_voxel(0, 15, 10) + Vec3d{0, 0, 1.2}), shaded(options.occupied_color)) << "a wall";
 }
 
 }  // namespace

@@ -4,7 +4,7 @@
 // truncation of a small file, wrong count prefixes, hostile counts (checked
 // with an allocation probe: this file replaces the global operator new with a
 // pass-through that can record the largest request while a test watches).
-// xyz: plain, colours, comments, CRLF, bad lines with their line numbers,
+// xyz: plain, colors, comments, CRLF, bad lines with their line numbers,
 // bz2 compressed (made here with libbz2), truncated/corrupt bz2. Factory:
 // format detection and open errors. Shared data (skipped when absent):
 // OctoMap's scan.dat.bz2 and spherical_scan.graph, the 3DTK ScanGraph.
@@ -433,8 +433,8 @@ TEST(Xyz, NumbersAreRoundedToFloatLikeStrtof) {
   EXPECT_EQ(scans[0].points[1].z, -std::numeric_limits<float>::infinity());
 }
 
-TEST(Xyz, ColoursAreRead) {
-  const fs::path path = test::scratch_dir() / "coloured.txt";
+TEST(Xyz, ColorsAreRead) {
+  const fs::path path = test::scratch_dir() / "colored.txt";
   write_file(path, "1 2 3 255 0 17\n4 5 6 0 128 255\n");
   const std::vector<Scan> scans = read_all(path);
   ASSERT_EQ(scans.size(), 1u);
@@ -493,9 +493,9 @@ TEST(Xyz, BadLinesAreReportedWithLineNumberAndText) {
       {"1 2 3x\n", ":1: '3x' is not a number"},
       {"1,2,3\n", ":1: expected 3 numbers (x y z) or 6 (x y z r g b), found 1: '1,2,3'"},
       {"1 2 3 # comment\n", ":1: expected 3 numbers (x y z) or 6 (x y z r g b), found 5"},
-      {"1 2 3 # a comment\n", ":1: colour value '#' is not an integer 0..255"},
-      {"1 2 3 255 0 256\n", ":1: colour value '256' is not an integer 0..255, in '1 2 3 255 0 256'"},
-      {"1 2 3 255 0 0.5\n", ":1: colour value '0.5' is not an integer 0..255"},
+      {"1 2 3 # a comment\n", ":1: color value '#' is not an integer 0..255"},
+      {"1 2 3 255 0 256\n", ":1: color value '256' is not an integer 0..255, in '1 2 3 255 0 256'"},
+      {"1 2 3 255 0 0.5\n", ":1: color value '0.5' is not an integer 0..255"},
       {"\n\n" + long_line + " 4\n", ":3: expected 3 numbers (x y z) or 6 (x y z r g b), found 4: '" +
                                         long_line.substr(0, 80) + "...'"},
       {"1 2 \x01\x02\n", ":1: '\?\?' is not a number"},
@@ -509,13 +509,13 @@ TEST(Xyz, BadLinesAreReportedWithLineNumberAndText) {
   }
 }
 
-TEST(Xyz, MixingColouredAndPlainLinesIsRejected) {
+TEST(Xyz, MixingColoredAndPlainLinesIsRejected) {
   const fs::path dir = test::scratch_dir();
   write_file(dir / "a.xyz", "# x y z r g b\n1 2 3 4 5 6\n1 2 3\n");
-  EXPECT_NE(format_error_of(dir / "a.xyz").find(":3: this line has no colour (x y z) but line 2 has one"),
+  EXPECT_NE(format_error_of(dir / "a.xyz").find(":3: this line has no color (x y z) but line 2 has one"),
             std::string::npos);
   write_file(dir / "b.xyz", "1 2 3\n\n1 2 3 4 5 6\n");
-  EXPECT_NE(format_error_of(dir / "b.xyz").find(":3: this line has a colour (x y z r g b) but line 1 has none"),
+  EXPECT_NE(format_error_of(dir / "b.xyz").find(":3: this line has a color (x y z r g b) but line 1 has none"),
             std::string::npos);
 }
 

@@ -62,8 +62,8 @@ OccupancyMap hand_made_map() {
   return map;
 }
 
-const Rgb kFreeGrey = TopdownOptions{}.free_colour;
-const Rgb kUnknownDark = TopdownOptions{}.unknown_colour;
+const Rgb kFreeGrey = TopdownOptions{}.free_color;
+const Rgb kUnknownDark = TopdownOptions{}.unknown_color;
 
 std::string text(Rgb c) {
   return "(" + std::to_string(c.r) + ", " + std::to_string(c.g) + ", " + std::to_string(c.b) + ")";
@@ -78,7 +78,7 @@ TEST(TopdownImage, HandMadeMapHasThePrunedNodesItIsMeantToHave) {
   EXPECT_EQ(depth_one_leaves, 2);  // A and F: the renderer must handle inner leaves
 }
 
-TEST(TopdownImage, RampEndsAreTheDocumentedColours) {
+TEST(TopdownImage, RampEndsAreTheDocumentedColors) {
   EXPECT_EQ(height_ramp(0.0), (Rgb{48, 64, 200}));
   EXPECT_EQ(height_ramp(0.5), (Rgb{60, 180, 75}));
   EXPECT_EQ(height_ramp(1.0), (Rgb{215, 48, 39}));
@@ -127,14 +127,14 @@ TEST(TopdownImage, HandPlacedVoxelsGiveExpectedPixels) {
   }
 }
 
-TEST(TopdownImage, FixedRampEndsAndCustomColours) {
+TEST(TopdownImage, FixedRampEndsAndCustomColors) {
   const OccupancyMap map = hand_made_map();
   TopdownOptions options;
   options.margin_pixels = 0;
   options.ramp_low_z = 0.05;
   options.ramp_high_z = 2.05;
-  options.free_colour = {1, 2, 3};
-  options.unknown_colour = {4, 5, 6};
+  options.free_color = {1, 2, 3};
+  options.unknown_color = {4, 5, 6};
   const Image image = render_topdown(map, options);
   ASSERT_EQ(image.width, 8);
   ASSERT_EQ(image.height, 2);
@@ -231,7 +231,7 @@ TEST(TopdownImage, BadOptionsAreNamed) {
   expect_named(options, "ramp_high_z");
 }
 
-/// A slow reference: the colour of one pixel of a depth-0 picture from
+/// A slow reference: the color of one pixel of a depth-0 picture from
 /// per-voxel state() queries.
 Rgb reference_pixel(const OccupancyMap& map, const Image& image, const TopdownOptions& options,
                     int column, int row) {
@@ -251,7 +251,7 @@ Rgb reference_pixel(const OccupancyMap& map, const Image& image, const TopdownOp
     }
     any_free = any_free || state == OccupancyState::free;
   }
-  return any_free ? options.free_colour : options.unknown_colour;
+  return any_free ? options.free_color : options.unknown_color;
 }
 
 TEST(TopdownImage, DemoSceneMapMatchesPerVoxelReference) {
@@ -286,23 +286,23 @@ TEST(TopdownImage, DemoSceneMapMatchesPerVoxelReference) {
   // A picture with all three kinds of column and walls of many heights.
   std::size_t free = 0;
   std::size_t unknown = 0;
-  std::vector<Rgb> occupied_colours;
+  std::vector<Rgb> occupied_colors;
   for (int row = 0; row < image.height; ++row) {
     for (int column = 0; column < image.width; ++column) {
       const Rgb c = image.at(column, row);
-      if (c == options.free_colour) {
+      if (c == options.free_color) {
         ++free;
-      } else if (c == options.unknown_colour) {
+      } else if (c == options.unknown_color) {
         ++unknown;
-      } else if (std::find(occupied_colours.begin(), occupied_colours.end(), c) ==
-                 occupied_colours.end()) {
-        occupied_colours.push_back(c);
+      } else if (std::find(occupied_colors.begin(), occupied_colors.end(), c) ==
+                 occupied_colors.end()) {
+        occupied_colors.push_back(c);
       }
     }
   }
   EXPECT_GT(free, 0u);
   EXPECT_GT(unknown, std::size_t(2 * (image.width + image.height)));  // at least the margin
-  EXPECT_GE(occupied_colours.size(), 10u);
+  EXPECT_GE(occupied_colors.size(), 10u);
 
   // Kept in the scratch folder for a human look.
   write_png(image, umbra::test::scratch_dir() / "demo_topdown.png");

@@ -52,7 +52,7 @@ struct TumFixture {
   std::uint32_t width = 4;
   std::uint32_t height = 3;
   std::vector<std::vector<std::uint16_t>> depths;
-  std::vector<Image> colours;
+  std::vector<Image> colors;
   std::vector<Matrix34> poses;          // of the frames on disk
   std::vector<std::array<double, 3>> origins;
 };
@@ -64,21 +64,21 @@ TumFixture tum_fixture(const fs::path& dir) {
   fs::create_directories(fixture.folder / "rgb");
   fixture.depths = {{0, 1000, 2000, 0, 500, 0, 65535, 3000, 1, 2, 0, 0}, {7, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 4000}};
   for (std::size_t frame = 0; frame < 2; ++frame) {
-    Image colour(4, 3);
+    Image color(4, 3);
     for (int row = 0; row < 3; ++row) {
       for (int column = 0; column < 4; ++column) {
-        colour.set(column, row,
+        color.set(column, row,
                    {static_cast<std::uint8_t>(10 * column + 1), static_cast<std::uint8_t>(50 * row + 2),
                     static_cast<std::uint8_t>(100 * frame + 3)});
       }
     }
-    fixture.colours.push_back(colour);
+    fixture.colors.push_back(color);
   }
   write_grey_png(fixture.folder / "depth" / "1.001.png", 4, 3, fixture.depths[0]);
-  write_png(fixture.colours[0], fixture.folder / "rgb" / "1.000.png");
+  write_png(fixture.colors[0], fixture.folder / "rgb" / "1.000.png");
   write_grey_png(fixture.folder / "depth" / "3.001.png", 4, 3, fixture.depths[1]);
-  write_png(fixture.colours[1], fixture.folder / "rgb" / "3.000.png");
-  write_png(fixture.colours[1], fixture.folder / "rgb" / "4.000.png");  // its depth image is missing
+  write_png(fixture.colors[1], fixture.folder / "rgb" / "3.000.png");
+  write_png(fixture.colors[1], fixture.folder / "rgb" / "4.000.png");  // its depth image is missing
   const double half = std::sqrt(0.5);
   fixture.poses = {Matrix34::from_quaternion(1, 0, 0, 0, 1, 2, 3), Matrix34::from_quaternion(half, 0, 0, half, -1, 0.5, 2)};
   fixture.origins = {{1, 2, 3}, {-1, 0.5, 2}};
@@ -114,7 +114,7 @@ void expect_tum_frames(const std::vector<Scan>& scans, const TumFixture& fixture
         const double y = (v - fixture.camera.cy) * z / fixture.camera.fy;
         expect_near_point(scan.points[k], fixture.poses[frame].apply(x, y, z), 1e-4,
                           what + " pixel " + std::to_string(u) + "," + std::to_string(v));
-        EXPECT_EQ(scan.colors[k], fixture.colours[frame].at(static_cast<int>(u), static_cast<int>(v))) << what;
+        EXPECT_EQ(scan.colors[k], fixture.colors[frame].at(static_cast<int>(u), static_cast<int>(v))) << what;
         ++k;
       }
     }
@@ -190,7 +190,7 @@ TEST(TumReader, AssociationDiscoveryAndErrors) {
   EXPECT_TRUE(contains(format_error_of(association, options), ":1:"));
   write_file(association, "rgb/1.000.png depth/1.001.png 1 2 3 0 0 0 0\n");
   EXPECT_TRUE(contains(format_error_of(association, options), "bad pose"));
-  // An 8-bit depth image, a corrupt one, a colour image of another size.
+  // An 8-bit depth image, a corrupt one, a color image of another size.
   write_file(association, "rgb/1.000.png depth/1.001.png 1 2 3 0 0 0 1\n");
   write_grey_png(fixture.folder / "depth" / "1.001.png", 4, 3, fixture.depths[0], 8);
   message = format_error_of(association, options);
@@ -200,7 +200,7 @@ TEST(TumReader, AssociationDiscoveryAndErrors) {
   EXPECT_TRUE(contains(message, "corrupt PNG")) << message;
   write_grey_png(fixture.folder / "depth" / "1.001.png", 2, 3, {1, 2, 3, 4, 5, 6});
   message = format_error_of(association, options);
-  EXPECT_TRUE(contains(message, "the colour image is 4 x 3")) << message;
+  EXPECT_TRUE(contains(message, "the color image is 4 x 3")) << message;
   // A bad camera.
   options.depth_camera.fx = 0;
   EXPECT_THROW((void)open_scan_source(association, options), std::invalid_argument);
@@ -216,11 +216,11 @@ TEST(TumReader, AssociationDiscoveryAndErrors) {
 /// A PNG that is only a header (and a stub of image data): enough for a
 /// reader to learn the size it declares, nothing to decode.
 void write_png_header_only(const fs::path& path, std::uint32_t width, std::uint32_t height, std::uint8_t bit_depth,
-                           std::uint8_t colour_type) {
+                           std::uint8_t color_type) {
   Bytes png(true);
   png.text("\x89PNG\r\n\x1a\n");
   Bytes header(true);
-  header.put(width).put(height).put(bit_depth).put(colour_type);
+  header.put(width).put(height).put(bit_depth).put(color_type);
   header.put(std::uint8_t{0}).put(std::uint8_t{0}).put(std::uint8_t{0});
   append_chunk(png, "IHDR", header.str());
   append_chunk(png, "IDAT", std::string("\x78\x01", 2));
@@ -303,13 +303,13 @@ TEST(TumRealData, TenPioneerSlam2Frames) {
     EXPECT_GT(scan.points.size(), 100000u);
     EXPECT_LE(scan.points.size(), 640u * 480u);
     ASSERT_EQ(scan.colors.size(), scan.points.size());
-    std::size_t coloured = 0;
+    std::size_t colored = 0;
     double farthest = 0;
     for (std::size_t i = 0; i < scan.points.size(); ++i) {
-      coloured += scan.colors[i] != Rgb{0, 0, 0};
+      colored += scan.colors[i] != Rgb{0, 0, 0};
       farthest = std::max(farthest, static_cast<double>((scan.points[i] - scan.origin).norm()));
     }
-    EXPECT_GT(coloured, scan.points.size() / 2);
+    EXPECT_GT(colored, scan.points.size() / 2);
     EXPECT_LT(farthest, 16.0);  // 65535 / 5000 m at the image corner
     // The pose convention and the intrinsics put the hall's floor (much of
     // every frame) level at the motion-capture frame's z = 0 (measured:

@@ -10,7 +10,7 @@
 // snapshots in that range. Questions cover point lookups at every depth,
 // collision checks, whole-map iterations and counts; every iteration also
 // checks that each inner node it meets agrees with its children (never a
-// coarse node that disagrees with them). Integrators, thread counts, colour
+// coarse node that disagrees with them). Integrators, thread counts, color
 // and automatic pruning vary, and decay steps (advance_clock) run between
 // the scans in one test. The same test runs under ThreadSanitizer in
 // the `tsan` label (tests/map/run_tsan_stress.sh).
@@ -266,7 +266,7 @@ TEST(Concurrency, ReadersSeeWholeDecaySteps) {
   run_contract({IntegratorKind::fast, 2, true, false, true}, 5, 2, 1);
 }
 
-TEST(Concurrency, ReadersSeeWholeScansWithThreadsColourAndNoPruning) {
+TEST(Concurrency, ReadersSeeWholeScansWithThreadsColorAndNoPruning) {
   run_contract({IntegratorKind::discrete, 2, false, true}, 8, 2, 1);
   run_contract({IntegratorKind::fast, 2, false, false}, 8, 2, 1);
   run_contract({IntegratorKind::discrete, 1, true, true}, 6, 2, 1);

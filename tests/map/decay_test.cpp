@@ -174,7 +174,7 @@ TEST(Decay, MatchesBruteForceAtEveryDepth) {
 
 TEST(Decay, DecayedVoxelsBecomeUnknownAndPruneAway) {
   // A map seen once, decayed far enough: every voxel back at 0, the tree a
-  // single unknown root as if nothing was ever observed, colour dropped.
+  // single unknown root as if nothing was ever observed, color dropped.
   MapConfig config;
   config.resolution = 0.1;
   config.depth_levels = 6;

@@ -1,5 +1,5 @@
 // crop_map against brute force: every finest voxel of the cropped map holds
-// the source's value (and colour and its weight) inside the box and is
+// the source's value (and color and its weight) inside the box and is
 // unknown outside it; the tree's invariants hold, automatic pruning is kept,
 // and a box that cuts a pruned node splits it.
 #include <gtest/gtest.h>
@@ -63,7 +63,7 @@ TEST(MapCrop, KeepsTheBoxAndNothingElse) {
   }
 }
 
-TEST(MapCrop, SplitsAPrunedNodeAndKeepsColourWeights) {
+TEST(MapCrop, SplitsAPrunedNodeAndKeepsColorWeights) {
   MapConfig config;
   config.resolution = 0.1;
   config.depth_levels = 5;
@@ -76,7 +76,7 @@ TEST(MapCrop, SplitsAPrunedNodeAndKeepsColourWeights) {
     }
   }
   ASSERT_LT(source.node_counts().total(), 100u) << "the block did not prune";
-  // Two colour samples on one voxel: a weight of 2.
+  // Two color samples on one voxel: a weight of 2.
   const Vec3d voxel = source.grid().center(Key{9, 9, 9});
   source.add_color(voxel, Rgb{200, 0, 0});
   source.add_color(voxel, Rgb{0, 0, 100});

@@ -221,7 +221,7 @@ TEST(MapMerge, IntoItselfDoublesTheLogOdds) {
   EXPECT_EQ(map.node(Key{0, 0, 0}).log_odds, 0.0f);
 }
 
-TEST(MapMerge, ColoursAverageByTheirSampleCounts) {
+TEST(MapMerge, ColorsAverageByTheirSampleCounts) {
   MapConfig config;
   config.resolution = 0.1;
   config.depth_levels = 5;
@@ -242,7 +242,7 @@ TEST(MapMerge, ColoursAverageByTheirSampleCounts) {
   EXPECT_EQ(map.color(only_other), (Rgb{9, 8, 7}));
   EXPECT_EQ(test::tree_of(map).color_weight(test::tree_of(map).find(morton::encode(both), 0).node), 4);
   EXPECT_EQ(test::check_invariants(map), "");
-  // A map without colour takes the log-odds only.
+  // A map without color takes the log-odds only.
   OccupancyMap plain(0.1, 5);
   plain.merge(other);
   EXPECT_EQ(plain.node(both).log_odds, 1.0f);

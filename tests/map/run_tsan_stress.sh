@@ -3,8 +3,8 @@
 # tsan, in the default suite): the TSan tree is built by scripts/sanitize.sh
 # thread, the one way to build it, but only the executables with threads
 # (the reader/writer contract, decay steps included, insertion with several threads and the
-# parallel apply and colour walk, the node pools' concurrent phase, the
-# thread pool, the parallel colour samples and radix sort), and only their
+# parallel apply and color walk, the node pools' concurrent phase, the
+# thread pool, the parallel color samples and radix sort), and only their
 # threaded tests run. Any report fails the run (halt_on_error).
 #
 #   tests/map/run_tsan_stress.sh SOURCE_DIR BUILD_DIR

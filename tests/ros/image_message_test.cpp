@@ -1,7 +1,7 @@
 // ROS depth images to umbra (ros/src/image_message.hpp): the pixels of
 // 16UC1 and 32FC1 images, padded rows and either byte order; the
 // intrinsics of a CameraInfo (P, else K; region of interest and binning as
-// image_geometry applies them); colour images of each encoding; and an
+// image_geometry applies them); color images of each encoding; and an
 // error naming the image for every malformed message.
 #include <cmath>
 #include <cstring>
@@ -189,7 +189,7 @@ TEST(ImageMessage, CameraInfoOfAnotherSizeOrWithoutCalibrationIsAnError) {
             std::string::npos);
 }
 
-TEST(ImageMessage, ColourImagesOfEachEncoding) {
+TEST(ImageMessage, ColorImagesOfEachEncoding) {
   for (const std::string encoding : {"rgb8", "bgr8", "rgba8", "bgra8"}) {
     const std::uint32_t channels = encoding.size() == 5 ? 4 : 3;
     const bool bgr = encoding[0] == 'b';
@@ -216,19 +216,19 @@ TEST(ImageMessage, ColourImagesOfEachEncoding) {
   }
 }
 
-TEST(ImageMessage, MalformedColourImagesNameTheImageAndTheProblem) {
+TEST(ImageMessage, MalformedColorImagesNameTheImageAndTheProblem) {
   const auto grey = [](std::uint32_t, std::uint32_t, std::uint8_t* p) { p[0] = p[1] = p[2] = 9; };
   std::vector<Rgb> colors;
   const auto decode = [&](const sensor_msgs::Image& image) {
     return error_of([&] { decode_color_image(image, 4, 3, colors, kName); });
   };
   EXPECT_EQ(decode(image_of("mono8", 4, 3, 3, 12, false, grey)),
-            kName + ": colour image has encoding 'mono8'; umbra reads rgb8, bgr8, rgba8 and bgra8");
+            kName + ": color image has encoding 'mono8'; umbra reads rgb8, bgr8, rgba8 and bgra8");
   EXPECT_EQ(decode(image_of("rgb8", 5, 3, 3, 15, false, grey)),
-            kName + ": colour image is 5 x 3 pixels, the depth image 4 x 3; umbra needs a colour image registered "
+            kName + ": color image is 5 x 3 pixels, the depth image 4 x 3; umbra needs a color image registered "
                     "to the depth image, pixel for pixel");
   EXPECT_EQ(decode(image_of("rgba8", 4, 3, 3, 12, false, grey)),
-            kName + ": colour image (rgba8, 4 x 3) has step 12, shorter than a row of 16 bytes");
+            kName + ": color image (rgba8, 4 x 3) has step 12, shorter than a row of 16 bytes");
 }
 
 }  // namespace

@@ -12,7 +12,7 @@
 // 3DTK scans) and the library makes from the simulator's points directly.
 // Then ~clear_bbx must free exactly the known voxels of a box, and ~reset
 // must empty the map. Depth images (16UC1 and 32FC1, with their CameraInfo,
-// a colour image, and TF for the camera's optical frame) must give the map
+// a color image, and TF for the camera's optical frame) must give the map
 // the library's insert_depth_image makes of the same images, and malformed
 // ones a log line naming the image while the node goes on. ROS's own command-line tools must work on the
 // node as a user types them (rostopic echo, rosservice call, after sourcing build/ros/messages/setup.sh), and
@@ -344,7 +344,7 @@ class Loopback : public ::testing::Test {
     cloud_pub_ = node_->advertise<sensor_msgs::PointCloud2>("/robot/points", 10);
     tf_pub_ = node_->advertise<tf2_msgs::TFMessage>("/tf", 100);
     // A camera driver's topics; the node's depth/image is remapped to the image, and finds the CameraInfo
-    // beside it (image_transport's rule). The colour image is remapped only where a test asks for colours.
+    // beside it (image_transport's rule). The color image is remapped only where a test asks for colors.
     depth_pub_ = node_->advertise<sensor_msgs::Image>("/camera/depth/image_rect_raw", 10);
     info_pub_ = node_->advertise<sensor_msgs::CameraInfo>("/camera/depth/camera_info", 10);
     color_pub_ = node_->advertise<sensor_msgs::Image>("/camera/color/image_raw", 10);
@@ -412,7 +412,7 @@ class Loopback : public ::testing::Test {
     return mapped;
   }
 
-  /// Publishes a depth image with its CameraInfo (and colour image) and waits for the maps with its stamp, a log
+  /// Publishes a depth image with its CameraInfo (and color image) and waits for the maps with its stamp, a log
   /// line saying the node cannot insert it, or the node's end; true when the maps came.
   bool insert_image(const sensor_msgs::Image& depth, const sensor_msgs::CameraInfo& info,
                     const sensor_msgs::Image* color = nullptr) {
@@ -754,7 +754,7 @@ TEST_F(Loopback, CommandLineToolsEchoTopicsAndCallServices) {
 TEST_F(Loopback, CloudsWithoutTransformAreNamedInAWarning) {
   ASSERT_NO_FATAL_FAILURE(start_server(0.1));
   const fs::path log = dir_ / "umbra_server.log";
-  // The log line that starts with `start`, without roscpp's colour codes around it.
+  // The log line that starts with `start`, without roscpp's color codes around it.
   const auto line_of = [&](const std::string& start) {
     const std::string text = log_text(log);
     const std::size_t at = text.find(start);
@@ -960,7 +960,7 @@ TEST_F(Loopback, HostileCloudsGiveAMapOrOneClearError) {
   ASSERT_NO_FATAL_FAILURE(start_server(0.1));
   const fs::path log = dir_ / "umbra_server.log";
   const std::vector<Vec3f> points{{1.0f, 1.0f, 1.0f}, {2.0f, 1.5f, 0.5f}, {-1.0f, 3.0f, 2.0f}};
-  // An rgb field past point_step, colours off (~keep_colors false): not looked at, the cloud is mapped.
+  // An rgb field past point_step, colors off (~keep_colors false): not looked at, the cloud is mapped.
   EXPECT_TRUE(insert(map_cloud(points, ros::Time(5000.0), 12))) << log_text(log);
   // NaN points: skipped and counted in the log.
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -1145,10 +1145,10 @@ sim::SimulatedDepthImage simulated_office_image(int pose_index) {
   return sim::simulate_depth_frame(sim::make_demo_scene(), sim::demo_camera_path()[std::size_t(pose_index)], model);
 }
 
-/// A colour image registered to a width x height depth image (rgb8, or bgr8), and its colours for the library.
+/// A color image registered to a width x height depth image (rgb8, or bgr8), and its colors for the library.
 sensor_msgs::Image color_image(int width, int height, bool bgr, const ros::Time& stamp, std::vector<Rgb>& colors) {
   sensor_msgs::Image m;
-  m.header.frame_id = "camera_color_optical_frame";  // ignored: the colours are the depth image's pixels'
+  m.header.frame_id = "camera_color_optical_frame";  // ignored: the colors are the depth image's pixels'
   m.header.stamp = stamp;
   m.width = static_cast<std::uint32_t>(width);
   m.height = static_cast<std::uint32_t>(height);
@@ -1233,8 +1233,8 @@ TEST_F(Loopback, DepthImagesGiveTheLibrarysMap) {
   EXPECT_NE(data_of(*full_.get()), tree_bytes(as_points, OctoMapFormat::ot));
 }
 
-// Colour from a registered colour image (~image_colors), and the image parameters reaching the integrator.
-TEST_F(Loopback, ColourImagesAndImageParameters) {
+// Color from a registered color image (~image_colors), and the image parameters reaching the integrator.
+TEST_F(Loopback, ColorImagesAndImageParameters) {
   const double resolution = 0.1;
   ASSERT_NO_FATAL_FAILURE(start_server(resolution, {"rgb/image:=/camera/color/image_raw", "_keep_colors:=true",
                                                     "_image_colors:=true", "_image_max_range:=3.0",
@@ -1262,9 +1262,9 @@ TEST_F(Loopback, ColourImagesAndImageParameters) {
   expected.insert_depth_image(wall.view(), wall.camera, along_x.pose(), colors, options);
   with_defaults.insert_depth_image(wall.view(), wall.camera, along_x.pose(), colors);
   ASSERT_NO_FATAL_FAILURE(expect_published(expected));
-  EXPECT_TRUE(expected.color(Vec3d{3.02, 2.03, 1.47}).has_value());  // the wall took the colour image's colours
+  EXPECT_TRUE(expected.color(Vec3d{3.02, 2.03, 1.47}).has_value());  // the wall took the color image's colors
 
-  // The office in 16UC1 millimetres, its colours as bgr8.
+  // The office in 16UC1 millimetres, its colors as bgr8.
   const sim::SimulatedDepthImage simulated = simulated_office_image(5);
   const CameraFrame office = office_frame(simulated, true);
   const CameraPlacement placement = placement_of(simulated.pose);
@@ -1288,7 +1288,7 @@ TEST_F(Loopback, MalformedDepthImagesAreRefusedAndTheNodeGoesOn) {
   ASSERT_NO_FATAL_FAILURE(start_server(0.1, {"_image_max_range:=10.0"}));
   const fs::path log = dir_ / "umbra_server.log";
   const CameraFrame wall = wall_frame();
-  // The log line that starts with `start`, without roscpp's colour codes around it.
+  // The log line that starts with `start`, without roscpp's color codes around it.
   const auto line_of = [&](const std::string& start) {
     const std::string text = log_text(log);
     const std::size_t at = text.find(start);

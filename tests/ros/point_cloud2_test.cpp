@@ -3,7 +3,7 @@
 // Every cloud is written here by a small independent packer from a list of
 // points and a layout (field types, offsets, padding, byte order, rows with
 // padding, NaN points); decoding must give back the points (rounded to
-// float after the transform, computed in double here), their colours, and
+// float after the transform, computed in double here), their colors, and
 // the NaN count. Bad layouts must throw a FormatError that names the cloud
 // and the problem.
 #include "umbra_ros/point_cloud2.hpp"
@@ -217,7 +217,7 @@ TEST(PointCloud2, TransformIsAppliedInDouble) {
   EXPECT_THROW((void)RigidTransform::from_quaternion({kNaN, 0, 0}, 0, 0, 0, 1), std::invalid_argument);
 }
 
-TEST(PointCloud2, EmptyCloudAndNoColourWanted) {
+TEST(PointCloud2, EmptyCloudAndNoColorWanted) {
   DecodedCloud out;
   PackedCloud cloud = pack({}, Layout{});
   decode_point_cloud2(cloud.view, {}, true, out, "empty");
@@ -225,7 +225,7 @@ TEST(PointCloud2, EmptyCloudAndNoColourWanted) {
   Layout layout;
   layout.color = Layout::Color::rgb_float;
   cloud = pack(test_points(10, 1), layout);
-  decode_point_cloud2(cloud.view, {}, false, out, "no colour wanted");
+  decode_point_cloud2(cloud.view, {}, false, out, "no color wanted");
   EXPECT_EQ(out.points.size(), 10u);
   EXPECT_TRUE(out.colors.empty());
 }

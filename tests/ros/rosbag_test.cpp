@@ -247,7 +247,7 @@ TEST(Rosbag, GeneratedBagsOfEveryCompressionGiveTheirPoints) {
       ASSERT_EQ(scans[i].colors.size(), scans[i].points.size());
       EXPECT_EQ(scans[i].colors[1], (Rgb{0x10, 0x20, 0x31}));
     }
-    // Colours not asked for: none decoded.
+    // Colors not asked for: none decoded.
     ros_io::RosbagOptions options;
     options.colors = false;
     EXPECT_TRUE(read_all(*ros_io::open_rosbag(dir / "small.bag", options)).front().colors.empty());

@@ -8,8 +8,8 @@
 
 namespace umbra::test {
 
-OccupancyMap demo_lidar_map(const MapConfig& config, const PointColour& colour) {
-  if (config.color && !colour) throw std::invalid_argument("demo_lidar_map: a coloured map needs a colour function");
+OccupancyMap demo_lidar_map(const MapConfig& config, const PointColor& color) {
+  if (config.color && !color) throw std::invalid_argument("demo_lidar_map: a colored map needs a color function");
   const sim::Scene scene = sim::make_demo_scene();
   sim::LidarModel lidar;
   lidar.rings = 16;
@@ -18,13 +18,13 @@ OccupancyMap demo_lidar_map(const MapConfig& config, const PointColour& colour) 
   InsertOptions insert;
   insert.max_range = lidar.max_range;
   std::vector<Vec3f> points;
-  std::vector<Rgb> colours;
+  std::vector<Rgb> colors;
   for (const sim::SensorPose& pose : sim::demo_path()) {
     sim::simulate_scan(scene, pose, lidar, points);
     if (config.color) {
-      colours.clear();
-      for (std::size_t i = 0; i < points.size(); ++i) colours.push_back(colour(i, points[i]));
-      map.insert_point_cloud(Vec3f(pose.position), points, colours, insert);
+      colors.clear();
+      for (std::size_t i = 0; i < points.size(); ++i) colors.push_back(color(i, points[i]));
+      map.insert_point_cloud(Vec3f(pose.position), points, colors, insert);
     } else {
       map.insert_point_cloud(Vec3f(pose.position), points, insert);
     }

@@ -13,13 +13,13 @@
 
 namespace umbra::test {
 
-/// Colour of point `index` of a scan, at `point`.
-using PointColour = std::function<Rgb(std::size_t index, Vec3f point)>;
+/// Color of point `index` of a scan, at `point`.
+using PointColor = std::function<Rgb(std::size_t index, Vec3f point)>;
 
 /// sim::make_demo_scene() scanned along sim::demo_path() by a 16-ring LiDAR
 /// with 360 azimuth steps, each scan inserted with the LiDAR's max range.
-/// With config.color, `colour` colours every point.
-OccupancyMap demo_lidar_map(const MapConfig& config, const PointColour& colour = {});
+/// With config.color, `color` colors every point.
+OccupancyMap demo_lidar_map(const MapConfig& config, const PointColor& color = {});
 
 /// Every other pose of the demo path through the procedural building, each a
 /// scan of a 16-ring LiDAR (360 steps, 1 cm range noise): sparse rings.

@@ -211,7 +211,7 @@ void DenseGrid::insert_scan(Vec3f origin, std::span<const Vec3f> points, const D
   for (const Triple& t : occupied_cells) free_cells.erase(t);
   for (const Triple& t : free_cells) add(Key{std::get<0>(t), std::get<1>(t), std::get<2>(t)}, miss);
   for (const Triple& t : occupied_cells) add(Key{std::get<0>(t), std::get<1>(t), std::get<2>(t)}, hit);
-  // Colours: each point whose ray ends in a hit, in scan order.
+  // Colors: each point whose ray ends in a hit, in scan order.
   for (std::size_t i = 0; i < colors.size(); ++i) {
     const Vec3f& p = points[i];
     Key k;

@@ -58,11 +58,11 @@ class DenseGrid {
     return rays_.ray_keys(origin, end, keys);
   }
   /// OctoMap's insertPointCloud on this grid; with `colors` (one per point),
-  /// every point that gives a hit also blends its colour into its voxel.
+  /// every point that gives a hit also blends its color into its voxel.
   void insert_scan(Vec3f origin, std::span<const Vec3f> points, const DenseScanOptions& options,
                    float hit, float miss, std::span<const Rgb> colors = {});
 
-  /// A voxel's colour: running average of its samples, weight = samples
+  /// A voxel's color: running average of its samples, weight = samples
   /// (saturating at 255, then each new sample weighs 1/256); weight 0: none.
   struct Color {
     Rgb rgb;
@@ -70,7 +70,7 @@ class DenseGrid {
   };
   [[nodiscard]] Color color_at(Key key) const { return colors_[index(key)]; }
   void blend(Key key, Rgb sample);
-  /// A coarser node's colour: the rounded average of its coloured children
+  /// A coarser node's color: the rounded average of its colored children
   /// (recursively), or none.
   [[nodiscard]] Color node_color(Key key, int depth) const;
 

@@ -88,7 +88,7 @@ void enumerate(const OccupancyMap& map, Key key, int depth, int query_depth, std
   const Node node = map.node(key, depth);
   bool leaf = depth <= query_depth || !node.has_children;
   if (!leaf && !map.auto_prune()) {
-    // Eight childless children of one value (and colour) act as one leaf.
+    // Eight childless children of one value (and color) act as one leaf.
     bool same = true;
     const Node first = map.node(child_key(key, depth, 0), depth - 1);
     for (unsigned slot = 0; slot < 8 && same; ++slot) {

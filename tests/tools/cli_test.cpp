@@ -145,7 +145,7 @@ TEST(Cli, BadInputGivesAClearErrorAndNoMap) {
   EXPECT_NE(info.output.find("junk.umb"), std::string::npos) << info.output;
 }
 
-TEST(Cli, BuildWithTheFastIntegratorThreadsBoxAndColour) {
+TEST(Cli, BuildWithTheFastIntegratorThreadsBoxAndColor) {
   const auto dir = test::scratch_dir();
   const std::vector<Vec3f> points = room_scan();
   {

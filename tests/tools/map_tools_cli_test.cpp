@@ -40,8 +40,8 @@ using test::quoted;
 using test::contains;
 using test::run;
 
-/// A coloured room (4 m, 10 cm voxels) seen from two places, with a pruned
-/// occupied 2 x 2 x 2 block (one depth-1 node) and a voxel without colour.
+/// A colored room (4 m, 10 cm voxels) seen from two places, with a pruned
+/// occupied 2 x 2 x 2 block (one depth-1 node) and a voxel without color.
 OccupancyMap room_map(IntegratorKind integrator = IntegratorKind::simple) {
   MapConfig config;
   config.resolution = 0.1;
@@ -113,7 +113,7 @@ TEST(CropCli, KeepsTheVoxelsInTheBoxAndNothingElse) {
   EXPECT_TRUE(contains(crop.output, "kept the voxels from (-1.3, -0.5, -1.1) to (0.8, 2.6, 0.5) m")) << crop.output;
   const OccupancyMap cut = load_map(dir / "cut.umb");
   const VoxelBox keep = voxel_box(map.grid(), Aabb{{-1.23, -0.5, -1.1}, {0.71, 2.5, 0.4}});
-  // Voxel by voxel: the source's value and colour inside, unknown outside.
+  // Voxel by voxel: the source's value and color inside, unknown outside.
   std::size_t kept = 0;
   for_each_key_near_known_space(map, [&](Key key) {
     const Node before = map.node(key);
@@ -139,7 +139,7 @@ TEST(CropCli, ReadsAndWritesOctoMapFiles) {
   ASSERT_EQ(run("convert " + quoted(dir / "room.umb") + " " + quoted(dir / "room.ot")).exit_code, 0);
   const std::string box = " --bbox -1,-1,-1,1,1,1";
   ASSERT_EQ(run("crop " + quoted(dir / "room.umb") + " -o " + quoted(dir / "cut.umb") + box).exit_code, 0);
-  // .ot in, .ot out: the same voxels as the .umb crop (.ot keeps every value and colour).
+  // .ot in, .ot out: the same voxels as the .umb crop (.ot keeps every value and color).
   const CommandResult ot = run("crop " + quoted(dir / "room.ot") + " -o " + quoted(dir / "cut.ot") + box);
   ASSERT_EQ(ot.exit_code, 0) << ot.output;
   EXPECT_EQ(leaves(load_any_map(dir / "cut.ot")), leaves(load_map(dir / "cut.umb")));
@@ -307,15 +307,15 @@ TEST(ExportCli, PointsAreTheOccupiedVoxelCentresAndReadBack) {
   save_map(map, dir / "room.umb");
   // Brute force: every occupied voxel near the known space, one key at a time.
   std::vector<Point> expected;
-  std::vector<Point> expected_coloured;
+  std::vector<Point> expected_colored;
   for_each_key_near_known_space(map, [&](Key key) {
     const Node node = map.node(key);
     if (node.state != OccupancyState::occupied) return;
     expected.push_back({map.grid().center_f(key), Rgb{}});
-    expected_coloured.push_back({map.grid().center_f(key), node.color.value_or(Rgb{128, 128, 128})});
+    expected_colored.push_back({map.grid().center_f(key), node.color.value_or(Rgb{128, 128, 128})});
   });
   std::sort(expected.begin(), expected.end());
-  std::sort(expected_coloured.begin(), expected_coloured.end());
+  std::sort(expected_colored.begin(), expected_colored.end());
 
   const CommandResult plain = run("export " + quoted(dir / "room.umb") + " -o " + quoted(dir / "room.ply"));
   ASSERT_EQ(plain.exit_code, 0) << plain.output;
@@ -326,14 +326,14 @@ TEST(ExportCli, PointsAreTheOccupiedVoxelCentresAndReadBack) {
   std::sort(got.begin(), got.end());
   EXPECT_EQ(got, expected);
 
-  const CommandResult coloured =
-      run("export " + quoted(dir / "room.umb") + " -o " + quoted(dir / "coloured.ply") + " --color");
-  ASSERT_EQ(coloured.exit_code, 0) << coloured.output;
-  EXPECT_TRUE(contains(coloured.output, "have no colour sample; they are grey")) << coloured.output;
-  got = read_ply_points(dir / "coloured.ply");
+  const CommandResult colored =
+      run("export " + quoted(dir / "room.umb") + " -o " + quoted(dir / "colored.ply") + " --color");
+  ASSERT_EQ(colored.exit_code, 0) << colored.output;
+  EXPECT_TRUE(contains(colored.output, "have no color sample; they are grey")) << colored.output;
+  got = read_ply_points(dir / "colored.ply");
   std::sort(got.begin(), got.end());
-  EXPECT_EQ(got, expected_coloured);
-  const std::vector<std::uint8_t> bytes = test::read_bytes(dir / "coloured.ply");
+  EXPECT_EQ(got, expected_colored);
+  const std::vector<std::uint8_t> bytes = test::read_bytes(dir / "colored.ply");
   const std::string head(bytes.begin(), bytes.begin() + 64);
   EXPECT_TRUE(head.starts_with("ply\nformat binary_little_endian 1.0\n")) << head;
 }
@@ -400,9 +400,9 @@ TEST(ExportCli, BadInputIsNamed) {
   OccupancyMap plain(0.1);
   plain.set_log_odds(Vec3d{0.05, 0.05, 0.05}, 2.0f);
   save_map(plain, dir / "plain.umb");
-  const CommandResult colour = run("export " + quoted(dir / "plain.umb") + " -o " + quoted(dir / "p.ply") + " --color");
-  EXPECT_EQ(colour.exit_code, 1) << colour.output;
-  EXPECT_TRUE(contains(colour.output, (dir / "plain.umb").string() + ": the map has no colours")) << colour.output;
+  const CommandResult color = run("export " + quoted(dir / "plain.umb") + " -o " + quoted(dir / "p.ply") + " --color");
+  EXPECT_EQ(color.exit_code, 1) << color.output;
+  EXPECT_TRUE(contains(color.output, (dir / "plain.umb").string() + ": the map has no colors")) << color.output;
   const CommandResult name = run("export " + quoted(dir / "plain.umb") + " -o " + quoted(dir / "p.obj"));
   EXPECT_EQ(name.exit_code, 2) << name.output;
   EXPECT_TRUE(contains(name.output, "name the output .ply")) << name.output;

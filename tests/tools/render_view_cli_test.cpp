@@ -41,7 +41,7 @@ using test::CommandResult;
 using test::cli;
 using test::quoted;
 
-/// The demo building at 20 cm, with colour, saved as DIR/building.umb.
+/// The demo building at 20 cm, with color, saved as DIR/building.umb.
 std::filesystem::path building_map(const std::filesystem::path& dir) {
   MapConfig config;
   config.resolution = 0.2;
@@ -78,7 +78,7 @@ TEST(RenderCli, WritesThePictureTheLibraryDraws) {
   bare_options.width = 120;
   EXPECT_EQ(read_png(dir / "bare.png").rgb, render_map(map, bare_options).image.rgb);
 
-  // A slice is seen along its axis and coloured by state unless told otherwise.
+  // A slice is seen along its axis and colored by state unless told otherwise.
   const CommandResult slice = test::run_command(cli() + " render " + quoted(map_path) + " -o " +
                                                 quoted(dir / "slice.png") + " --slice y=6.1 --width 300");
   ASSERT_EQ(slice.exit_code, 0) << slice.output;
@@ -97,7 +97,7 @@ TEST(RenderCli, DefaultsCutTheCeilingFromAboveAndTheNearHalfFromTheFront) {
   save_map(room, dir / "room.umb");
   const std::string render = cli() + " render " + quoted(dir / "room.umb") + " --width 300 ";
 
-  // A top view cuts the ceiling: the floor shows (its height colour at the room's middle).
+  // A top view cuts the ceiling: the floor shows (its height color at the room's middle).
   const CommandResult top = test::run_command(render + "-o " + quoted(dir / "top.png") + " --view top");
   ASSERT_EQ(top.exit_code, 0) << top.output;
   EXPECT_NE(top.output.find("ceiling found at 2.400 m"), std::string::npos) << top.output;
@@ -123,7 +123,7 @@ TEST(RenderCli, DefaultsCutTheCeilingFromAboveAndTheNearHalfFromTheFront) {
   ASSERT_EQ(uncut.exit_code, 0) << uncut.output;
   EXPECT_NE(read_png(dir / "uncut.png").at(int(x), int(y)), shaded_floor);
 
-  // A front view: cut through the middle (y >= 1.45), coloured by distance.
+  // A front view: cut through the middle (y >= 1.45), colored by distance.
   const CommandResult front = test::run_command(render + "-o " + quoted(dir / "front.png") + " --view front");
   ASSERT_EQ(front.exit_code, 0) << front.output;
   EXPECT_NE(front.output.find("y >= 1.450 m"), std::string::npos) << front.output;
@@ -144,15 +144,15 @@ TEST(RenderCli, StateViewShowsFreeAndUnknownSpaceNotJustRed) {
   ASSERT_EQ(top.exit_code, 0) << top.output;
   EXPECT_NE(top.output.find("floor found"), std::string::npos) << top.output;
   const Image picture = read_png(dir / "state.png");
-  const RenderOptions colours;
+  const RenderOptions colors;
   std::size_t free = 0;
   std::size_t unknown = 0;
   std::size_t red = 0;
   for (int row = 0; row < picture.height; ++row) {
     for (int column = 0; column < picture.width; ++column) {
       const Rgb c = picture.at(column, row);
-      free += c == colours.free_colour ? 1 : 0;
-      unknown += c == colours.unknown_colour ? 1 : 0;
+      free += c == colors.free_color ? 1 : 0;
+      unknown += c == colors.unknown_color ? 1 : 0;
       red += c.r > 2 * c.g && c.r > 2 * c.b ? 1 : 0;
     }
   }
@@ -226,7 +226,7 @@ TEST(RenderCli, BadOptionsAreUsageErrorsThatNameTheProblem) {
   const CommandResult rgb = test::run_command(cli() + " render " + quoted(dir / "plain.umb") + " -o " +
                                               quoted(dir / "out.png") + " --color rgb");
   EXPECT_EQ(rgb.exit_code, 2) << rgb.output;
-  EXPECT_NE(rgb.output.find("no colour"), std::string::npos) << rgb.output;
+  EXPECT_NE(rgb.output.find("no color"), std::string::npos) << rgb.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "out.png"));
 
   const CommandResult missing = test::run_command(cli() + " render " + quoted(dir / "nothing.umb") + " -o x.png");
@@ -270,11 +270,11 @@ std::vector<std::uint8_t> from_base64(const std::string& text) {
 }
 
 /// A box in finest voxels from the known space's lowest corner, clipped to
-/// the known space as the page clips it, with its colour when the layer has colours.
+/// the known space as the page clips it, with its color when the layer has colors.
 using Box = std::tuple<std::int64_t, std::int64_t, std::int64_t, std::int64_t, std::int64_t, std::int64_t,
                        std::uint32_t>;
 
-/// 8-bit colour as the page shows it: 5-6-5 bits, the high bits repeated below.
+/// 8-bit color as the page shows it: 5-6-5 bits, the high bits repeated below.
 std::uint32_t as_shown(Rgb c) {
   const std::uint32_t r = c.r >> 3;
   const std::uint32_t g = c.g >> 2;
@@ -309,7 +309,7 @@ Box box_of(const std::array<std::int64_t, 3>& key, std::int64_t edge, const Page
 
 /// A layer in the format of tools/viewer_data.hpp, decoded by the test's own code.
 std::vector<Box> decode_layer(const std::string& base64, std::size_t count, int depth, const PageGeometry& page,
-                              bool colours) {
+                              bool colors) {
   const std::vector<std::uint8_t> packed = from_base64(base64);
   std::vector<std::uint8_t> raw(count * 16 + 64);
   uLongf size = raw.size();
@@ -329,15 +329,15 @@ std::vector<Box> decode_layer(const std::string& base64, std::size_t count, int 
     code += delta;
     codes.push_back(code);
   }
-  EXPECT_EQ(raw.size(), at + count + (colours ? 3 * count : 0));
-  if (raw.size() != at + count + (colours ? 3 * count : 0)) return {};
+  EXPECT_EQ(raw.size(), at + count + (colors ? 3 * count : 0));
+  if (raw.size() != at + count + (colors ? 3 * count : 0)) return {};
   std::vector<Box> boxes;
   std::array<std::uint8_t, 3> last{};
   for (std::size_t i = 0; i < count; ++i) {
     std::array<std::int64_t, 3> key{};
     for (int axis = 0; axis < 3; ++axis) key[std::size_t(axis)] = std::int64_t(every_third_bit(codes[i] >> axis)) << depth;
     std::uint32_t rgb = 0;
-    if (colours) {
+    if (colors) {
       std::array<std::uint32_t, 3> c{};
       for (std::size_t channel = 0; channel < 3; ++channel) {
         last[channel] = static_cast<std::uint8_t>(last[channel] + raw[at + count + channel * count + i]);
@@ -402,15 +402,15 @@ TEST(ViewCli, PageIsSelfContainedAndItsLayersAreTheLibrarysNodes) {
     const std::size_t begin = page.find(open);
     ASSERT_NE(begin, std::string::npos) << id;
     const std::string base64 = page.substr(begin + open.size(), page.find('<', begin + open.size()) - begin - open.size());
-    const bool colours = state == "occupied";
-    const std::vector<Box> decoded = decode_layer(base64, count, depth, geometry, colours);
+    const bool colors = state == "occupied";
+    const std::vector<Box> decoded = decode_layer(base64, count, depth, geometry, colors);
     layer_text += base64.size();
     layer_nodes += count;
 
     std::vector<Box> expected;
     for (const Node& node : map.query(predicate, depth)) {
       const std::array<std::int64_t, 3> key{node.key.x, node.key.y, node.key.z};
-      const std::uint32_t rgb = colours ? as_shown(node.color.value_or(Rgb{150, 150, 150})) : 0;
+      const std::uint32_t rgb = colors ? as_shown(node.color.value_or(Rgb{150, 150, 150})) : 0;
       expected.push_back(box_of(key, std::int64_t{1} << node.depth, geometry, rgb));
     }
     std::sort(expected.begin(), expected.end());
@@ -420,8 +420,8 @@ TEST(ViewCli, PageIsSelfContainedAndItsLayersAreTheLibrarysNodes) {
   EXPECT_EQ(depths.size(), 8u);  // the finest depth and seven coarser
   EXPECT_EQ(layers, 3 * depths.size());
   // Size: the layers' base64 text per node, over every layer. The format of
-  // viewer_data.hpp (sorted code deltas, 5-6-5 colours) takes 0.89 bytes
-  // here; the previous one (six 16-bit columns, 8-bit colours) took 1.78.
+  // viewer_data.hpp (sorted code deltas, 5-6-5 colors) takes 0.89 bytes
+  // here; the previous one (six 16-bit columns, 8-bit colors) took 1.78.
   EXPECT_LE(double(layer_text) / double(layer_nodes), 1.0) << layer_text << " bytes for " << layer_nodes << " nodes";
 }
 

@@ -1,4 +1,4 @@
-// Rgb: an 8-bit colour, as point clouds and coloured maps carry it.
+// Rgb: an 8-bit color, as point clouds and colored maps carry it.
 #pragma once
 
 #include <cstdint>

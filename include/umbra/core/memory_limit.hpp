@@ -4,7 +4,7 @@
 // one pass over its node records) how many bytes the tree will take before
 // allocating any of it; reading a scan works out what its points take (from
 // the count the header declares, or as the points arrive when the format has
-// no count; 12 bytes a point, 15 with colour; a depth image 20 bytes a
+// no count; 12 bytes a point, 15 with color; a depth image 20 bytes a
 // pixel). A need above the limit throws MemoryLimitError naming the file,
 // the need and the limit, and nothing more is allocated. The limit applies
 // to each file or scan on its own, not to the sum of everything the program

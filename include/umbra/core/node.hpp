@@ -33,7 +33,7 @@ struct Node {
   /// The node has children in the map (it is not a leaf of the tree). A
   /// childless node's value holds for every voxel it covers.
   bool has_children = false;
-  std::optional<Rgb> color;   ///< maps with colour: the node's (average) colour, when it has one
+  std::optional<Rgb> color;   ///< maps with color: the node's (average) color, when it has one
 
   [[nodiscard]] bool contains_occupied() const { return state == OccupancyState::occupied; }
   /// Morton code of key (the node's first finest voxel).

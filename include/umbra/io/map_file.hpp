@@ -78,7 +78,7 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path, const 
 /// node and value); throws FormatError saying what is wrong and where.
 /// Before allocating, the header's node counts give what the map will take
 /// (the file, and 68 bytes per node with children, 32 at the finest depth,
-/// 32 more with colour); above memory_limit() it throws MemoryLimitError
+/// 32 more with color); above memory_limit() it throws MemoryLimitError
 /// naming the file, that need and the limit (umbra/core/memory_limit.hpp).
 [[nodiscard]] OccupancyMap load_map(const std::filesystem::path& path);
 

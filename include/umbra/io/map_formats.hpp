@@ -2,7 +2,7 @@
 //
 //   .umb  umbra's own format (map_file.hpp): exact, every setting kept
 //   .bt   OctoMap binary (octomap_files.hpp): free/occupied per leaf only
-//   .ot   OctoMap full (octomap_files.hpp): log-odds per node, colour in a ColorOcTree
+//   .ot   OctoMap full (octomap_files.hpp): log-odds per node, color in a ColorOcTree
 //
 // The extension is matched without regard to case. Cost: that of the
 // format's own reader or writer; choosing it costs nothing.

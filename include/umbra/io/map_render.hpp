@@ -4,14 +4,14 @@
 // camera (parallel projection: sizes do not shrink with distance):
 //  - a view (no slice): every occupied node at the chosen depth drawn as a
 //    solid cube, hidden faces removed with a depth buffer, each visible face
-//    shaded by a fixed light so that the 3D shape reads. With the colour
+//    shaded by a fixed light so that the 3D shape reads. With the color
 //    modes height, depth and rgb free and unknown space are not drawn (the
 //    background shows through); with `state` they are painted behind the
-//    cubes (see Colours).
+//    cubes (see Colors).
 //  - a slice: the layer of depth-`depth` nodes one node thick that contains
 //    a coordinate on one axis, seen along that axis, every pixel painted by
 //    the state of the node under it: occupied, free or unknown (the state
-//    colours below, or for occupied nodes the colour mode's colour).
+//    colors below, or for occupied nodes the color mode's color).
 //
 // Views (right = the picture's column direction, up = its row direction
 // upwards, toward = from the scene to the viewer; right x up = toward):
@@ -28,17 +28,17 @@
 // so that a front view looks into a building instead of at its outer wall.
 // render_cuts.hpp finds the cuts a user usually wants (a ceiling, the middle).
 //
-// Colours: `height` puts each occupied node's centre height on height_ramp
+// Colors: `height` puts each occupied node's centre height on height_ramp
 // (topdown_image.hpp) between the lowest and highest drawn centre; `depth`
 // puts its distance from the viewer on the same ramp, nearest red, farthest
 // blue (for front and side views, where height would only repeat the row);
-// `rgb` uses the node's colour (maps with colour only; a node without one
-// gets `uncoloured_colour`); `state` paints occupied nodes `occupied_colour`
+// `rgb` uses the node's color (maps with color only; a node without one
+// gets `uncolored_color`); `state` paints occupied nodes `occupied_color`
 // and, in a view, every pixel that no cube covers by what lies along its line
-// of sight inside the drawn window: free_colour where that line meets a free
-// node, unknown_colour where it crosses the box of the known space without
+// of sight inside the drawn window: free_color where that line meets a free
+// node, unknown_color where it crosses the box of the known space without
 // meeting one, the background outside that box.
-// A face's colour is multiplied by 0.5 + 0.5 max(0, n.l), with n its normal
+// A face's color is multiplied by 0.5 + 0.5 max(0, n.l), with n its normal
 // and l = unit(toward + 0.8 up - 0.4 right): in the iso view the top faces
 // are brightest and the faces to the right darkest; in the other views every
 // visible face gets the same 0.87. Free and unknown space are not shaded.
@@ -54,7 +54,7 @@
 // the drawing is made narrower and framed by a title line (what is shown),
 // for axis-aligned pictures coordinate ticks in metres along the left and
 // bottom edges with the axis names, and a footer with the legend (the state
-// colours, or the ramp with its two end values) and, for axis-aligned
+// colors, or the ramp with its two end values) and, for axis-aligned
 // pictures, a scale bar; picture_annotations.hpp gives the layout. The
 // picture stays `width` pixels wide and grows by the annotation rows.
 //
@@ -119,10 +119,10 @@ struct RenderOptions {
   int width = 1024;       ///< pixels, in [2 * margin_pixels + 1, kMaxRenderPixels]
   int margin_pixels = 8;  ///< >= 0
   Rgb background{255, 255, 255};
-  Rgb occupied_colour{200, 40, 40};    ///< state colours (slices, and views with `state`)
-  Rgb free_colour{200, 200, 200};
-  Rgb unknown_colour{32, 32, 40};
-  Rgb uncoloured_colour{150, 150, 150};  ///< `rgb` for an occupied node that has no colour
+  Rgb occupied_color{200, 40, 40};    ///< state colors (slices, and views with `state`)
+  Rgb free_color{200, 200, 200};
+  Rgb unknown_color{32, 32, 40};
+  Rgb uncolored_color{150, 150, 150};  ///< `rgb` for an occupied node that has no color
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -154,14 +154,14 @@ struct MapPicture {
   /// The ends of the ramp, metres: `height` the lowest and highest centre z;
   /// `depth` the farthest and nearest centre's coordinate on the view axis
   /// (front: y, side: x, top: z; iso: the distance along toward). Both 0 for
-  /// the other colour modes.
+  /// the other color modes.
   double ramp_low = 0.0;
   double ramp_high = 0.0;
 };
 
 /// Throws std::invalid_argument for options that do not fit `map`: a bad
 /// field (validate()), a depth above the map's depth levels, `rgb` for a map
-/// without colour.
+/// without color.
 void check_render_options(const OccupancyMap& map, const RenderOptions& options);
 
 /// Draws the picture described at the top of this file. Throws what

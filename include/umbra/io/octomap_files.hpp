@@ -8,13 +8,13 @@
 //        and merging equal siblings, exactly as liboctomap's writeBinary.
 //        Reading gives every free leaf the clamping minimum and every
 //        occupied leaf the clamping maximum, as liboctomap does.
-//   .ot  full: every node's float log-odds (+ 3 colour bytes in a
+//   .ot  full: every node's float log-odds (+ 3 color bytes in a
 //        ColorOcTree) and an 8-bit child mask. Ids read: OcTree,
 //        OcTreeStamped (same layout: liboctomap 1.9.7 stores no timestamp),
 //        ColorOcTree and the legacy id "1" (= OcTree); anything else, e.g. a
 //        CountingOcTree (liboctomap registers it as "OcTreeBase"), is refused
 //        with a message naming the id. Written: OcTree, or ColorOcTree when
-//        the map has colour.
+//        the map has color.
 //
 // How umbra's maps and OctoMap's trees correspond (both are 16 levels deep;
 // other depth levels are refused on writing because OctoMap fixes 16 and
@@ -22,12 +22,12 @@
 // with children; a child OctoMap does not have is an umbra child with
 // log-odds exactly 0, i.e. unknown. Writing, an umbra node whose whole
 // subtree is exactly 0 is left out; inner values are the maximum over the
-// children OctoMap has (not umbra's maximum over all eight), inner colours
-// OctoMap's truncating average of its children whose colour is set. In a
-// ColorOcTree white (255,255,255) means "no colour" both ways, so an umbra
-// voxel coloured pure white reads back uncoloured; colour weights read back
-// as 1. A loaded file is exact: leaves, float bits and colours as in the file
-// (inner values and colours are recomputed by umbra's rules). If the file
+// children OctoMap has (not umbra's maximum over all eight), inner colors
+// OctoMap's truncating average of its children whose color is set. In a
+// ColorOcTree white (255,255,255) means "no color" both ways, so an umbra
+// voxel colored pure white reads back uncolored; color weights read back
+// as 1. A loaded file is exact: leaves, float bits and colors as in the file
+// (inner values and colors are recomputed by umbra's rules). If the file
 // holds eight equal childless siblings that OctoMap did not merge, the map
 // comes back with auto-pruning off so that it is written back unchanged.
 //
@@ -51,7 +51,7 @@
 // allocated from the header's `size` — it is checked against the file
 // length first and against the nodes found at the end. Writing makes one
 // depth-first pass and holds the encoded file in memory (2 bytes per node
-// with children for .bt; 5 bytes per node for .ot, 8 with colour) before
+// with children for .bt; 5 bytes per node for .ot, 8 with color) before
 // writing it to a temporary file that is flushed and renamed over the
 // target, so an existing file is never left half-written.
 //
@@ -78,7 +78,7 @@ inline constexpr int kOctoMapDepthLevels = 16;
 
 enum class OctoMapFormat : unsigned char {
   bt,  ///< binary, maximum likelihood ("# Octomap OcTree binary file")
-  ot,  ///< full, with log-odds (and colour) per node ("# Octomap OcTree file")
+  ot,  ///< full, with log-odds (and color) per node ("# Octomap OcTree file")
 };
 
 /// "bt" or "ot".
@@ -88,7 +88,7 @@ const char* to_string(OctoMapFormat format);
 struct OctoMapFileInfo {
   OctoMapFormat format = OctoMapFormat::bt;
   std::string tree_type;        ///< the header's id ("1" is reported as "OcTree")
-  bool color = false;           ///< a ColorOcTree .ot: 3 colour bytes per node
+  bool color = false;           ///< a ColorOcTree .ot: 3 color bytes per node
   double resolution = 0.0;      ///< metres
   std::uint64_t nodes = 0;      ///< the header's `size`: nodes in OctoMap's tree
   std::uint64_t data_offset = 0;  ///< where the tree data begins
@@ -117,7 +117,7 @@ struct OctoMapFileInfo {
 /// `resolution` and `binary` beside it).
 struct OctoMapTreeData {
   OctoMapFormat format = OctoMapFormat::bt;
-  std::string id;             ///< the tree type: "OcTree", or "ColorOcTree" for an .ot of a map with colour
+  std::string id;             ///< the tree type: "OcTree", or "ColorOcTree" for an .ot of a map with color
   double resolution = 0.0;    ///< metres
   std::vector<std::uint8_t> data;
 };

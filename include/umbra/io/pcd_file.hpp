@@ -7,7 +7,7 @@
 // binary") or LZF-compressed with the fields stored column by column ("DATA
 // binary_compressed"). umbra reads the x, y, z fields (any PCD type, rounded
 // to float; NaN points are passed through for the integrator to skip and
-// count) and colours from a packed "rgb" or "rgba" field (4 bytes, float or
+// count) and colors from a packed "rgb" or "rgba" field (4 bytes, float or
 // integer, holding 0x00RRGGBB / 0xAARRGGBB). Other fields are skipped.
 //
 // Pose: PCL stores the sensor pose as VIEWPOINT tx ty tz qw qx qy qz

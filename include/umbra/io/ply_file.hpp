@@ -6,7 +6,7 @@
 // instance per line) or binary ("binary_little_endian 1.0" /
 // "binary_big_endian 1.0"). umbra reads the x, y, z properties of the
 // "vertex" element (any PLY scalar type, rounded to float) and, when all
-// three are present, the colours red/green/blue (or diffuse_red/...): uchar
+// three are present, the colors red/green/blue (or diffuse_red/...): uchar
 // as is, ushort scaled from 0..65535, float/double scaled from 0..1, other
 // integers clamped to 0..255. Every other property and element (normals,
 // alpha, faces with list properties, ...) is skipped but still checked, so a

@@ -40,10 +40,10 @@ struct Image {
   /// unless both sides are > 0.
   Image(int width_pixels, int height_pixels, Rgb fill = {});
 
-  /// Colour of a pixel; throws std::out_of_range outside the picture.
+  /// Color of a pixel; throws std::out_of_range outside the picture.
   [[nodiscard]] Rgb at(int column, int row) const;
   /// Sets a pixel; throws std::out_of_range outside the picture.
-  void set(int column, int row, Rgb colour);
+  void set(int column, int row, Rgb color);
 
   /// Throws std::invalid_argument unless width and height are > 0 and rgb
   /// holds exactly width * height * 3 bytes.

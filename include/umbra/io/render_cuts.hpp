@@ -21,7 +21,7 @@
 // above them, counted in the layer of their highest cells, among the layers
 // whose top lies in the lower half; from the largest, every adjacent layer
 // above with at least half its area. The cut keeps everything above the
-// highest of them (a top view coloured by state then shows free floor space
+// highest of them (a top view colored by state then shows free floor space
 // between the walls, as a 2D occupancy grid does). geb079.bt: the floor's
 // top at 0.0 m; the demo building: 0.2 m.
 //

@@ -27,7 +27,7 @@ std::unique_ptr<ScanSource> open_scan_graph(const std::filesystem::path& path);
 /// Writes `scans` as a ScanGraph: one node per scan with identity rotation,
 /// translation = scan.origin and the points stored relative to the origin (so
 /// reading the file back gives the same map-frame points up to float
-/// rounding), node ids 0, 1, ..., and no edges. Colours are not stored (the
+/// rounding), node ids 0, 1, ..., and no edges. Colors are not stored (the
 /// format has none). The file is saved atomically (umbra/io/file_saving.hpp),
 /// so readers never see a partial file.
 /// Throws std::invalid_argument for a non-finite origin or a scan with more

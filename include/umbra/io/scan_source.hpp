@@ -2,7 +2,7 @@
 //
 // A source yields scans one at a time (so a long sequence never has to fit
 // in memory): the sensor origin and the points, both in the map frame, and
-// optionally one colour per point. Readers pick the format from the file
+// optionally one color per point. Readers pick the format from the file
 // extension unless ScanSourceOptions::format names it.
 //
 // Formats (format name: what open_scan_source accepts):
@@ -10,12 +10,12 @@
 //   xyz    ASCII "x y z [r g b]" per line, .xyz .dat .txt (each also .bz2):
 //          one scan at ScanSourceOptions::origin.
 //   ply    PLY, .ply (ascii, binary little/big endian): one scan at
-//          ScanSourceOptions::origin; colours from red/green/blue.
+//          ScanSourceOptions::origin; colors from red/green/blue.
 //   pcd    PCL point cloud, .pcd (ascii, binary, binary_compressed): one
 //          scan; a non-identity VIEWPOINT is the sensor pose (points are
 //          in the sensor frame and are transformed by it, origin = its
 //          translation), else the points are taken as they are and the
-//          origin is ScanSourceOptions::origin. Colours from rgb/rgba.
+//          origin is ScanSourceOptions::origin. Colors from rgb/rgba.
 //   kitti  KITTI velodyne scans (float32 x y z reflectance): a folder of
 //          .bin files with ScanSourceOptions::poses (KITTI odometry poses,
 //          one 3x4 camera pose per scan) and optionally calibration
@@ -24,7 +24,7 @@
 //   tum    TUM RGB-D: the sequence folder (holding depth/ and rgb/ and one
 //          *assoc*.txt association file, or ScanSourceOptions::association)
 //          or the association file itself with format "tum"; every row
-//          whose depth and colour images exist is one scan, back-projected
+//          whose depth and color images exist is one scan, back-projected
 //          with ScanSourceOptions::depth_camera, origin = the camera position.
 //   rosbag ROS 1 bag, .bag: PointCloud2 messages on ScanSourceOptions::topics
 //          moved into the frame ScanSourceOptions::frame with the bag's TF.
@@ -37,7 +37,7 @@
 // Errors: malformed files throw umbra::FormatError naming the file and the
 // line or byte offset; a missing file throws std::runtime_error naming it.
 // Memory: a scan whose points need more than umbra::memory_limit() (12 bytes
-// a point, 15 with colour; see umbra/core/memory_limit.hpp) is refused with
+// a point, 15 with color; see umbra/core/memory_limit.hpp) is refused with
 // umbra::MemoryLimitError naming the file, the need and the limit: at open
 // when the header declares the count (PLY, PCD, ScanGraph), else before the
 // points are read (KITTI by file size, TUM by image size) or as they arrive

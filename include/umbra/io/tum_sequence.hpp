@@ -1,22 +1,22 @@
 // TUM RGB-D sequences: depth images with poses, back-projected into scans.
 //
 // A TUM RGB-D benchmark sequence has depth/*.png (16-bit greyscale, raw
-// value / depth_scale = metres, 0 = no reading) and rgb/*.png (8-bit colour,
+// value / depth_scale = metres, 0 = no reading) and rgb/*.png (8-bit color,
 // same size), named by their timestamps. An association file pairs them
 // with the ground-truth pose, one row per frame: "rgb_path depth_path tx ty
 // tz qx qy qz qw" (paths relative to the association file's folder; the pose
 // is the camera-to-world transform of the optical frame, quaternion with w
 // last, as in TUM's groundtruth.txt); '#' lines are comments. Every row
-// whose depth and colour images both exist on disk is a scan, in file order
+// whose depth and color images both exist on disk is a scan, in file order
 // (a partial copy of a sequence yields just the frames it holds). A scan is
 // built from every pixel (u, v) with a non-zero depth d: camera point
 // z = d / depth_scale, x = (u - cx) z / fx, y = (v - cy) z / fy (x right, y
 // down, z forward), mapped to the world by the row's pose; the origin is the
-// pose's translation, the colour the colour image's pixel (u, v). Opening
+// pose's translation, the color the color image's pixel (u, v). Opening
 // parses and checks the whole association file (a few hundred KB for a long
 // sequence) and looks up which files exist; next() decodes one frame's two
 // images (libpng) into reused buffers, so memory stays at one frame. The
-// scan keeps the depth image and the colour image (Scan::image) for the
+// scan keeps the depth image and the color image (Scan::image) for the
 // projective integrator; its points are back_project() of that image.
 #pragma once
 

@@ -16,7 +16,7 @@ namespace umbra {
 
 /// Opens an ASCII point file (decompressing it when the name ends in .bz2,
 /// case-insensitive) as a source of exactly one scan whose sensor origin is
-/// `origin`. Lines are "x y z" or "x y z r g b" (colours 0..255, all lines
+/// `origin`. Lines are "x y z" or "x y z r g b" (colors 0..255, all lines
 /// alike); blank lines and lines starting with '#' are skipped; NaN and inf
 /// coordinates are passed through. Throws std::runtime_error("cannot open
 /// FILE: reason") when the file cannot be opened; malformed lines and corrupt

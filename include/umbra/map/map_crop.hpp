@@ -1,11 +1,11 @@
 // crop_map: the part of a map inside a box, as a new map.
 //
 // The voxels of the VoxelBox keep their values (log-odds, float for float)
-// and colours (with the count of samples behind them, so that later colour
+// and colors (with the count of samples behind them, so that later color
 // updates average as they would have); every other voxel becomes unknown.
 // A pruned node that the box cuts is split just enough to keep its part.
 // The new map has the source's resolution, depth levels, sensor model,
-// thresholds, colour, insertion box and automatic pruning (on: equal
+// thresholds, color, insertion box and automatic pruning (on: equal
 // siblings the cut leaves are merged, as after any update).
 //
 // OctoMap's edit_octree does the same with its -bbx option. Cost: one walk

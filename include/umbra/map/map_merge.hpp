@@ -10,7 +10,7 @@
 //    centre c takes the value of other's voxel that contains T^-1 c (computed
 //    in double as R^T (c - t)), if that point lies in other and that voxel is
 //    known. Each voxel of this map thus gets at most one of other's voxels.
-// docs/design.md ("Merging maps") has the details, the colour rule and the costs.
+// docs/design.md ("Merging maps") has the details, the color rule and the costs.
 #pragma once
 
 #include <cstdint>

@@ -22,7 +22,7 @@
 //  - insert_point_cloud traces its rays while queries go on (tracing only
 //    reads the map) and applies the traced scan in one short exclusive
 //    phase: a query waits at most for one such phase.
-//  - everything else that changes the map (single-voxel updates, colours,
+//  - everything else that changes the map (single-voxel updates, colors,
 //    prune(), set_auto_prune(), thresholds, sensor model, clear(), the box,
 //    a decay step of advance_clock or a stamped scan) is exclusive in the same way; two writers take turns.
 //  - an open query range holds the map for reading until it is destroyed; a
@@ -73,7 +73,7 @@ struct MapConfig {
   int depth_levels = 16;    ///< 1..21; 16 is OctoMap's depth
   SensorModel sensor;
   Thresholds thresholds;
-  bool color = false;       ///< keep an RGB colour per voxel
+  bool color = false;       ///< keep an RGB color per voxel
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -82,7 +82,7 @@ struct MapConfig {
 class OccupancyMap {
  public:
   explicit OccupancyMap(const MapConfig& config);
-  /// A map without colour.
+  /// A map without color.
   explicit OccupancyMap(double resolution, int depth_levels = 16, const SensorModel& sensor = {},
                         const Thresholds& thresholds = {});
   ~OccupancyMap();
@@ -124,17 +124,17 @@ class OccupancyMap {
   template <std::same_as<Key> K>
   void set_log_odds(K key, float log_odds) { set_key_log_odds(key, log_odds); }
 
-  // --- colour (maps made with MapConfig::color) ---------------------------
+  // --- color (maps made with MapConfig::color) ---------------------------
   [[nodiscard]] bool has_color() const { return color_; }
-  /// Colour of the depth-`depth` node containing the coordinate: a voxel's
+  /// Color of the depth-`depth` node containing the coordinate: a voxel's
   /// running average of the points that fell in it, a coarser node's the
-  /// average of its coloured children; nothing when uncoloured.
+  /// average of its colored children; nothing when uncolored.
   [[nodiscard]] std::optional<Rgb> color(Vec3d coordinate, int depth = 0) const;
   template <std::same_as<Key> K>
   [[nodiscard]] std::optional<Rgb> color(K key, int depth = 0) const { return node(key, depth).color; }
-  /// One more colour sample for the voxel (running average).
+  /// One more color sample for the voxel (running average).
   void add_color(Vec3d coordinate, Rgb rgb);
-  /// Sets the voxel's colour outright.
+  /// Sets the voxel's color outright.
   void set_color(Key key, Rgb rgb);
 
   // --- bounding box ---------------------------------------------------------
@@ -174,9 +174,9 @@ class OccupancyMap {
   /// map is unchanged then.
   InsertStats insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,
                                  const InsertOptions& options = {});
-  /// The same with one colour per point: every point that gives a hit adds
-  /// its colour to its voxel. Throws std::invalid_argument when the map has
-  /// no colour or the sizes differ.
+  /// The same with one color per point: every point that gives a hit adds
+  /// its color to its voxel. Throws std::invalid_argument when the map has
+  /// no color or the sizes differ.
   InsertStats insert_point_cloud(Vec3f origin, std::span<const Vec3f> points, std::span<const Rgb> colors,
                                  const InsertOptions& options = {});
 
@@ -188,9 +188,9 @@ class OccupancyMap {
   /// docs/design.md, "The projective integrator"); the hits are the discrete
   /// integrator's on the image's points. Any other integrator inserts the
   /// image's points (back_project) from the camera's position as a point
-  /// cloud. `colors`: empty, or one per pixel (the map must have colour).
+  /// cloud. `colors`: empty, or one per pixel (the map must have color).
   /// Throws std::invalid_argument for bad intrinsics, a pose that is not a
-  /// rotation and translation, a colour count that is not the pixel count,
+  /// rotation and translation, a color count that is not the pixel count,
   /// or bad options, and std::out_of_range for a camera outside the map; the
   /// map is unchanged then.
   InsertStats insert_depth_image(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose,
@@ -289,7 +289,7 @@ class OccupancyMap {
   /// Adds `other`'s log-odds to this map's, voxel by voxel (clamped to this
   /// map's sensor model); other's voxel k lands on k + offset. Voxels other
   /// never observed change nothing; a pruned node covers all its voxels.
-  /// Colour: where both maps have it, a voxel's colour becomes the average of
+  /// Color: where both maps have it, a voxel's color becomes the average of
   /// the two weighted by their sample counts (docs/design.md, "Merging maps").
   /// Throws std::invalid_argument when the resolutions or depth levels
   /// differ (naming both), std::out_of_range when a known voxel of other

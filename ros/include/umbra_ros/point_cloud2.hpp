@@ -9,9 +9,9 @@
 // use (intensity, ring, time, "_" padding fields) are skipped.
 //
 // What is read: x, y, z as FLOAT32 or FLOAT64 (the first value when count >
-// 1); with colours asked for, the field "rgb" or "rgba" as FLOAT32 holding
+// 1); with colors asked for, the field "rgb" or "rgba" as FLOAT32 holding
 // the packed bits (as PCL writes it) or UINT32, 0x00RRGGBB (the top byte,
-// alpha, is ignored); a cloud without such a field gives no colours.
+// alpha, is ignored); a cloud without such a field gives no colors.
 // Points with a non-finite coordinate (organised clouds mark missing returns
 // with NaN, whatever `is_dense` says) are kept, non-finite, and counted: the
 // integrator skips and counts them as for every other input. The rigid

@@ -50,16 +50,16 @@ Rgb Image::at(int column, int row) const {
   return {rgb[i], rgb[i + 1], rgb[i + 2]};
 }
 
-void Image::set(int column, int row, Rgb colour) {
+void Image::set(int column, int row, Rgb color) {
   if (column < 0 || column >= width || row < 0 || row >= height) {
     throw std::out_of_range("Image::set: pixel (" + std::to_string(column) + ", " +
                             std::to_string(row) + ") is outside the " + std::to_string(width) +
                             " x " + std::to_string(height) + " picture");
   }
   const std::size_t i = (std::size_t(row) * std::size_t(width) + std::size_t(column)) * 3;
-  rgb[i] = colour.r;
-  rgb[i + 1] = colour.g;
-  rgb[i + 2] = colour.b;
+  rgb[i] = color.r;
+  rgb[i + 1] = color.g;
+  rgb[i + 2] = color.b;
 }
 
 void Image::validate() const {

@@ -8,7 +8,7 @@
 // save and on load (plus refresh_all() to recompute the inner nodes), no
 // per-node allocation, virtual call or system call; memory besides the map
 // is the compressed file and two chunk buffers (with MapSaveOptions::threads
-// above 1, zstd's own threads compress the values and colour streams in
+// above 1, zstd's own threads compress the values and color streams in
 // 1 MiB jobs while the tree is walked: a few MiB more). Saving goes through
 // write_file_atomically (temporary file, fsync, rename).
 #include "umbra/io/map_file.hpp"
@@ -52,7 +52,7 @@ constexpr std::size_t kHeaderBytes = 124;
 constexpr std::size_t kChecksumBytes = 4;
 /// Flag bit 0: saved with auto-pruning off; equal childless siblings may be present.
 constexpr std::uint32_t kFlagUnpruned = 1u;
-/// Flag bit 1: a coloured map; a colour frame follows the values frame.
+/// Flag bit 1: a colored map; a color frame follows the values frame.
 constexpr std::uint32_t kFlagColor = 2u;
 constexpr std::uint32_t kKnownFlags = kFlagUnpruned | kFlagColor;
 
@@ -302,17 +302,17 @@ MapFileInfo decode_header(const std::string& file, std::span<const std::uint8_t>
   }
   info.file_bytes = kHeaderBytes + info.structure_compressed_bytes + info.values_compressed_bytes + kChecksumBytes;
   if (info.config.color && file_size > info.file_bytes) {
-    // The colour frame is what lies between the values frame and the checksum.
+    // The color frame is what lies between the values frame and the checksum.
     info.colors_compressed_bytes = file_size - info.file_bytes;
     if (info.childless_nodes > kMaxZstdExpansion * info.colors_compressed_bytes / 4) {
-      throw fail(at::childless_nodes, "colour stream needs " + std::to_string(info.childless_nodes) +
+      throw fail(at::childless_nodes, "color stream needs " + std::to_string(info.childless_nodes) +
                                           " x 4 bytes, but its " + std::to_string(info.colors_compressed_bytes) +
                                           " compressed bytes can expand to at most " +
                                           std::to_string(kMaxZstdExpansion * info.colors_compressed_bytes));
     }
     info.file_bytes = file_size;
   } else if (info.config.color) {
-    throw fail(file_size, "truncated: flag bit 1 says a colour frame follows the values frame, but the file ends "
+    throw fail(file_size, "truncated: flag bit 1 says a color frame follows the values frame, but the file ends "
                           "with the values frame (" + std::to_string(file_size) + " bytes)");
   }
   if (file_size < info.file_bytes) {
@@ -513,7 +513,7 @@ class FrameReader {
 /// Writes the two node streams of a tree in depth-first order (see the spec).
 class TreeEncoder {
  public:
-  /// `colors` is null for a map without colour.
+  /// `colors` is null for a map without color.
   TreeEncoder(const OccupancyTree& tree, LogOddsRange range, bool pruned, FrameWriter& structure, FrameWriter& values,
               FrameWriter* colors)
       : tree_(tree), range_(range), pruned_(pruned), structure_(structure), values_(values), colors_(colors) {}
@@ -593,7 +593,7 @@ class TreeEncoder {
 /// Rebuilds a tree from the two node streams, checking every mask and value.
 class TreeDecoder {
  public:
-  /// `colors` is null for a map without colour.
+  /// `colors` is null for a map without color.
   TreeDecoder(detail::TreeBuilder& tree, const MapFileInfo& info, FrameReader& structure, FrameReader& values,
               FrameReader* colors)
       : tree_(tree),
@@ -618,7 +618,7 @@ class TreeDecoder {
     }
     structure_.finish("node structure has unused bytes after the tree ends");
     values_.finish("unused values after the tree ends");
-    if (colors_ != nullptr) colors_->finish("unused colours after the tree ends");
+    if (colors_ != nullptr) colors_->finish("unused colors after the tree ends");
   }
 
  private:
@@ -650,7 +650,7 @@ class TreeDecoder {
   }
 
   /// A file marked pruned must not hold eight childless children that are
-  /// equal (in value, and in colour when it has colour).
+  /// equal (in value, and in color when it has color).
   void check_not_prunable(NodeRef node, std::uint64_t code) const {
     const NodeRef first = tree_.child(node, 0);
     for (unsigned slot = 1; slot < 8; ++slot) {
@@ -672,9 +672,9 @@ class TreeDecoder {
     const Rgb rgb{bytes[0], bytes[1], bytes[2]};
     const std::uint8_t weight = bytes[3];
     if (weight == 0 && rgb != Rgb{}) {
-      colors_->fail("the " + node_text(node.depth, code) + " has weight 0 (no colour) but colour (" +
+      colors_->fail("the " + node_text(node.depth, code) + " has weight 0 (no color) but color (" +
                     std::to_string(rgb.r) + ", " + std::to_string(rgb.g) + ", " + std::to_string(rgb.b) +
-                    "); an uncoloured node is stored as 0 0 0 0");
+                    "); an uncolored node is stored as 0 0 0 0");
     }
     tree_.set_childless_color(node, rgb, weight);
   }
@@ -738,7 +738,7 @@ std::uint64_t saturating_product(std::uint64_t a, std::uint64_t b) {
 
 /// What load_map allocates for a file, from its validated header: the whole
 /// file, and one group of eight children per inner node (an InnerGroup above
-/// the finest depth, a LeafGroup at it, and a ColorGroup each with colour).
+/// the finest depth, a LeafGroup at it, and a ColorGroup each with color).
 /// The structure stream holds one byte per inner node at depth >= 2, plus
 /// the root's, so that many inner nodes have InnerGroup children.
 std::uint64_t bytes_to_load(const MapFileInfo& info) {
@@ -768,7 +768,7 @@ void MapSaveOptions::validate() const {
 void save_map(const OccupancyMap& map, const std::filesystem::path& path, const MapSaveOptions& options) {
   options.validate();
   // Every thread but the caller's (which walks the tree) compresses the
-  // values and colour streams, which are nearly all the bytes; the small
+  // values and color streams, which are nearly all the bytes; the small
   // structure stream stays on the caller's thread. At most 2 each: the walk
   // feeds ~450 MB/s and one worker compresses ~500 MB/s at level 3 (a
   // second one brought nothing measurable on the 3DTK map), so more would idle.
@@ -872,7 +872,7 @@ OccupancyMap load_body(const io_detail::InputFile& file, const std::filesystem::
   std::optional<FrameReader> colors;
   if (info.config.color) {
     const std::uint64_t colors_at = values_at + info.values_compressed_bytes;
-    colors.emplace(name, colors_at, "colour stream",
+    colors.emplace(name, colors_at, "color stream",
                    all.subspan(static_cast<std::size_t>(colors_at), static_cast<std::size_t>(info.colors_compressed_bytes)),
                    4 * info.childless_nodes);
   }

@@ -194,7 +194,7 @@ Header parse_header(ByteReader& in, const std::string& name) {
 
   if (id == "1") id = "OcTree";  // the legacy id liboctomap still accepts
   if (const std::string problem = unreadable_tree_type(id); !problem.empty()) lexer.fail_at(id_line, problem);
-  header.color = id == "ColorOcTree" && header.format == OctoMapFormat::ot;  // a .bt file carries no colour
+  header.color = id == "ColorOcTree" && header.format == OctoMapFormat::ot;  // a .bt file carries no color
   header.tree_type = id;
   header.data_offset = in.offset();
   return header;
@@ -268,7 +268,7 @@ void check_declared_size(const Header& header, const std::string& name) {
     return FormatError::at_line(name, header.size_line, message);
   };
   if (header.format == OctoMapFormat::ot) {
-    // Every node is its data (4 bytes of log-odds, 3 of colour in a ColorOcTree) and a child mask byte.
+    // Every node is its data (4 bytes of log-odds, 3 of color in a ColorOcTree) and a child mask byte.
     const std::uint64_t node_bytes = header.color ? 8 : 5;
     if (data_bytes % node_bytes == 0 && data_bytes / node_bytes == nodes) return;
     throw fail("size says " + std::to_string(nodes) + " nodes of " + std::to_string(node_bytes) + " bytes (" +

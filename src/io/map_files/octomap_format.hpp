@@ -54,7 +54,7 @@ void check_declared_size(const Header& header, const std::string& name);
 
 /// Throws MemoryLimitError (umbra/core/memory_limit.hpp) when building the
 /// tree needs more than the memory limit: one group of eight children per
-/// node with children (`parents`), 68 bytes each, 32 more with colour.
+/// node with children (`parents`), 68 bytes each, 32 more with color.
 void require_tree_memory(const Header& header, const std::string& name, std::uint64_t parents);
 /// What require_tree_memory compares with the limit.
 std::uint64_t tree_bytes(const Header& header, std::uint64_t parents);
@@ -87,7 +87,7 @@ inline std::string octomap_node(int depth, std::uint64_t code) {
   return "the " + io_detail::node_text("OctoMap depth", kOctoMapDepthLevels - depth, code);
 }
 
-/// The map a decoder fills: resolution from the header, 16 levels, the sensor model, colour if asked.
+/// The map a decoder fills: resolution from the header, 16 levels, the sensor model, color if asked.
 OccupancyMap new_map(const Header& header, const std::string& name, const SensorModel& sensor, bool color);
 
 }  // namespace umbra::octomap_io

@@ -2,20 +2,20 @@
 //
 // Layout (liboctomap's readNodesRecurs/writeNodesRecurs): depth first from
 // the root, every node is its data — the float log-odds, little-endian,
-// then in a ColorOcTree the colour r, g, b — and a byte whose bit i says
+// then in a ColorOcTree the color r, g, b — and a byte whose bit i says
 // that child i exists; the existing children follow in child order.
 // OcTreeStamped nodes have the OcTree layout (liboctomap 1.9.7 does not
 // store the timestamp).
 //
 // Reading: leaves keep their float bits (a leaf of exactly 0 is unknown in
 // umbra; -0 is stored as 0); children that do not exist stay unknown; inner
-// values and colours in the file are checked to be finite numbers and
-// otherwise not used (umbra recomputes them). A colour of white (255, 255,
-// 255) is "no colour", as in liboctomap. Log-odds beyond the sensor model's
+// values and colors in the file are checked to be finite numbers and
+// otherwise not used (umbra recomputes them). A color of white (255, 255,
+// 255) is "no color", as in liboctomap. Log-odds beyond the sensor model's
 // clamping range widen the map's clamping range (see octomap_files.hpp).
 // Writing: a node whose subtree is entirely 0 is left out; an inner node
 // gets the maximum of the children written and the truncating average of
-// their set colours (white if none), as liboctomap's updateInnerOccupancy.
+// their set colors (white if none), as liboctomap's updateInnerOccupancy.
 //
 // Cost: one depth-first pass either way, recursion at most 17 deep, no
 // per-node allocation (the output grows amortised; a left-out subtree's

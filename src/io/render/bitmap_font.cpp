@@ -88,7 +88,7 @@ bool glyph_pixel(char c, int column, int row) {
 
 int text_width(std::string_view text, int scale) { return int(text.size()) * kGlyphAdvance * scale; }
 
-void draw_text(Image& image, int left, int top, std::string_view text, Rgb colour, int scale) {
+void draw_text(Image& image, int left, int top, std::string_view text, Rgb color, int scale) {
   for (std::size_t i = 0; i < text.size(); ++i) {
     const int cell_left = left + int(i) * kGlyphAdvance * scale;
     for (int row = 0; row < kGlyphHeight * scale; ++row) {
@@ -97,7 +97,7 @@ void draw_text(Image& image, int left, int top, std::string_view text, Rgb colou
       for (int column = 0; column < kGlyphWidth * scale; ++column) {
         const int x = cell_left + column;
         if (x < 0 || x >= image.width || !glyph_pixel(text[i], column / scale, row / scale)) continue;
-        image.set(x, y, colour);
+        image.set(x, y, color);
       }
     }
   }

@@ -33,6 +33,6 @@ int text_width(std::string_view text, int scale);
 
 /// Draws `text` with its cells' top-left corner at (left, top); pixels
 /// outside the image are skipped.
-void draw_text(Image& image, int left, int top, std::string_view text, Rgb colour, int scale);
+void draw_text(Image& image, int left, int top, std::string_view text, Rgb color, int scale);
 
 }  // namespace umbra::detail

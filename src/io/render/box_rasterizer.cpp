@@ -50,21 +50,21 @@ void BoxRasterizer::for_each_facing_face(Vec3d min, Vec3d max, Face&& face) cons
   }
 }
 
-void BoxRasterizer::draw_box(Vec3d min, Vec3d max, Rgb colour) {
+void BoxRasterizer::draw_box(Vec3d min, Vec3d max, Rgb color) {
   for_each_facing_face(min, max, [&](Vec3d corner, Vec3d edge_a, Vec3d edge_b, Vec3d normal) {
     const double factor = shade(normal);
-    draw_face(corner, edge_a, edge_b, {scaled(colour.r, factor), scaled(colour.g, factor), scaled(colour.b, factor)},
+    draw_face(corner, edge_a, edge_b, {scaled(color.r, factor), scaled(color.g, factor), scaled(color.b, factor)},
               true);
   });
 }
 
-void BoxRasterizer::paint_silhouette(Vec3d min, Vec3d max, Rgb colour) {
+void BoxRasterizer::paint_silhouette(Vec3d min, Vec3d max, Rgb color) {
   for_each_facing_face(min, max, [&](Vec3d corner, Vec3d edge_a, Vec3d edge_b, Vec3d) {
-    draw_face(corner, edge_a, edge_b, colour, false);
+    draw_face(corner, edge_a, edge_b, color, false);
   });
 }
 
-void BoxRasterizer::draw_face(Vec3d corner, Vec3d edge_a, Vec3d edge_b, Rgb colour, bool depth_tested) {
+void BoxRasterizer::draw_face(Vec3d corner, Vec3d edge_a, Vec3d edge_b, Rgb color, bool depth_tested) {
   const double mpp = camera_.metres_per_pixel;
   const auto [cx, cy] = camera_.pixel(corner);
   // The edges on screen (rows grow downwards).
@@ -103,9 +103,9 @@ void BoxRasterizer::draw_face(Vec3d corner, Vec3d edge_a, Vec3d edge_b, Rgb colo
         depth_[pixel] = depth;
       }
       std::uint8_t* out = image_.rgb.data() + 3 * pixel;
-      out[0] = colour.r;
-      out[1] = colour.g;
-      out[2] = colour.b;
+      out[0] = color.r;
+      out[1] = color.g;
+      out[2] = color.b;
     }
   }
 }

@@ -40,7 +40,7 @@ struct Bounds {
   }
 };
 
-/// The ends of a colour ramp: the lowest and highest value added.
+/// The ends of a color ramp: the lowest and highest value added.
 struct RampRange {
   double low = std::numeric_limits<double>::infinity();
   double high = -std::numeric_limits<double>::infinity();
@@ -93,8 +93,8 @@ double ramp_value(const Node& node, RenderColor color, const RenderCamera& camer
   return color == RenderColor::depth ? node.center.dot(camera.toward) : node.center.z;
 }
 
-/// The colour of an occupied node in the chosen colour mode.
-Rgb occupied_colour(const Node& node, const RenderOptions& options, const RampRange& ramp,
+/// The color of an occupied node in the chosen color mode.
+Rgb occupied_color(const Node& node, const RenderOptions& options, const RampRange& ramp,
                     const RenderCamera& camera) {
   switch (options.color) {
     case RenderColor::height:
@@ -103,11 +103,11 @@ Rgb occupied_colour(const Node& node, const RenderOptions& options, const RampRa
       return height_ramp(ramp.high > ramp.low ? (value - ramp.low) / (ramp.high - ramp.low) : 0.0);
     }
     case RenderColor::rgb:
-      return node.color.value_or(options.uncoloured_colour);
+      return node.color.value_or(options.uncolored_color);
     case RenderColor::state:
       break;
   }
-  return options.occupied_colour;
+  return options.occupied_color;
 }
 
 /// The part of the map a view draws: the height window and the section.
@@ -161,7 +161,7 @@ MapPicture render_view(const OccupancyMap& map, const RenderOptions& options) {
                                 window_words(options) +
                                 ", so a view shows nothing (a slice shows free and unknown space)");
   }
-  // With state colours the free space is drawn too: frame the known space.
+  // With state colors the free space is drawn too: frame the known space.
   Bounds known = content;
   if (by_state) {
     for (const Node& node : map.query(window && pred::free(), options.depth)) known.add(node.min_corner(), node.max_corner());
@@ -174,13 +174,13 @@ MapPicture render_view(const OccupancyMap& map, const RenderOptions& options) {
   detail::BoxRasterizer rasterizer(frame.camera, picture.image);
   if (by_state) {
     // Behind every cube: the known box unknown, then what free space covers.
-    rasterizer.paint_silhouette(known.min, known.max, options.unknown_colour);
+    rasterizer.paint_silhouette(known.min, known.max, options.unknown_color);
     for (const Node& node : map.query(window && pred::free(), options.depth)) {
-      rasterizer.paint_silhouette(node.min_corner(), node.max_corner(), options.free_colour);
+      rasterizer.paint_silhouette(node.min_corner(), node.max_corner(), options.free_color);
     }
   }
   for (const Node& node : map.query(obstacles, options.depth)) {
-    rasterizer.draw_box(node.min_corner(), node.max_corner(), occupied_colour(node, options, ramp, frame.camera));
+    rasterizer.draw_box(node.min_corner(), node.max_corner(), occupied_color(node, options, ramp, frame.camera));
     ++picture.nodes_drawn;
   }
   report_ramp(picture, options, ramp);
@@ -196,7 +196,7 @@ double slice_plane(const Grid& grid, double position, int depth) {
 
 /// Paints the pixels whose centres lie in the node's rectangle (half-open,
 /// so that the nodes of a slice, which tile it, paint every pixel once).
-void paint_rectangle(Image& image, const RenderCamera& camera, const Node& node, Rgb colour) {
+void paint_rectangle(Image& image, const RenderCamera& camera, const Node& node, Rgb color) {
   const auto [x0, y0] = camera.pixel(node.min_corner());
   const auto [x1, y1] = camera.pixel(node.max_corner());
   const int first_column = std::max(0, static_cast<int>(std::ceil(std::min(x0, x1) - 0.5)));
@@ -206,9 +206,9 @@ void paint_rectangle(Image& image, const RenderCamera& camera, const Node& node,
   for (int row = first_row; row < end_row; ++row) {
     std::uint8_t* out = image.rgb.data() + 3 * (std::size_t(row) * std::size_t(image.width) + std::size_t(first_column));
     for (int column = first_column; column < end_column; ++column, out += 3) {
-      out[0] = colour.r;
-      out[1] = colour.g;
-      out[2] = colour.b;
+      out[0] = color.r;
+      out[1] = color.g;
+      out[2] = color.b;
     }
   }
 }
@@ -256,13 +256,13 @@ MapPicture render_slice(const OccupancyMap& map, const RenderOptions& options) {
   picture.camera = frame.camera;
   picture.depth = options.depth;
   for (const Node& node : map.query(layer, options.depth)) {
-    Rgb colour = options.unknown_colour;
+    Rgb color = options.unknown_color;
     if (node.state == OccupancyState::occupied) {
-      colour = occupied_colour(node, options, ramp, camera);
+      color = occupied_color(node, options, ramp, camera);
     } else if (node.state == OccupancyState::free) {
-      colour = options.free_colour;
+      color = options.free_color;
     }
-    paint_rectangle(picture.image, picture.camera, node, colour);
+    paint_rectangle(picture.image, picture.camera, node, color);
     ++picture.nodes_drawn;
   }
   report_ramp(picture, options, ramp);
@@ -394,7 +394,7 @@ void check_render_options(const OccupancyMap& map, const RenderOptions& options)
     bad_option("depth", "at most the map's depth levels (" + std::to_string(map.depth_levels()) + ")", options.depth);
   }
   if (options.color == RenderColor::rgb && !map.has_color()) {
-    throw std::invalid_argument("RenderOptions::color is rgb, but the map has no colour (use height or state)");
+    throw std::invalid_argument("RenderOptions::color is rgb, but the map has no color (use height or state)");
   }
 }
 

@@ -79,35 +79,35 @@ struct Painter {
   Rgb text;
   Rgb line;
 
-  void fill(int x0, int y0, int width, int height, Rgb colour) const {
+  void fill(int x0, int y0, int width, int height, Rgb color) const {
     for (int y = std::max(0, y0); y < std::min(image.height, y0 + height); ++y) {
-      for (int x = std::max(0, x0); x < std::min(image.width, x0 + width); ++x) image.set(x, y, colour);
+      for (int x = std::max(0, x0); x < std::min(image.width, x0 + width); ++x) image.set(x, y, color);
     }
   }
   void write(int x, int y, const std::string& words) const { draw_text(image, x, y, words, text, scale); }
   [[nodiscard]] int width_of(const std::string& words) const { return text_width(words, scale); }
-  /// A swatch with a one-pixel outline, so that a colour like the background shows.
-  void swatch(int x, int y, Rgb colour) const {
+  /// A swatch with a one-pixel outline, so that a color like the background shows.
+  void swatch(int x, int y, Rgb color) const {
     const int side = kLine * scale - 2 * scale;
     fill(x, y + scale, side, side, line);
-    fill(x + 1, y + scale + 1, side - 2, side - 2, colour);
+    fill(x + 1, y + scale + 1, side - 2, side - 2, color);
   }
 };
 
-Rgb text_colour_on(Rgb background) {
+Rgb text_color_on(Rgb background) {
   const int luminance = (299 * background.r + 587 * background.g + 114 * background.b) / 1000;
   return luminance > 128 ? Rgb{40, 40, 40} : Rgb{230, 230, 230};
 }
 
-/// The legend row: what the colours mean. Returns nothing; draws at (x, y).
+/// The legend row: what the colors mean. Returns nothing; draws at (x, y).
 void draw_legend(const Painter& paint, const MapPicture& drawing, const RenderOptions& options, int x, int y) {
   const int s = paint.scale;
   switch (options.color) {
     case RenderColor::state: {
       const std::vector<std::pair<Rgb, std::string>> entries{
-          {options.occupied_colour, "occupied"}, {options.free_colour, "free"}, {options.unknown_colour, "unknown"}};
-      for (const auto& [colour, name] : entries) {
-        paint.swatch(x, y, colour);
+          {options.occupied_color, "occupied"}, {options.free_color, "free"}, {options.unknown_color, "unknown"}};
+      for (const auto& [color, name] : entries) {
+        paint.swatch(x, y, color);
         x += kLine * s;
         paint.write(x, y, name);
         x += paint.width_of(name + "  ");
@@ -115,7 +115,7 @@ void draw_legend(const Painter& paint, const MapPicture& drawing, const RenderOp
       return;
     }
     case RenderColor::rgb:
-      paint.write(x, y, "colours: the map's own");
+      paint.write(x, y, "colors: the map's own");
       return;
     case RenderColor::height:
     case RenderColor::depth:
@@ -201,7 +201,7 @@ MapPicture annotate(const MapPicture& drawing, const RenderOptions& options, con
     std::copy_n(drawing.image.rgb.begin() + 3 * std::ptrdiff_t(row) * width, 3 * width,
                 picture.image.rgb.begin() + 3 * ((std::ptrdiff_t(row) + layout.top) * picture.image.width + layout.left));
   }
-  const Painter paint{picture.image, s, text_colour_on(options.background), Rgb{120, 120, 120}};
+  const Painter paint{picture.image, s, text_color_on(options.background), Rgb{120, 120, 120}};
   const int x0 = layout.left;  // the drawing's corner in the annotated image
   const int y0 = layout.top;
   paint.write(x0, kPad * s, title);

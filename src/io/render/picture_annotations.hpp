@@ -10,9 +10,9 @@
 //           aligned, for the vertical axis (room for 8 characters)
 //   frame   a one-pixel line around the drawing
 //   bottom  axis-aligned pictures: ticks and values for the horizontal axis
-//           and its name; then the legend: the state colours as swatches,
+//           and its name; then the legend: the state colors as swatches,
 //           or the ramp with its two ends in metres (height: low blue to
-//           high red; depth: near red to far blue), or "map colours"; then,
+//           high red; depth: near red to far blue), or "map colors"; then,
 //           for axis-aligned pictures, a scale bar of 1, 2 or 5 x 10^k
 //           metres, the longest such not over a quarter of the drawing
 // Tick spacing: the smallest 1, 2 or 5 x 10^k metres whose ticks lie at

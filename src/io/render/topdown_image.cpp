@@ -206,19 +206,19 @@ Image render_topdown(const OccupancyMap& map, const TopdownOptions& options) {
     if (options.ramp_high_z) ramp_high = *options.ramp_high_z;
   }
 
-  Image image(width, height, options.unknown_colour);
+  Image image(width, height, options.unknown_color);
   std::uint8_t* out = image.rgb.data();
   for (const std::int32_t cell : cells) {
-    Rgb colour = options.unknown_colour;
+    Rgb color = options.unknown_color;
     if (cell == kFreeCell) {
-      colour = options.free_colour;
+      color = options.free_color;
     } else if (cell >= 0) {
       const double z = grid.axis_center(std::uint32_t(cell));
-      colour = height_ramp(ramp_high > ramp_low ? (z - ramp_low) / (ramp_high - ramp_low) : 0.0);
+      color = height_ramp(ramp_high > ramp_low ? (z - ramp_low) / (ramp_high - ramp_low) : 0.0);
     }
-    out[0] = colour.r;
-    out[1] = colour.g;
-    out[2] = colour.b;
+    out[0] = color.r;
+    out[1] = color.g;
+    out[2] = color.b;
     out += 3;
   }
 

@@ -85,10 +85,10 @@ struct FieldRoles {
   std::size_t x = 0;
   std::size_t y = 0;
   std::size_t z = 0;
-  std::optional<std::size_t> colour;
+  std::optional<std::size_t> color;
 };
 
-Rgb unpack_colour(std::uint32_t bits) {
+Rgb unpack_color(std::uint32_t bits) {
   return {static_cast<std::uint8_t>(bits >> 16), static_cast<std::uint8_t>(bits >> 8), static_cast<std::uint8_t>(bits)};
 }
 
@@ -106,7 +106,7 @@ class PcdReader final : public io_detail::SingleScanSource {
     const std::uint64_t buffers =
         encoding_ == PcdEncoding::binary_compressed ? compressed_bytes_ + point_count_ * record_bytes_ : 0;
     io_detail::require_point_memory(file_.name(), "reading its " + std::to_string(point_count_) + " points",
-                                    point_count_, roles_.colour.has_value(), buffers);
+                                    point_count_, roles_.color.has_value(), buffers);
   }
 
   [[nodiscard]] std::vector<Vec3f> origins() const override {
@@ -334,15 +334,15 @@ class PcdReader final : public io_detail::SingleScanSource {
     roles_.x = required("x");
     roles_.y = required("y");
     roles_.z = required("z");
-    roles_.colour = find("rgb");
-    if (!roles_.colour) roles_.colour = find("rgba");
-    if (roles_.colour) {
-      const PcdField& colour = fields_[*roles_.colour];
-      if (colour.type.bytes != 4 || colour.count != 1) {
+    roles_.color = find("rgb");
+    if (!roles_.color) roles_.color = find("rgba");
+    if (roles_.color) {
+      const PcdField& color = fields_[*roles_.color];
+      if (color.type.bytes != 4 || color.count != 1) {
         throw FormatError::at_line(file_.name(), fields_line,
-                                   "field '" + colour.name +
+                                   "field '" + color.name +
                                        "' must be one packed 4-byte value (SIZE 4, COUNT 1), found SIZE " +
-                                       std::to_string(colour.type.bytes) + " COUNT " + std::to_string(colour.count));
+                                       std::to_string(color.type.bytes) + " COUNT " + std::to_string(color.count));
       }
     }
   }
@@ -416,7 +416,7 @@ class PcdReader final : public io_detail::SingleScanSource {
     scan.name = display_name_;
     // Safe: the count was checked against the file size when it was opened.
     scan.points.reserve(static_cast<std::size_t>(point_count_));
-    if (roles_.colour) scan.colors.reserve(static_cast<std::size_t>(point_count_));
+    if (roles_.color) scan.colors.reserve(static_cast<std::size_t>(point_count_));
     switch (encoding_) {
       case PcdEncoding::ascii:
         read_ascii(scan);
@@ -452,9 +452,9 @@ class PcdReader final : public io_detail::SingleScanSource {
       }
       scan.points.push_back({coordinate(record + x.offset, roles_.x), coordinate(record + y.offset, roles_.y),
                              coordinate(record + z.offset, roles_.z)});
-      if (roles_.colour) {
-        scan.colors.push_back(unpack_colour(
-            static_cast<std::uint32_t>(io_detail::load_bits(record + fields_[*roles_.colour].offset, 4, false))));
+      if (roles_.color) {
+        scan.colors.push_back(unpack_color(
+            static_cast<std::uint32_t>(io_detail::load_bits(record + fields_[*roles_.color].offset, 4, false))));
       }
       if (point % 65536 == 0) consumed_.store(reader.offset(), std::memory_order_relaxed);
     }
@@ -484,10 +484,10 @@ class PcdReader final : public io_detail::SingleScanSource {
       scan.points.push_back({coordinate(xs + point * x_bytes, roles_.x), coordinate(ys + point * y_bytes, roles_.y),
                              coordinate(zs + point * z_bytes, roles_.z)});
     }
-    if (roles_.colour) {
-      const unsigned char* colours = column(*roles_.colour);
+    if (roles_.color) {
+      const unsigned char* colors = column(*roles_.color);
       for (std::uint64_t point = 0; point < point_count_; ++point) {
-        scan.colors.push_back(unpack_colour(static_cast<std::uint32_t>(io_detail::load_bits(colours + 4 * point, 4, false))));
+        scan.colors.push_back(unpack_color(static_cast<std::uint32_t>(io_detail::load_bits(colors + 4 * point, 4, false))));
       }
     }
   }
@@ -507,9 +507,9 @@ class PcdReader final : public io_detail::SingleScanSource {
     return true;
   }
 
-  /// A packed colour written as text: an integer (the bits, as PCL writes
-  /// rgb since 1.8 and for integer fields) or a float whose bits are the colour.
-  bool parse_packed_colour(std::string_view token, const PcdField& field, std::uint32_t& bits) const {
+  /// A packed color written as text: an integer (the bits, as PCL writes
+  /// rgb since 1.8 and for integer fields) or a float whose bits are the color.
+  bool parse_packed_color(std::string_view token, const PcdField& field, std::uint32_t& bits) const {
     const bool integer_text = token.find_first_of(".eEnNiI") == std::string_view::npos;
     if (field.type.kind == ScalarKind::floating_point && !integer_text) {
       float value = 0;
@@ -532,8 +532,8 @@ class PcdReader final : public io_detail::SingleScanSource {
   void read_ascii(Scan& scan) {
     std::string_view line;
     std::uint64_t point = 0;
-    const std::size_t wanted_fields = roles_.colour ? 4 : 3;
-    const std::size_t wanted[4] = {roles_.x, roles_.y, roles_.z, roles_.colour.value_or(0)};
+    const std::size_t wanted_fields = roles_.color ? 4 : 3;
+    const std::size_t wanted[4] = {roles_.x, roles_.y, roles_.z, roles_.color.value_or(0)};
     while (point < point_count_) {
       if (!lines_->next_non_blank(line)) {
         throw FormatError::at_line(file_.name(), lines_->line_number() + 1,
@@ -563,12 +563,12 @@ class PcdReader final : public io_detail::SingleScanSource {
         }
       }
       scan.points.push_back(p);
-      if (roles_.colour) {
+      if (roles_.color) {
         std::uint32_t bits = 0;
-        if (!parse_packed_colour(values[3], fields_[wanted[3]], bits)) {
-          ascii_error("field '" + fields_[wanted[3]].name + "' is " + quote(values[3]) + ", not a packed colour", line);
+        if (!parse_packed_color(values[3], fields_[wanted[3]], bits)) {
+          ascii_error("field '" + fields_[wanted[3]].name + "' is " + quote(values[3]) + ", not a packed color", line);
         }
-        scan.colors.push_back(unpack_colour(bits));
+        scan.colors.push_back(unpack_color(bits));
       }
       ++point;
       if (point % 4096 == 0) consumed_.store(lines_->offset(), std::memory_order_relaxed);

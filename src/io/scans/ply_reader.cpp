@@ -98,7 +98,7 @@ Role role_named(std::string_view name) {
   return Role::none;
 }
 
-std::uint8_t colour_channel(double value, ScalarType type) {
+std::uint8_t color_channel(double value, ScalarType type) {
   double channel = value;
   if (type.kind == ScalarKind::floating_point) {
     channel = std::round(value * 255.0);
@@ -120,7 +120,7 @@ class PlyReader final : public io_detail::SingleScanSource {
     parse_header();
     const std::uint64_t count = elements_[vertex_element_].count;
     io_detail::require_point_memory(file_.name(), "reading its " + std::to_string(count) + " vertices", count,
-                                    has_colours_);
+                                    has_colors_);
   }
 
   [[nodiscard]] std::vector<Vec3f> origins() const override { return {origin_}; }
@@ -136,7 +136,7 @@ class PlyReader final : public io_detail::SingleScanSource {
     scan.name = display_name_;
     // Safe: the count was checked against the file size when it was opened.
     scan.points.reserve(static_cast<std::size_t>(elements_[vertex_element_].count));
-    if (has_colours_) scan.colors.reserve(static_cast<std::size_t>(elements_[vertex_element_].count));
+    if (has_colors_) scan.colors.reserve(static_cast<std::size_t>(elements_[vertex_element_].count));
     if (encoding_ == PlyEncoding::ascii) {
       read_ascii(scan);
     } else {
@@ -268,12 +268,12 @@ class PlyReader final : public io_detail::SingleScanSource {
                                        names[static_cast<std::size_t>(role)] + "' property");
       }
     }
-    const int colour_channels = (by_role[4] != nullptr) + (by_role[5] != nullptr) + (by_role[6] != nullptr);
-    if (colour_channels != 0 && colour_channels != 3) {
+    const int color_channels = (by_role[4] != nullptr) + (by_role[5] != nullptr) + (by_role[6] != nullptr);
+    if (color_channels != 0 && color_channels != 3) {
       throw FormatError::at_line(file_.name(), vertex->header_line,
-                                 "the vertex element has only some of the colour properties red, green, blue");
+                                 "the vertex element has only some of the color properties red, green, blue");
     }
-    has_colours_ = colour_channels == 3;
+    has_colors_ = color_channels == 3;
   }
 
   /// Every element's count against the bytes after the header.
@@ -391,13 +391,13 @@ class PlyReader final : public io_detail::SingleScanSource {
       } else {
         const unsigned char* record = reader.take(record_bytes);
         if (record == nullptr) truncated(reader, element, instance, std::to_string(record_bytes) + " bytes");
-        for (std::size_t role = 1; role < (has_colours_ ? 7U : 4U); ++role) {
+        for (std::size_t role = 1; role < (has_colors_ ? 7U : 4U); ++role) {
           const PlyProperty& property = *vertex_roles_[role];
           values[role] = io_detail::load_scalar(record + property.offset, property.type, big_endian);
         }
       }
       scan.points.push_back({static_cast<float>(values[1]), static_cast<float>(values[2]), static_cast<float>(values[3])});
-      if (has_colours_) push_colour(values, scan);
+      if (has_colors_) push_color(values, scan);
       if (instance % 65536 == 0) consumed_.store(reader.offset(), std::memory_order_relaxed);
     }
   }
@@ -428,10 +428,10 @@ class PlyReader final : public io_detail::SingleScanSource {
     }
   }
 
-  void push_colour(const std::array<double, 7>& values, Scan& scan) const {
-    scan.colors.push_back({colour_channel(values[4], vertex_roles_[4]->type),
-                           colour_channel(values[5], vertex_roles_[5]->type),
-                           colour_channel(values[6], vertex_roles_[6]->type)});
+  void push_color(const std::array<double, 7>& values, Scan& scan) const {
+    scan.colors.push_back({color_channel(values[4], vertex_roles_[4]->type),
+                           color_channel(values[5], vertex_roles_[5]->type),
+                           color_channel(values[6], vertex_roles_[6]->type)});
   }
 
   // --- ascii data ---
@@ -500,7 +500,7 @@ class PlyReader final : public io_detail::SingleScanSource {
         }
         if (is_vertex) {
           scan.points.push_back({coordinates[1], coordinates[2], coordinates[3]});
-          if (has_colours_) push_colour(values, scan);
+          if (has_colors_) push_color(values, scan);
         }
         if (instance % kProgressStride == 0) consumed_.store(lines_->offset(), std::memory_order_relaxed);
       }
@@ -521,7 +521,7 @@ class PlyReader final : public io_detail::SingleScanSource {
   std::vector<PlyElement> elements_;
   std::size_t vertex_element_ = 0;
   std::array<const PlyProperty*, 7> vertex_roles_{};  // by Role; points into elements_ (fixed after the header)
-  bool has_colours_ = false;
+  bool has_colors_ = false;
   std::uint64_t data_offset_ = 0;
   std::atomic<std::uint64_t> consumed_{0};  // file offset reached, for progress()
 };

@@ -139,25 +139,25 @@ bool parse_scalar(std::string_view token, ScalarType type, double& value) {
 
 // --- SingleScanSource --------------------------------------------------------
 
-std::uint64_t point_bytes(std::uint64_t points, bool colour) {
-  const std::uint64_t each = sizeof(Vec3f) + (colour ? sizeof(Rgb) : 0);
+std::uint64_t point_bytes(std::uint64_t points, bool color) {
+  const std::uint64_t each = sizeof(Vec3f) + (color ? sizeof(Rgb) : 0);
   return points > UINT64_MAX / each ? UINT64_MAX : points * each;
 }
 
-void require_point_memory(const std::string& file, const std::string& what, std::uint64_t points, bool colour,
+void require_point_memory(const std::string& file, const std::string& what, std::uint64_t points, bool color,
                           std::uint64_t extra_bytes) {
-  const std::uint64_t bytes = point_bytes(points, colour);
+  const std::uint64_t bytes = point_bytes(points, color);
   detail::require_memory(file, what, bytes > UINT64_MAX - extra_bytes ? UINT64_MAX : bytes + extra_bytes);
 }
 
-void grow_points(Scan& scan, bool colour, const std::string& file) {
+void grow_points(Scan& scan, bool color, const std::string& file) {
   const std::size_t capacity = std::max<std::size_t>(std::size_t{1} << 16, 2 * scan.points.capacity());
   require_point_memory(file,
                        "making room for " + std::to_string(capacity) + " points (" +
                            std::to_string(scan.points.size()) + " read so far; the file does not say how many follow)",
-                       capacity, colour);
+                       capacity, color);
   scan.points.reserve(capacity);
-  if (colour) scan.colors.reserve(capacity);
+  if (color) scan.colors.reserve(capacity);
 }
 
 namespace {

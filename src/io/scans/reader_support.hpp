@@ -108,18 +108,18 @@ bool parse_scalar(std::string_view token, ScalarType type, double& value);
 /// The rigid (or affine) 3x4 transform of the readers: the public umbra::Pose.
 using umbra::Pose;
 
-/// Bytes the points of a scan take in a Scan: 12 a point, 15 with colour.
-std::uint64_t point_bytes(std::uint64_t points, bool colour);
+/// Bytes the points of a scan take in a Scan: 12 a point, 15 with color.
+std::uint64_t point_bytes(std::uint64_t points, bool color);
 
 /// Throws MemoryLimitError "FILE: WHAT needs ..." unless `points` points
-/// (with colours when `colour`) plus `extra_bytes` fit the memory limit.
-void require_point_memory(const std::string& file, const std::string& what, std::uint64_t points, bool colour,
+/// (with colors when `color`) plus `extra_bytes` fit the memory limit.
+void require_point_memory(const std::string& file, const std::string& what, std::uint64_t points, bool color,
                           std::uint64_t extra_bytes = 0);
 
 /// Makes room for more points in a scan whose count is not known in advance
 /// (capacity doubled, at least 64 Ki points), after checking the new
 /// capacity against the memory limit.
-void grow_points(Scan& scan, bool colour, const std::string& file);
+void grow_points(Scan& scan, bool color, const std::string& file);
 
 /// Wraps a reader so that a std::bad_alloc from its next() comes out as a
 /// MemoryLimitError naming `file` and the points read; `make()` constructs

@@ -5,7 +5,7 @@
 // poses to matrices. next() decodes the frame's 16-bit depth PNG with
 // libpng's low-level API (the simplified API would apply gamma handling to
 // 16-bit data; here the samples arrive untouched, big-endian as stored),
-// the colour PNG with read_png, and back-projects every non-zero depth pixel
+// the color PNG with read_png, and back-projects every non-zero depth pixel
 // with per-column and per-row factors computed once per image size. Cost
 // per frame: decoding two 640x480 PNGs and one multiply-add pass; memory:
 // one frame's images and points, reused from scan to scan.
@@ -43,7 +43,7 @@ using io_detail::quote;
 using io_detail::Tokens;
 
 constexpr std::uint64_t kMaxDepthPixels = std::uint64_t{1} << 26;  // 64 Mpixel: no depth camera is larger
-// The decoded 16-bit depth and RGB colour images, their copy in the scan
+// The decoded 16-bit depth and RGB color images, their copy in the scan
 // (ScanImage) and each point's pixel index.
 constexpr std::uint64_t kImageBytesPerPixel = 2 + 3 + 2 + 3 + 4;
 
@@ -91,7 +91,7 @@ struct PngHeader {
   png_uint_32 width = 0;
   png_uint_32 height = 0;
   int bit_depth = 0;
-  int colour_type = 0;
+  int color_type = 0;
 };
 
 // The two functions below hold only trivially destructible locals between
@@ -100,7 +100,7 @@ bool read_png_header(png_structp png, png_infop info, std::FILE* file, PngHeader
   if (setjmp(png_jmpbuf(png)) != 0) return false;
   png_init_io(png, file);
   png_read_info(png, info);
-  png_get_IHDR(png, info, &header.width, &header.height, &header.bit_depth, &header.colour_type, nullptr, nullptr,
+  png_get_IHDR(png, info, &header.width, &header.height, &header.bit_depth, &header.color_type, nullptr, nullptr,
                nullptr);
   return true;
 }
@@ -142,10 +142,10 @@ void read_depth_png(const fs::path& path, PngDepth& image) {
   if (!read_png_header(handle.png(), handle.info(), file, header)) {
     throw FormatError(path.string(), std::string("corrupt PNG header (libpng: ") + state.message + ")");
   }
-  if (header.bit_depth != 16 || header.colour_type != PNG_COLOR_TYPE_GRAY) {
+  if (header.bit_depth != 16 || header.color_type != PNG_COLOR_TYPE_GRAY) {
     throw FormatError(path.string(), "expected a 16-bit greyscale depth image, found " +
-                                         std::to_string(header.bit_depth) + "-bit samples of PNG colour type " +
-                                         std::to_string(header.colour_type) + " (0 is greyscale)");
+                                         std::to_string(header.bit_depth) + "-bit samples of PNG color type " +
+                                         std::to_string(header.color_type) + " (0 is greyscale)");
   }
   const std::uint64_t pixels = std::uint64_t{header.width} * header.height;
   if (pixels == 0 || pixels > kMaxDepthPixels) {
@@ -173,7 +173,7 @@ void read_depth_png(const fs::path& path, PngDepth& image) {
 
 struct Frame {
   fs::path depth;
-  fs::path colour;
+  fs::path color;
   std::string depth_text;  // as written in the association file
   std::uint64_t line = 0;
   Pose pose;  // camera (optical frame) to world
@@ -224,7 +224,7 @@ class TumReader final : public ScanSource {
                                    "found " + quote(line));
       }
       Frame frame;
-      frame.colour = folder / fs::path(std::string(first));
+      frame.color = folder / fs::path(std::string(first));
       frame.depth = folder / fs::path(std::string(second));
       frame.depth_text = std::string(second);
       frame.line = lines.line_number();
@@ -235,7 +235,7 @@ class TumReader final : public ScanSource {
       } catch (const std::invalid_argument& error) {
         throw FormatError::at_line(file.name(), lines.line_number(), std::string("bad pose: ") + error.what());
       }
-      if (file_exists(frame.depth) && file_exists(frame.colour)) {
+      if (file_exists(frame.depth) && file_exists(frame.color)) {
         frames_.push_back(std::move(frame));
       } else {
         note_missing(frame, file.name());
@@ -268,16 +268,16 @@ class TumReader final : public ScanSource {
     if (next_frame_ >= frames_.size()) return false;
     const Frame& frame = frames_[next_frame_];
     read_depth_png(frame.depth, depth_);
-    Image colour;
+    Image color;
     try {
-      colour = read_png(frame.colour);
+      color = read_png(frame.color);
     } catch (const std::runtime_error& error) {
-      throw FormatError(frame.colour.string(), std::string("cannot decode the colour image: ") + error.what());
+      throw FormatError(frame.color.string(), std::string("cannot decode the color image: ") + error.what());
     }
-    if (static_cast<std::uint32_t>(colour.width) != depth_.width ||
-        static_cast<std::uint32_t>(colour.height) != depth_.height) {
-      throw FormatError(frame.colour.string(), "the colour image is " + std::to_string(colour.width) + " x " +
-                                                   std::to_string(colour.height) + " pixels but the depth image " +
+    if (static_cast<std::uint32_t>(color.width) != depth_.width ||
+        static_cast<std::uint32_t>(color.height) != depth_.height) {
+      throw FormatError(frame.color.string(), "the color image is " + std::to_string(color.width) + " x " +
+                                                   std::to_string(color.height) + " pixels but the depth image " +
                                                    frame.depth.string() + " is " + std::to_string(depth_.width) +
                                                    " x " + std::to_string(depth_.height));
     }
@@ -298,7 +298,7 @@ class TumReader final : public ScanSource {
     image.colors.resize(pixels);
     for (std::size_t i = 0; i < pixels; ++i) {
       image.raw[i] = static_cast<std::uint16_t>(depth_.at(i));
-      image.colors[i] = {colour.rgb[3 * i], colour.rgb[3 * i + 1], colour.rgb[3 * i + 2]};
+      image.colors[i] = {color.rgb[3 * i], color.rgb[3 * i + 1], color.rgb[3 * i + 2]};
     }
     back_project(image.view(), image.camera, image.pose, scan.points, &pixels_);
     scan.colors.resize(pixels_.size());
@@ -319,7 +319,7 @@ class TumReader final : public ScanSource {
   /// Counts a row whose images are not both on disk; the first one is named in messages.
   void note_missing(const Frame& frame, const std::string& file) {
     if (missing_rows_++ > 0) return;
-    const fs::path& missing = file_exists(frame.depth) ? frame.colour : frame.depth;
+    const fs::path& missing = file_exists(frame.depth) ? frame.color : frame.depth;
     first_missing_ = "the first is line " + std::to_string(frame.line) + " of " + file + ": " + missing.string() +
                      " does not exist";
   }

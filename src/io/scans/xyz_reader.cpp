@@ -182,7 +182,7 @@ bool parse_coordinate(std::string_view token, float& value) {
 }
 
 /// A whole token as an integer 0..255, digits only (no sign).
-bool parse_colour_channel(std::string_view token, std::uint8_t& value) {
+bool parse_color_channel(std::string_view token, std::uint8_t& value) {
   unsigned channel = 0;
   const auto [end, status] = std::from_chars(token.data(), token.data() + token.size(), channel);
   if (status != std::errc() || end != token.data() + token.size() || channel > 255) return false;
@@ -291,16 +291,16 @@ class XyzReader final : public io_detail::SingleScanSource {
                                  "expected 3 numbers (x y z) or 6 (x y z r g b), found " +
                                      std::to_string(token_count) + ": " + quote(line));
     }
-    const bool has_colour = token_count == 6;
-    if (!colour_line_kind_) {
-      colour_line_kind_ = has_colour;
+    const bool has_color = token_count == 6;
+    if (!color_line_kind_) {
+      color_line_kind_ = has_color;
       first_point_line_ = line_number;
-    } else if (*colour_line_kind_ != has_colour) {
+    } else if (*color_line_kind_ != has_color) {
       throw FormatError::at_line(
           file_name_, line_number,
-          std::string(has_colour ? "this line has a colour (x y z r g b) but line "
-                                 : "this line has no colour (x y z) but line ") +
-              std::to_string(first_point_line_) + (has_colour ? " has none" : " has one") +
+          std::string(has_color ? "this line has a color (x y z r g b) but line "
+                                 : "this line has no color (x y z) but line ") +
+              std::to_string(first_point_line_) + (has_color ? " has none" : " has one") +
               "; either every line has r g b or none does: " + quote(line));
     }
 
@@ -312,19 +312,19 @@ class XyzReader final : public io_detail::SingleScanSource {
       }
     }
     // Grown here, checked against the memory limit: the file does not say how many points follow.
-    if (scan.points.size() == scan.points.capacity()) io_detail::grow_points(scan, has_colour, file_name_);
+    if (scan.points.size() == scan.points.capacity()) io_detail::grow_points(scan, has_color, file_name_);
     scan.points.push_back(point);
-    if (has_colour) {
-      Rgb colour;
-      std::uint8_t* channels[3] = {&colour.r, &colour.g, &colour.b};
+    if (has_color) {
+      Rgb color;
+      std::uint8_t* channels[3] = {&color.r, &color.g, &color.b};
       for (std::size_t channel = 0; channel < 3; ++channel) {
-        if (!parse_colour_channel(tokens[3 + channel], *channels[channel])) {
+        if (!parse_color_channel(tokens[3 + channel], *channels[channel])) {
           throw FormatError::at_line(file_name_, line_number,
-                                     "colour value " + quote(tokens[3 + channel]) +
+                                     "color value " + quote(tokens[3 + channel]) +
                                          " is not an integer 0..255, in " + quote(line));
         }
       }
-      scan.colors.push_back(colour);
+      scan.colors.push_back(color);
     }
   }
 
@@ -333,7 +333,7 @@ class XyzReader final : public io_detail::SingleScanSource {
   Vec3f origin_;
   std::uint64_t file_size_ = 0;  // 0 when unknown (pipes)
   std::unique_ptr<TextInput> input_;
-  std::optional<bool> colour_line_kind_;  // set by the first point line: true = with colours
+  std::optional<bool> color_line_kind_;  // set by the first point line: true = with colors
   std::uint64_t first_point_line_ = 0;
 };
 

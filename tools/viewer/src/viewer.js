@@ -6,7 +6,7 @@
 // layer (#layer-N, zlib-compressed). Only the layers of the depth on show are
 // decoded and on the GPU; changing the depth drops them. Each layer is one
 // draw call of a unit cube instanced n times, with a corner, an edge length
-// per axis and (occupied layers of coloured maps) a colour per instance: 28
+// per axis and (occupied layers of colored maps) a color per instance: 28
 // bytes of GPU memory per node.
 //
 // A height cut (the "cut above" slider) hides every box whose bottom is at
@@ -25,17 +25,17 @@ const STATES = ['occupied', 'free', 'unknown'];
 // Free and unknown space are drawn see-through, a little shrunk, so that
 // their boxes stay apart and the obstacles show through them.
 const LOOK = {
-  occupied: { colour: [0.843, 0.188, 0.165], opacity: 1.0, shrink: 1.0 },
-  free: { colour: [0.353, 0.824, 0.478], opacity: 0.16, shrink: 0.9 },
-  unknown: { colour: [0.604, 0.478, 0.847], opacity: 0.12, shrink: 0.9 },
+  occupied: { color: [0.843, 0.188, 0.165], opacity: 1.0, shrink: 1.0 },
+  free: { color: [0.353, 0.824, 0.478], opacity: 0.16, shrink: 0.9 },
+  unknown: { color: [0.604, 0.478, 0.847], opacity: 0.12, shrink: 0.9 },
 };
 
 const vertexShader = /* glsl */ `
   attribute vec3 cornerAt;
   attribute vec3 edge;
   attribute vec3 rgb;
-  uniform float colourMode;  // 0 height, 1 the map's colours, 2 flat
-  uniform vec3 flatColour;
+  uniform float colorMode;  // 0 height, 1 the map's colors, 2 flat
+  uniform vec3 flatColor;
   uniform float zLow;
   uniform float zHigh;
   uniform float shrink;
@@ -65,10 +65,10 @@ const vertexShader = /* glsl */ `
     }
     vec3 centre = cornerAt + 0.5 * edge;
     vec3 world = centre + (position - 0.5) * edge * shrink;
-    vec3 base = flatColour;
-    if (colourMode < 0.5) {
+    vec3 base = flatColor;
+    if (colorMode < 0.5) {
       base = ramp(zHigh > zLow ? (centre.z - zLow) / (zHigh - zLow) : 0.0);
-    } else if (colourMode < 1.5) {
+    } else if (colorMode < 1.5) {
       base = rgb;
     }
     // Boxes are never turned: the cube's normals are world normals.
@@ -171,14 +171,14 @@ function compact10(v) {
 
 const TWO_30 = 1073741824;
 
-/// A layer's instances: corners, edges and colours in metres from the known
+/// A layer's instances: corners, edges and colors in metres from the known
 /// space's lowest corner (clipped to the known space), their
 /// total volume and height range. The format is tools/viewer_data.hpp's:
-/// varint code deltas, depth bytes, 5-6-5 colour columns.
+/// varint code deltas, depth bytes, 5-6-5 color columns.
 async function decodeLayer(layer) {
   const n = layer.count;
   const bytes = new Uint8Array(await inflate(layer.id));
-  const withColours = layer.state === 'occupied' && data.hasColor;
+  const withColors = layer.state === 'occupied' && data.hasColor;
   const corners = new Float32Array(3 * n);
   const edges = new Float32Array(3 * n);
   const bottoms = new Float64Array(n);  // for the height cut
@@ -200,7 +200,7 @@ async function decodeLayer(layer) {
     code += delta;
     codes[i] = code;
   }
-  const expected = at + n + (withColours ? 3 * n : 0);
+  const expected = at + n + (withColors ? 3 * n : 0);
   if (bytes.length !== expected) {
     throw new Error(`layer ${layer.id} holds ${bytes.length} bytes, expected ${expected}`);
   }
@@ -229,8 +229,8 @@ async function decodeLayer(layer) {
     zLow = Math.min(zLow, z);
     zHigh = Math.max(zHigh, z);
   }
-  const colours = new Uint8Array(3 * n);
-  if (withColours) {
+  const colors = new Uint8Array(3 * n);
+  if (withColors) {
     const base = at + n;
     const last = [0, 0, 0];
     const bits = [5, 6, 5];
@@ -239,11 +239,11 @@ async function decodeLayer(layer) {
         last[channel] = (last[channel] + bytes[base + channel * n + i]) & 0xff;
         const v = last[channel];
         // Back to 8 bits: the high bits repeated below (31 -> 255, 63 -> 255).
-        colours[3 * i + channel] = (v << (8 - bits[channel])) | (v >> (2 * bits[channel] - 8));
+        colors[3 * i + channel] = (v << (8 - bits[channel])) | (v >> (2 * bits[channel] - 8));
       }
     }
   }
-  return { count: n, corners, edges, colours, bottoms, volumes, volume: volume * resolution ** 3, zLow, zHigh };
+  return { count: n, corners, edges, colors, bottoms, volumes, volume: volume * resolution ** 3, zLow, zHigh };
 }
 
 function meshOf(state, decoded) {
@@ -253,15 +253,15 @@ function meshOf(state, decoded) {
   geometry.setAttribute('normal', unitCube.getAttribute('normal'));
   geometry.setAttribute('cornerAt', new THREE.InstancedBufferAttribute(decoded.corners, 3));
   geometry.setAttribute('edge', new THREE.InstancedBufferAttribute(decoded.edges, 3));
-  geometry.setAttribute('rgb', new THREE.InstancedBufferAttribute(decoded.colours, 3, true));
+  geometry.setAttribute('rgb', new THREE.InstancedBufferAttribute(decoded.colors, 3, true));
   geometry.instanceCount = decoded.count;
   const look = LOOK[state];
   const material = new THREE.ShaderMaterial({
     vertexShader,
     fragmentShader,
     uniforms: {
-      colourMode: { value: 2 },
-      flatColour: { value: new THREE.Vector3(...look.colour) },
+      colorMode: { value: 2 },
+      flatColor: { value: new THREE.Vector3(...look.color) },
       zLow: { value: decoded.zLow },
       zHigh: { value: decoded.zHigh },
       shrink: { value: look.shrink },
@@ -333,7 +333,7 @@ let cut = data.ceilingCut === null || data.ceilingCut === undefined ? knownHigh 
 function cutScene() {
   return cut - knownLow;
 }
-let colourMode = 0;  // 0 height, 1 the map's colours
+let colorMode = 0;  // 0 height, 1 the map's colors
 let current = { depth: null, meshes: {}, decoded: {} };
 let request = 0;  // the latest show() wins when several overlap
 
@@ -341,9 +341,9 @@ function layerOf(depth, state) {
   return (layersAt.get(depth) || {})[state];
 }
 
-function applyColourMode() {
+function applyColorMode() {
   for (const [state, mesh] of Object.entries(current.meshes)) {
-    mesh.material.uniforms.colourMode.value = state === 'occupied' ? colourMode : 2;
+    mesh.material.uniforms.colorMode.value = state === 'occupied' ? colorMode : 2;
   }
 }
 
@@ -368,7 +368,7 @@ async function show(depth) {
   }
   if (mine !== request) return;
   applyCut();
-  applyColourMode();
+  applyColorMode();
   stats.depth = depth;
   describe(depth);
   render();
@@ -470,11 +470,11 @@ function wireControls() {
   for (const state of STATES) {
     element('show-' + state).addEventListener('change', (event) => setVisible(state, event.target.checked));
   }
-  const colours = element('color-mode');
-  colours.disabled = !data.hasColor;
-  colours.addEventListener('change', () => {
-    colourMode = colours.value === 'rgb' ? 1 : 0;
-    applyColourMode();
+  const colors = element('color-mode');
+  colors.disabled = !data.hasColor;
+  colors.addEventListener('change', () => {
+    colorMode = colors.value === 'rgb' ? 1 : 0;
+    applyColorMode();
     render();
   });
 }
