@@ -5,9 +5,9 @@
 namespace umbra::cli {
 
 std::string printable(std::string_view text, std::size_t max_shown) {
-  return io_detail::escape(text, {.max_bytes = max_shown,
-                                  .unprintable = io_detail::Unprintable::hex,
-                                  .cut = io_detail::CutMark::dots_count});
+  return detail::escape(text, {.max_bytes = max_shown,
+                                  .unprintable = detail::Unprintable::hex,
+                                  .cut = detail::CutMark::dots_count});
 }
 
 }  // namespace umbra::cli

@@ -69,7 +69,7 @@ struct CachedChunk {
 struct BagFile::State {
   explicit State(const std::filesystem::path& path) : file(path, "ROS bag"), name(file.name()) {}
 
-  io_detail::InputFile file;
+  detail::InputFile file;
   std::string name;
   std::vector<Chunk> chunks;
   std::vector<BagConnection> connections;
@@ -133,7 +133,7 @@ struct BagFile::State {
     const std::string first(magic.begin(), magic.end());
     if (first != kMagic) {
       if (first.rfind("#ROSBAG V", 0) == 0) {
-        throw site(0).error("ROS bag format " + io_detail::quote(first.substr(9, first.find('\n') - 9)) +
+        throw site(0).error("ROS bag format " + detail::quote(first.substr(9, first.find('\n') - 9)) +
                             " is not read (only format 2.0, written by ROS since 2010)");
       }
       throw site(0).error("not a ROS bag: the file does not start with '#ROSBAG V2.0'");
@@ -144,7 +144,7 @@ struct BagFile::State {
     }
     const std::string encryptor = header.fields.text_or("encryptor", "");
     if (!encryptor.empty() && encryptor != "rosbag/NoEncryptor") {
-      throw site(header.byte).error("the bag is encrypted (" + io_detail::quote(encryptor) +
+      throw site(header.byte).error("the bag is encrypted (" + detail::quote(encryptor) +
                                     "); decrypt it first (rosbag decrypt)");
     }
     const std::uint64_t index_byte = header.fields.u64("index_pos");
@@ -203,7 +203,7 @@ struct BagFile::State {
     Chunk chunk{record.byte, record.data_byte, record.data_size, record.fields.u32("size"),
                 record.fields.text("compression")};
     if (chunk.compression != "none" && chunk.compression != "bz2" && chunk.compression != "lz4") {
-      throw site(record.byte).error("the chunk's compression " + io_detail::quote(chunk.compression) +
+      throw site(record.byte).error("the chunk's compression " + detail::quote(chunk.compression) +
                                     " is none of none, bz2, lz4");
     }
     if (chunk.compression == "none" && chunk.size != chunk.data_size) {

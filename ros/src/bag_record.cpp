@@ -53,11 +53,11 @@ RecordFields::RecordFields(std::span<const std::uint8_t> bytes, const RecordSite
     at += length;
     const std::size_t equals = field.find('=');
     if (equals == std::string::npos) {
-      throw here.error("a header field has no '=' (" + io_detail::quote(field) + ")");
+      throw here.error("a header field has no '=' (" + detail::quote(field) + ")");
     }
     const std::string name = field.substr(0, equals);
     if (!fields_.emplace(name, field.substr(equals + 1)).second) {
-      throw here.error("the header field " + io_detail::quote(name) + " appears twice");
+      throw here.error("the header field " + detail::quote(name) + " appears twice");
     }
   }
 }

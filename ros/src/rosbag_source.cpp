@@ -152,8 +152,8 @@ class RosbagSource final : public RosbagScanSource {
       if (std::find(topics_.begin(), topics_.end(), connection.topic) == topics_.end()) continue;
       throw FormatError::at_byte(path_, connection.byte,
                                  "connection " + std::to_string(connection.id) + " on " +
-                                     io_detail::quote(connection.topic) + " is sensor_msgs/PointCloud2 with md5sum " +
-                                     io_detail::quote(connection.md5sum) + ", not " + kPointCloud2Md5 +
+                                     detail::quote(connection.topic) + " is sensor_msgs/PointCloud2 with md5sum " +
+                                     detail::quote(connection.md5sum) + ", not " + kPointCloud2Md5 +
                                      ": another version of the message, which umbra cannot read");
     }
   }
@@ -165,7 +165,7 @@ class RosbagSource final : public RosbagScanSource {
         return true;
       }
       warnings_.push_back(path_ + ": ignoring connection " + std::to_string(c.id) + " on " + c.topic + ": " +
-                          io_detail::quote(c.type) + " with md5sum " + io_detail::quote(c.md5sum) +
+                          detail::quote(c.type) + " with md5sum " + detail::quote(c.md5sum) +
                           " is not a tf2_msgs/TFMessage");
       return false;
     });

@@ -18,7 +18,7 @@
 #include "message_text.hpp"
 #include "umbra/io/format_error.hpp"
 
-namespace umbra::io_detail {
+namespace umbra::detail {
 
 namespace {
 constexpr std::size_t kLineChunkBytes = 256 * 1024;
@@ -197,4 +197,4 @@ bool LineReader::next_non_blank(std::string_view& line) {
   return false;
 }
 
-}  // namespace umbra::io_detail
+}  // namespace umbra::detail

@@ -26,7 +26,7 @@
 #include <string_view>
 #include <vector>
 
-namespace umbra::io_detail {
+namespace umbra::detail {
 
 /// Throws std::runtime_error("cannot open FILE: it is a directory") when
 /// `path` names a folder (checked without opening it, so that an unreadable
@@ -158,4 +158,4 @@ class LineReader {
   bool at_end_ = false;
 };
 
-}  // namespace umbra::io_detail
+}  // namespace umbra::detail

@@ -10,7 +10,7 @@
 
 #include "umbra/core/morton.hpp"
 
-namespace umbra::io_detail {
+namespace umbra::detail {
 
 std::string errno_text(int error) { return std::generic_category().message(error); }
 
@@ -78,4 +78,4 @@ std::string node_text(std::string_view depth_name, int depth, std::uint64_t code
          ", " + std::to_string(key.y) + ", " + std::to_string(key.z) + ")";
 }
 
-}  // namespace umbra::io_detail
+}  // namespace umbra::detail

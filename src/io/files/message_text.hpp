@@ -10,7 +10,7 @@
 #include <string>
 #include <string_view>
 
-namespace umbra::io_detail {
+namespace umbra::detail {
 
 /// The system's text for an errno value, e.g. "No such file or directory".
 std::string errno_text(int error);
@@ -59,4 +59,4 @@ std::string float_text(float value);
 /// and the key of its first voxel (`code`, the Morton code of the node).
 std::string node_text(std::string_view depth_name, int depth, std::uint64_t code);
 
-}  // namespace umbra::io_detail
+}  // namespace umbra::detail

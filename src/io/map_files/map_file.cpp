@@ -129,11 +129,11 @@ std::string number(float v) {
   return out.str();
 }
 
-using io_detail::float_text;
-using io_detail::quote_bytes;
+using detail::float_text;
+using detail::quote_bytes;
 
 /// "node at depth D, key (x, y, z)", depth as the tree counts it (0: the leaves).
-std::string node_text(int depth, std::uint64_t code) { return io_detail::node_text("depth", depth, code); }
+std::string node_text(int depth, std::uint64_t code) { return detail::node_text("depth", depth, code); }
 
 // --- header -------------------------------------------------------------------
 
@@ -751,7 +751,7 @@ std::uint64_t bytes_to_load(const MapFileInfo& info) {
   return groups > UINT64_MAX - info.file_bytes ? UINT64_MAX : groups + info.file_bytes;
 }
 
-OccupancyMap load_body(const io_detail::InputFile& file, const std::filesystem::path& path, const MapFileInfo& info);
+OccupancyMap load_body(const detail::InputFile& file, const std::filesystem::path& path, const MapFileInfo& info);
 
 }  // namespace
 
@@ -820,7 +820,7 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path, const 
 }
 
 MapFileInfo read_map_info(const std::filesystem::path& path) {
-  const io_detail::InputFile file(path, {}, "map file");
+  const detail::InputFile file(path, {}, "map file");
   std::array<std::uint8_t, kHeaderBytes> head{};
   const std::size_t n = file.read_at(0, head.data(), head.size());
   return decode_header(path.string(), std::span(head).first(n), file.size());
@@ -828,7 +828,7 @@ MapFileInfo read_map_info(const std::filesystem::path& path) {
 
 OccupancyMap load_map(const std::filesystem::path& path) {
   const std::string name = path.string();
-  const io_detail::InputFile file(path, {}, "map file");
+  const detail::InputFile file(path, {}, "map file");
 
   // 1. The header, checked against the real file size before anything is allocated.
   std::array<std::uint8_t, kHeaderBytes> head{};
@@ -841,7 +841,7 @@ OccupancyMap load_map(const std::filesystem::path& path) {
 
 namespace {
 
-OccupancyMap load_body(const io_detail::InputFile& file, const std::filesystem::path& path, const MapFileInfo& info) {
+OccupancyMap load_body(const detail::InputFile& file, const std::filesystem::path& path, const MapFileInfo& info) {
   const std::string name = path.string();
 
   // 2. The whole file (its size is now known to be what the header declares), and its checksum.

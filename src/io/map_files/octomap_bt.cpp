@@ -27,7 +27,7 @@
 #include "map/map_access.hpp"
 #include "octomap_format.hpp"
 
-namespace umbra::octomap_io {
+namespace umbra::detail {
 namespace {
 
 enum ChildCode : std::uint8_t { kAbsent = 0, kFree = 1, kOccupied = 2, kHasChildren = 3 };
@@ -227,4 +227,4 @@ EncodedTree encode_bt(const OccupancyMap& map) {
   return detail::MapAccess::read(map, [](const OccupancyTree& tree) { return BtEncoder(tree).run(); });
 }
 
-}  // namespace umbra::octomap_io
+}  // namespace umbra::detail

@@ -28,7 +28,7 @@
 #include "octomap_format.hpp"
 
 namespace umbra {
-namespace octomap_io {
+namespace detail {
 namespace {
 
 namespace fs = std::filesystem;
@@ -330,25 +330,25 @@ OccupancyMap new_map(const Header& header, const std::string& name, const Sensor
   }
 }
 
-}  // namespace octomap_io
+}  // namespace detail
 
 // --- public functions -------------------------------------------------------------
 
 namespace {
 
-OccupancyMap decode(octomap_io::ByteReader& in, const std::string& name, const SensorModel& sensor) {
+OccupancyMap decode(detail::ByteReader& in, const std::string& name, const SensorModel& sensor) {
   sensor.validate();
-  const octomap_io::Header header = octomap_io::parse_header(in, name);
+  const detail::Header header = detail::parse_header(in, name);
   // The decoders check the tree's need against the memory limit first; this names an allocation that fails anyway.
   return detail::naming_bad_alloc(name, "loading the OctoMap tree (" + std::to_string(header.nodes) + " nodes)", 0, [&] {
-    return header.format == OctoMapFormat::bt ? octomap_io::decode_bt(in, header, name, sensor)
-                                              : octomap_io::decode_ot(in, header, name, sensor);
+    return header.format == OctoMapFormat::bt ? detail::decode_bt(in, header, name, sensor)
+                                              : detail::decode_ot(in, header, name, sensor);
   });
 }
 
 struct EncodedFile {
   std::string header;
-  octomap_io::EncodedTree tree;
+  detail::EncodedTree tree;
 };
 
 const char* tree_id(const OccupancyMap& map, OctoMapFormat format) {
@@ -356,10 +356,10 @@ const char* tree_id(const OccupancyMap& map, OctoMapFormat format) {
 }
 
 EncodedFile encode(const OccupancyMap& map, OctoMapFormat format, const std::string& what) {
-  octomap_io::require_octomap_depth(map, what);
+  detail::require_octomap_depth(map, what);
   EncodedFile file;
-  file.tree = format == OctoMapFormat::bt ? octomap_io::encode_bt(map) : octomap_io::encode_ot(map);
-  file.header = octomap_io::header_text(format, tree_id(map, format), file.tree.nodes, map.resolution());
+  file.tree = format == OctoMapFormat::bt ? detail::encode_bt(map) : detail::encode_ot(map);
+  file.header = detail::header_text(format, tree_id(map, format), file.tree.nodes, map.resolution());
   return file;
 }
 
@@ -368,22 +368,22 @@ EncodedFile encode(const OccupancyMap& map, OctoMapFormat format, const std::str
 const char* to_string(OctoMapFormat format) { return format == OctoMapFormat::bt ? "bt" : "ot"; }
 
 OccupancyMap load_octomap(const std::filesystem::path& path, const SensorModel& sensor) {
-  const octomap_io::InputFile file(path, {}, "map file");
-  octomap_io::ByteReader in(file, 0);
+  const detail::InputFile file(path, {}, "map file");
+  detail::ByteReader in(file, 0);
   return decode(in, path.string(), sensor);
 }
 
 OccupancyMap decode_octomap(std::span<const std::uint8_t> bytes, const std::string& name, const SensorModel& sensor) {
-  octomap_io::ByteReader in(bytes);
+  detail::ByteReader in(bytes);
   return decode(in, name, sensor);
 }
 
 OctoMapFileInfo read_octomap_info(const std::filesystem::path& path) {
-  const octomap_io::InputFile file(path, {}, "map file");
-  octomap_io::ByteReader in(file, 0);
+  const detail::InputFile file(path, {}, "map file");
+  detail::ByteReader in(file, 0);
   const std::string name = path.string();
-  const octomap_io::Header header = octomap_io::parse_header(in, name);
-  octomap_io::check_declared_size(header, name);
+  const detail::Header header = detail::parse_header(in, name);
+  detail::check_declared_size(header, name);
   OctoMapFileInfo info = header;
   return info;
 }
@@ -404,24 +404,24 @@ OccupancyMap decode_octomap_tree(OctoMapFormat format, const std::string& id, do
                                  std::span<const std::uint8_t> data, const std::string& name,
                                  const SensorModel& sensor) {
   sensor.validate();
-  octomap_io::Header header;
+  detail::Header header;
   header.format = format;
   header.tree_type = id == "1" ? std::string("OcTree") : id;
-  if (const std::string problem = octomap_io::unreadable_tree_type(header.tree_type); !problem.empty()) {
+  if (const std::string problem = detail::unreadable_tree_type(header.tree_type); !problem.empty()) {
     throw FormatError(name, problem);
   }
   header.color = header.tree_type == "ColorOcTree" && format == OctoMapFormat::ot;
   if (!(std::isfinite(resolution) && resolution > 0.0 && std::isfinite(1.0 / resolution))) {
     throw FormatError(name, "the resolution must be a finite number > 0 (the voxel edge in metres), got " +
-                                octomap_io::resolution_text(resolution));
+                                detail::resolution_text(resolution));
   }
   header.resolution = resolution;
   header.file_bytes = data.size();
   header.data_offset = 0;
-  header.nodes = octomap_io::count_tree_nodes(header, data, name);
-  octomap_io::ByteReader in(data);
-  return format == OctoMapFormat::bt ? octomap_io::decode_bt(in, header, name, sensor)
-                                     : octomap_io::decode_ot(in, header, name, sensor);
+  header.nodes = detail::count_tree_nodes(header, data, name);
+  detail::ByteReader in(data);
+  return format == OctoMapFormat::bt ? detail::decode_bt(in, header, name, sensor)
+                                     : detail::decode_ot(in, header, name, sensor);
 }
 
 void save_octomap(const OccupancyMap& map, const std::filesystem::path& path, OctoMapFormat format) {

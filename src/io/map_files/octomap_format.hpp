@@ -19,14 +19,14 @@
 #include "message_text.hpp"
 #include "umbra/io/octomap_files.hpp"
 
-namespace umbra::octomap_io {
+namespace umbra::detail {
 
-using io_detail::float_text;
-using io_detail::quote_bytes;
+using detail::float_text;
+using detail::quote_bytes;
 
 /// The byte input both readers stream from (a file or bytes in memory).
-using io_detail::ByteReader;
-using io_detail::InputFile;
+using detail::ByteReader;
+using detail::InputFile;
 
 /// The header, plus where its fields were (for messages).
 struct Header : OctoMapFileInfo {
@@ -84,10 +84,10 @@ void require_octomap_depth(const OccupancyMap& map, const std::string& what);
 /// "the node at OctoMap depth D, key (x, y, z)" for a node at umbra depth
 /// `depth` (OctoMap counts depths from the root down, umbra from the leaves up).
 inline std::string octomap_node(int depth, std::uint64_t code) {
-  return "the " + io_detail::node_text("OctoMap depth", kOctoMapDepthLevels - depth, code);
+  return "the " + detail::node_text("OctoMap depth", kOctoMapDepthLevels - depth, code);
 }
 
 /// The map a decoder fills: resolution from the header, 16 levels, the sensor model, color if asked.
 OccupancyMap new_map(const Header& header, const std::string& name, const SensorModel& sensor, bool color);
 
-}  // namespace umbra::octomap_io
+}  // namespace umbra::detail

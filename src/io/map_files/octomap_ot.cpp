@@ -30,7 +30,7 @@
 #include "octomap_format.hpp"
 #include "umbra/core/memory_limit.hpp"
 
-namespace umbra::octomap_io {
+namespace umbra::detail {
 namespace {
 
 constexpr Rgb kNoColor{255, 255, 255};
@@ -301,4 +301,4 @@ EncodedTree encode_ot(const OccupancyMap& map) {
   return detail::MapAccess::read(map, [](const OccupancyTree& tree) { return OtEncoder(tree).run(); });
 }
 
-}  // namespace umbra::octomap_io
+}  // namespace umbra::detail

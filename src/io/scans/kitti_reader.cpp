@@ -33,18 +33,18 @@
 namespace umbra {
 namespace {
 
-using io_detail::ByteReader;
-using io_detail::InputFile;
-using io_detail::LineReader;
-using io_detail::Pose;
-using io_detail::quote;
-using io_detail::Tokens;
+using detail::ByteReader;
+using detail::InputFile;
+using detail::LineReader;
+using detail::Pose;
+using detail::quote;
+using detail::Tokens;
 
 constexpr std::size_t kPointBytes = 16;  // float32 x, y, z, reflectance
 
 namespace fs = std::filesystem;
 
-bool is_bin_file(const fs::path& path) { return io_detail::to_lower(path.extension().string()) == ".bin"; }
+bool is_bin_file(const fs::path& path) { return detail::to_lower(path.extension().string()) == ".bin"; }
 
 /// The number a scan file is named by ("000123.bin" -> 123), if it is one.
 std::optional<std::uint64_t> scan_number(const fs::path& path) {
@@ -54,7 +54,7 @@ std::optional<std::uint64_t> scan_number(const fs::path& path) {
     return std::nullopt;
   }
   std::uint64_t number = 0;
-  io_detail::parse_unsigned(stem, number);
+  detail::parse_unsigned(stem, number);
   return number;
 }
 
@@ -88,7 +88,7 @@ void require_rotation(const Pose& pose, const std::string& file, std::uint64_t l
 bool read_numbers(Tokens& tokens, std::span<double> values) {
   for (double& value : values) {
     const std::string_view token = tokens.next();
-    if (!io_detail::parse_double(token, value) || !std::isfinite(value)) return false;
+    if (!detail::parse_double(token, value) || !std::isfinite(value)) return false;
   }
   return tokens.at_end();
 }
@@ -221,7 +221,7 @@ class KittiReader final : public ScanSource {
                                      " bytes, not a multiple of 16 (float32 x y z reflectance per point): truncated?");
     }
     const std::uint64_t point_count = size / kPointBytes;
-    io_detail::require_point_memory(file.name(), "reading its " + std::to_string(point_count) + " points", point_count,
+    detail::require_point_memory(file.name(), "reading its " + std::to_string(point_count) + " points", point_count,
                                     false);
     scan.points.clear();
     scan.colors.clear();
@@ -237,9 +237,9 @@ class KittiReader final : public ScanSource {
       if (record == nullptr) {
         throw FormatError::at_byte(file.name(), reader.offset(), "truncated file: it shrank while being read");
       }
-      const Vec3f p{std::bit_cast<float>(static_cast<std::uint32_t>(io_detail::load_bits(record, 4, false))),
-                    std::bit_cast<float>(static_cast<std::uint32_t>(io_detail::load_bits(record + 4, 4, false))),
-                    std::bit_cast<float>(static_cast<std::uint32_t>(io_detail::load_bits(record + 8, 4, false)))};
+      const Vec3f p{std::bit_cast<float>(static_cast<std::uint32_t>(detail::load_bits(record, 4, false))),
+                    std::bit_cast<float>(static_cast<std::uint32_t>(detail::load_bits(record + 4, 4, false))),
+                    std::bit_cast<float>(static_cast<std::uint32_t>(detail::load_bits(record + 8, 4, false)))};
       scan.points.push_back(posed ? entry.pose.apply(p) : p);
     }
     ++next_scan_;
@@ -291,7 +291,7 @@ std::unique_ptr<ScanSource> open_kitti_velodyne(const fs::path& folder_or_file, 
 
 std::unique_ptr<ScanSource> open_kitti_scans(std::vector<fs::path> scan_files, const KittiOptions& options) {
   const fs::path first = scan_files.empty() ? fs::path() : scan_files.front();
-  return io_detail::naming_bad_alloc(first, [&] { return std::make_unique<KittiReader>(std::move(scan_files), options); });
+  return detail::naming_bad_alloc(first, [&] { return std::make_unique<KittiReader>(std::move(scan_files), options); });
 }
 
 }  // namespace umbra

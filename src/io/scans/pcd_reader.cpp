@@ -36,14 +36,14 @@
 namespace umbra {
 namespace {
 
-using io_detail::ByteReader;
-using io_detail::InputFile;
-using io_detail::LineReader;
-using io_detail::Pose;
-using io_detail::quote;
-using io_detail::ScalarKind;
-using io_detail::ScalarType;
-using io_detail::Tokens;
+using detail::ByteReader;
+using detail::InputFile;
+using detail::LineReader;
+using detail::Pose;
+using detail::quote;
+using detail::ScalarKind;
+using detail::ScalarType;
+using detail::Tokens;
 
 constexpr std::uint64_t kMaxPointBytes = std::uint64_t{1} << 24;  // larger records are not point clouds
 
@@ -92,11 +92,11 @@ Rgb unpack_color(std::uint32_t bits) {
   return {static_cast<std::uint8_t>(bits >> 16), static_cast<std::uint8_t>(bits >> 8), static_cast<std::uint8_t>(bits)};
 }
 
-class PcdReader final : public io_detail::SingleScanSource {
+class PcdReader final : public detail::SingleScanSource {
  public:
   PcdReader(const std::filesystem::path& path, Vec3f origin)
       : file_(path), display_name_(path.filename().string()), origin_(origin) {
-    if (io_detail::has_bz2_suffix(path)) {
+    if (detail::has_bz2_suffix(path)) {
       throw FormatError(file_.name(), "compressed .bz2 PCD files are not supported; decompress it first (bunzip2)");
     }
     lines_ = std::make_unique<LineReader>(file_, 0);
@@ -105,7 +105,7 @@ class PcdReader final : public io_detail::SingleScanSource {
     // binary_compressed holds the compressed and the decompressed data besides the points.
     const std::uint64_t buffers =
         encoding_ == PcdEncoding::binary_compressed ? compressed_bytes_ + point_count_ * record_bytes_ : 0;
-    io_detail::require_point_memory(file_.name(), "reading its " + std::to_string(point_count_) + " points",
+    detail::require_point_memory(file_.name(), "reading its " + std::to_string(point_count_) + " points",
                                     point_count_, roles_.color.has_value(), buffers);
   }
 
@@ -128,7 +128,7 @@ class PcdReader final : public io_detail::SingleScanSource {
     std::vector<std::uint64_t> values;
     for (std::string_view token = tokens.next(); !token.empty(); token = tokens.next()) {
       std::uint64_t value = 0;
-      if (!io_detail::parse_unsigned(token, value)) {
+      if (!detail::parse_unsigned(token, value)) {
         header_error(std::string(keyword) + ": " + quote(token) + " is not a non-negative integer, in " + quote(line));
       }
       values.push_back(value);
@@ -298,7 +298,7 @@ class PcdReader final : public io_detail::SingleScanSource {
     double values[7];
     std::size_t count = 0;
     for (std::string_view token = tokens.next(); !token.empty(); token = tokens.next()) {
-      if (count == 7 || !io_detail::parse_double(token, values[count])) {
+      if (count == 7 || !detail::parse_double(token, values[count])) {
         header_error("VIEWPOINT expects 7 numbers (tx ty tz qw qx qy qz), found " + quote(line));
       }
       ++count;
@@ -379,8 +379,8 @@ class PcdReader final : public io_detail::SingleScanSource {
                                  "after the header, but only " +
                                      std::to_string(remaining) + " bytes follow");
     }
-    compressed_bytes_ = io_detail::load_bits(sizes, 4, false);
-    const std::uint64_t uncompressed_bytes = io_detail::load_bits(sizes + 4, 4, false);
+    compressed_bytes_ = detail::load_bits(sizes, 4, false);
+    const std::uint64_t uncompressed_bytes = detail::load_bits(sizes + 4, 4, false);
     if (compressed_bytes_ > remaining - 8) {
       throw FormatError::at_byte(file_.name(), data_offset_,
                                  "truncated file: the compressed data is declared as " +
@@ -434,7 +434,7 @@ class PcdReader final : public io_detail::SingleScanSource {
   }
 
   [[nodiscard]] float coordinate(const unsigned char* bytes, std::size_t field) const {
-    return static_cast<float>(io_detail::load_scalar(bytes, fields_[field].type, false));
+    return static_cast<float>(detail::load_scalar(bytes, fields_[field].type, false));
   }
 
   void read_binary(Scan& scan) {
@@ -454,7 +454,7 @@ class PcdReader final : public io_detail::SingleScanSource {
                              coordinate(record + z.offset, roles_.z)});
       if (roles_.color) {
         scan.colors.push_back(unpack_color(
-            static_cast<std::uint32_t>(io_detail::load_bits(record + fields_[*roles_.color].offset, 4, false))));
+            static_cast<std::uint32_t>(detail::load_bits(record + fields_[*roles_.color].offset, 4, false))));
       }
       if (point % 65536 == 0) consumed_.store(reader.offset(), std::memory_order_relaxed);
     }
@@ -487,7 +487,7 @@ class PcdReader final : public io_detail::SingleScanSource {
     if (roles_.color) {
       const unsigned char* colors = column(*roles_.color);
       for (std::uint64_t point = 0; point < point_count_; ++point) {
-        scan.colors.push_back(unpack_color(static_cast<std::uint32_t>(io_detail::load_bits(colors + 4 * point, 4, false))));
+        scan.colors.push_back(unpack_color(static_cast<std::uint32_t>(detail::load_bits(colors + 4 * point, 4, false))));
       }
     }
   }
@@ -499,10 +499,10 @@ class PcdReader final : public io_detail::SingleScanSource {
   /// An ascii coordinate of any PCD type, as float.
   bool parse_coordinate(std::string_view token, const PcdField& field, float& value) const {
     if (field.type.kind == ScalarKind::floating_point && field.type.bytes == 4) {
-      return io_detail::parse_float(token, value);
+      return detail::parse_float(token, value);
     }
     double wide = 0;
-    if (!io_detail::parse_scalar(token, field.type, wide)) return false;
+    if (!detail::parse_scalar(token, field.type, wide)) return false;
     value = static_cast<float>(wide);
     return true;
   }
@@ -513,18 +513,18 @@ class PcdReader final : public io_detail::SingleScanSource {
     const bool integer_text = token.find_first_of(".eEnNiI") == std::string_view::npos;
     if (field.type.kind == ScalarKind::floating_point && !integer_text) {
       float value = 0;
-      if (!io_detail::parse_float(token, value)) return false;
+      if (!detail::parse_float(token, value)) return false;
       bits = std::bit_cast<std::uint32_t>(value);
       return true;
     }
     if (token.starts_with('-')) {
       std::int64_t value = 0;
-      if (!io_detail::parse_signed(token, value) || value < INT32_MIN) return false;
+      if (!detail::parse_signed(token, value) || value < INT32_MIN) return false;
       bits = static_cast<std::uint32_t>(value);
       return true;
     }
     std::uint64_t value = 0;
-    if (!io_detail::parse_unsigned(token, value) || value > UINT32_MAX) return false;
+    if (!detail::parse_unsigned(token, value) || value > UINT32_MAX) return false;
     bits = static_cast<std::uint32_t>(value);
     return true;
   }
@@ -600,7 +600,7 @@ class PcdReader final : public io_detail::SingleScanSource {
 }  // namespace
 
 std::unique_ptr<ScanSource> open_pcd_file(const std::filesystem::path& path, Vec3f origin) {
-  return io_detail::naming_bad_alloc(path, [&] { return std::make_unique<PcdReader>(path, origin); });
+  return detail::naming_bad_alloc(path, [&] { return std::make_unique<PcdReader>(path, origin); });
 }
 
 }  // namespace umbra

@@ -32,13 +32,13 @@
 namespace umbra {
 namespace {
 
-using io_detail::ByteReader;
-using io_detail::InputFile;
-using io_detail::LineReader;
-using io_detail::quote;
-using io_detail::ScalarKind;
-using io_detail::ScalarType;
-using io_detail::Tokens;
+using detail::ByteReader;
+using detail::InputFile;
+using detail::LineReader;
+using detail::quote;
+using detail::ScalarKind;
+using detail::ScalarType;
+using detail::Tokens;
 
 enum class PlyEncoding { ascii, binary_little_endian, binary_big_endian };
 
@@ -109,17 +109,17 @@ std::uint8_t color_channel(double value, ScalarType type) {
   return static_cast<std::uint8_t>(std::min(channel, 255.0));
 }
 
-class PlyReader final : public io_detail::SingleScanSource {
+class PlyReader final : public detail::SingleScanSource {
  public:
   PlyReader(const std::filesystem::path& path, Vec3f origin)
       : file_(path), display_name_(path.filename().string()), origin_(origin) {
-    if (io_detail::has_bz2_suffix(path)) {
+    if (detail::has_bz2_suffix(path)) {
       throw FormatError(file_.name(), "compressed PLY files are not supported; decompress it first (bunzip2)");
     }
     lines_ = std::make_unique<LineReader>(file_, 0);
     parse_header();
     const std::uint64_t count = elements_[vertex_element_].count;
-    io_detail::require_point_memory(file_.name(), "reading its " + std::to_string(count) + " vertices", count,
+    detail::require_point_memory(file_.name(), "reading its " + std::to_string(count) + " vertices", count,
                                     has_colors_);
   }
 
@@ -190,7 +190,7 @@ class PlyReader final : public io_detail::SingleScanSource {
         PlyElement element;
         element.name = std::string(tokens.next());
         const std::string_view count = tokens.next();
-        if (element.name.empty() || !io_detail::parse_unsigned(count, element.count) || !tokens.at_end()) {
+        if (element.name.empty() || !detail::parse_unsigned(count, element.count) || !tokens.at_end()) {
           header_error("expected 'element NAME COUNT' with a non-negative integer count, found " + quote(line));
         }
         element.header_line = lines_->line_number();
@@ -368,7 +368,7 @@ class PlyReader final : public io_detail::SingleScanSource {
       }
       const unsigned char* count_bytes = reader.take(property.count_type.bytes);
       if (count_bytes == nullptr) truncated(reader, element, instance, "the length of list '" + property.name + "'");
-      const double length = io_detail::load_scalar(count_bytes, property.count_type, big_endian);
+      const double length = detail::load_scalar(count_bytes, property.count_type, big_endian);
       if (length < 0) {
         throw FormatError::at_byte(file_.name(), reader.offset() - property.count_type.bytes,
                                    "element '" + element.name + "' instance " + std::to_string(instance) +
@@ -393,7 +393,7 @@ class PlyReader final : public io_detail::SingleScanSource {
         if (record == nullptr) truncated(reader, element, instance, std::to_string(record_bytes) + " bytes");
         for (std::size_t role = 1; role < (has_colors_ ? 7U : 4U); ++role) {
           const PlyProperty& property = *vertex_roles_[role];
-          values[role] = io_detail::load_scalar(record + property.offset, property.type, big_endian);
+          values[role] = detail::load_scalar(record + property.offset, property.type, big_endian);
         }
       }
       scan.points.push_back({static_cast<float>(values[1]), static_cast<float>(values[2]), static_cast<float>(values[3])});
@@ -409,7 +409,7 @@ class PlyReader final : public io_detail::SingleScanSource {
       if (property.is_list) {
         const unsigned char* count_bytes = reader.take(property.count_type.bytes);
         if (count_bytes == nullptr) truncated(reader, element, instance, "the length of list '" + property.name + "'");
-        const double length = io_detail::load_scalar(count_bytes, property.count_type, big_endian);
+        const double length = detail::load_scalar(count_bytes, property.count_type, big_endian);
         if (length < 0) {
           throw FormatError::at_byte(file_.name(), reader.offset() - property.count_type.bytes,
                                      "vertex " + std::to_string(instance) + ": list '" + property.name +
@@ -423,7 +423,7 @@ class PlyReader final : public io_detail::SingleScanSource {
       const unsigned char* bytes = reader.take(property.type.bytes);
       if (bytes == nullptr) truncated(reader, element, instance, "property '" + property.name + "'");
       if (property.role != Role::none) {
-        values[static_cast<std::size_t>(property.role)] = io_detail::load_scalar(bytes, property.type, big_endian);
+        values[static_cast<std::size_t>(property.role)] = detail::load_scalar(bytes, property.type, big_endian);
       }
     }
   }
@@ -465,7 +465,7 @@ class PlyReader final : public io_detail::SingleScanSource {
             const std::string_view count_token = tokens.next();
             double length = 0;
             if (count_token.empty()) ascii_error("too few values for element '" + element.name + "'", line);
-            if (!io_detail::parse_scalar(count_token, property.count_type, length) || length < 0) {
+            if (!detail::parse_scalar(count_token, property.count_type, length) || length < 0) {
               ascii_error("the length of list '" + property.name + "' is " + quote(count_token) +
                               ", not a non-negative integer",
                           line);
@@ -485,10 +485,10 @@ class PlyReader final : public io_detail::SingleScanSource {
           const auto role = static_cast<std::size_t>(property.role);
           bool ok = false;
           if (role <= 3 && property.type.kind == ScalarKind::floating_point && property.type.bytes == 4) {
-            ok = io_detail::parse_float(token, coordinates[role]);
+            ok = detail::parse_float(token, coordinates[role]);
             values[role] = coordinates[role];
           } else {
-            ok = io_detail::parse_scalar(token, property.type, values[role]);
+            ok = detail::parse_scalar(token, property.type, values[role]);
             if (role <= 3) coordinates[role] = static_cast<float>(values[role]);
           }
           if (!ok) ascii_error("property '" + property.name + "' is " + quote(token) + ", not a number of its type", line);
@@ -529,7 +529,7 @@ class PlyReader final : public io_detail::SingleScanSource {
 }  // namespace
 
 std::unique_ptr<ScanSource> open_ply_file(const std::filesystem::path& path, Vec3f origin) {
-  return io_detail::naming_bad_alloc(path, [&] { return std::make_unique<PlyReader>(path, origin); });
+  return detail::naming_bad_alloc(path, [&] { return std::make_unique<PlyReader>(path, origin); });
 }
 
 }  // namespace umbra

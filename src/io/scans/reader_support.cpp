@@ -18,7 +18,7 @@
 #include "core/memory_budget.hpp"
 #include "umbra/io/format_error.hpp"
 
-namespace umbra::io_detail {
+namespace umbra::detail {
 
 std::string to_lower(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(),
@@ -215,4 +215,4 @@ double SingleScanSource::progress() const {
   return static_cast<double>(bytes_consumed()) / static_cast<double>(total);
 }
 
-}  // namespace umbra::io_detail
+}  // namespace umbra::detail

@@ -29,7 +29,7 @@
 #include "umbra/core/vec3.hpp"
 #include "umbra/io/scan_source.hpp"
 
-namespace umbra::io_detail {
+namespace umbra::detail {
 
 /// `text` with the ASCII letters in lower case.
 std::string to_lower(std::string text);
@@ -152,4 +152,4 @@ class SingleScanSource : public ScanSource {
   std::exception_ptr error_;
 };
 
-}  // namespace umbra::io_detail
+}  // namespace umbra::detail

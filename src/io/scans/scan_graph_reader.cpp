@@ -41,8 +41,8 @@
 namespace umbra {
 namespace {
 
-using io_detail::InputFile;
-using io_detail::Pose;
+using detail::InputFile;
+using detail::Pose;
 
 constexpr std::uint64_t kCountBytes = 4;                         // uint32 / int32 fields
 constexpr std::uint64_t kPointBytes = 4 + 3 * 8;                 // int32 3 + 3 doubles
@@ -55,12 +55,12 @@ constexpr std::uint32_t kPointsPerChunk = 4096;
 // --- little-endian encoding, independent of the host byte order ---
 
 std::uint32_t load_u32(const unsigned char* bytes) {
-  return static_cast<std::uint32_t>(io_detail::load_bits(bytes, 4, false));
+  return static_cast<std::uint32_t>(detail::load_bits(bytes, 4, false));
 }
 
 std::int32_t load_i32(const unsigned char* bytes) { return static_cast<std::int32_t>(load_u32(bytes)); }
 
-double load_f64(const unsigned char* bytes) { return std::bit_cast<double>(io_detail::load_bits(bytes, 8, false)); }
+double load_f64(const unsigned char* bytes) { return std::bit_cast<double>(detail::load_bits(bytes, 8, false)); }
 
 void append_u32(std::vector<unsigned char>& out, std::uint32_t value) {
   for (int i = 0; i < 4; ++i) out.push_back(static_cast<unsigned char>(value >> (8 * i)));
@@ -93,7 +93,7 @@ class ScanGraphReader final : public ScanSource {
  public:
   explicit ScanGraphReader(const std::filesystem::path& path)
       : file_(path, "ScanGraph"), display_name_(path.filename().string()) {
-    if (io_detail::has_bz2_suffix(path)) {
+    if (detail::has_bz2_suffix(path)) {
       throw FormatError(file_.name(), "compressed ScanGraph files are not supported; decompress it first (bunzip2)");
     }
     index_nodes();
@@ -104,7 +104,7 @@ class ScanGraphReader final : public ScanSource {
       if (nodes_[index].point_count > nodes_[largest].point_count) largest = index;
     }
     if (!nodes_.empty()) {
-      io_detail::require_point_memory(file_.name(),
+      detail::require_point_memory(file_.name(),
                                       "reading scan " + std::to_string(largest) + " (" +
                                           std::to_string(nodes_[largest].point_count) + " points)",
                                       nodes_[largest].point_count, false);
@@ -309,8 +309,8 @@ class ScanGraphReader final : public ScanSource {
 }  // namespace
 
 std::unique_ptr<ScanSource> open_scan_graph(const std::filesystem::path& path) {
-  io_detail::reject_directory(path);  // before opening, so an unreadable folder is named as a folder
-  return io_detail::naming_bad_alloc(path, [&] { return std::make_unique<ScanGraphReader>(path); });
+  detail::reject_directory(path);  // before opening, so an unreadable folder is named as a folder
+  return detail::naming_bad_alloc(path, [&] { return std::make_unique<ScanGraphReader>(path); });
 }
 
 void write_scan_graph(const std::filesystem::path& path, const std::vector<Scan>& scans) {

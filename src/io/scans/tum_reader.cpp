@@ -36,11 +36,11 @@ namespace umbra {
 namespace {
 
 namespace fs = std::filesystem;
-using io_detail::InputFile;
-using io_detail::LineReader;
-using io_detail::Pose;
-using io_detail::quote;
-using io_detail::Tokens;
+using detail::InputFile;
+using detail::LineReader;
+using detail::Pose;
+using detail::quote;
+using detail::Tokens;
 
 constexpr std::uint64_t kMaxDepthPixels = std::uint64_t{1} << 26;  // 64 Mpixel: no depth camera is larger
 // The decoded 16-bit depth and RGB color images, their copy in the scan
@@ -128,7 +128,7 @@ struct PngDepth {
 
 void read_depth_png(const fs::path& path, PngDepth& image) {
   std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) throw std::runtime_error("cannot open " + path.string() + ": " + io_detail::errno_text(errno));
+  if (file == nullptr) throw std::runtime_error("cannot open " + path.string() + ": " + detail::errno_text(errno));
   PngErrorState state;
   PngReadHandle handle(file, state);
   if (!handle.valid()) throw std::runtime_error("cannot read " + path.string() + ": libpng initialisation failed");
@@ -152,7 +152,7 @@ void read_depth_png(const fs::path& path, PngDepth& image) {
     throw FormatError(path.string(), "a depth image of " + std::to_string(header.width) + " x " +
                                          std::to_string(header.height) + " pixels is implausible");
   }
-  io_detail::require_point_memory(path.string(),
+  detail::require_point_memory(path.string(),
                                   "a frame of " + std::to_string(header.width) + " x " +
                                       std::to_string(header.height) +
                                       " pixels (both images, the scan's copy of them and its points)",
@@ -213,7 +213,7 @@ class TumReader final : public ScanSource {
       std::size_t count = 0;
       bool numbers_ok = true;
       for (std::string_view token = tokens.next(); !token.empty(); token = tokens.next()) {
-        if (count < 7 && !(io_detail::parse_double(token, values[count]) && std::isfinite(values[count]))) {
+        if (count < 7 && !(detail::parse_double(token, values[count]) && std::isfinite(values[count]))) {
           numbers_ok = false;
         }
         ++count;
@@ -338,7 +338,7 @@ class TumReader final : public ScanSource {
 }  // namespace
 
 std::unique_ptr<ScanSource> open_tum_sequence(const fs::path& association_file, const DepthCamera& camera) {
-  return io_detail::naming_bad_alloc(association_file,
+  return detail::naming_bad_alloc(association_file,
                                      [&] { return std::make_unique<TumReader>(association_file, camera); });
 }
 
@@ -351,7 +351,7 @@ fs::path find_tum_association(const fs::path& folder, const fs::path& associatio
   if (!association.empty()) return association.is_absolute() ? association : folder / association;
   std::vector<fs::path> candidates;
   for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
-    const std::string name = io_detail::to_lower(entry.path().filename().string());
+    const std::string name = detail::to_lower(entry.path().filename().string());
     if (name.find("assoc") != std::string::npos && name.ends_with(".txt") && entry.is_regular_file()) {
       candidates.push_back(entry.path());
     }

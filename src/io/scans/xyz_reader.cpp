@@ -34,9 +34,9 @@
 namespace umbra {
 namespace {
 
-using io_detail::errno_text;
-using io_detail::FileHandle;
-using io_detail::Tokens;
+using detail::errno_text;
+using detail::FileHandle;
+using detail::Tokens;
 
 constexpr std::size_t kRawChunkBytes = 256 * 1024;   // compressed input per read
 constexpr std::size_t kTextChunkBytes = 256 * 1024;  // initial text buffer
@@ -159,13 +159,13 @@ class TextInput {
 /// `text` quoted for an error message; unlike the binary formats' readers,
 /// this one shows bytes from 0x80 on as they are (UTF-8 text stays legible).
 std::string quote(std::string_view text) {
-  return io_detail::quote(text, {.unprintable = io_detail::Unprintable::question_mark_keep_utf8});
+  return detail::quote(text, {.unprintable = detail::Unprintable::question_mark_keep_utf8});
 }
 
 /// Parses a whole token as a float: decimal or scientific, optional sign
 /// (including '+'), "nan" and "inf". Values beyond float range become +-inf
 /// or are flushed towards 0, as strtof would; beyond double range is an error
-/// (where io_detail::parse_float, used by PLY and PCD, gives +-inf or 0).
+/// (where detail::parse_float, used by PLY and PCD, gives +-inf or 0).
 bool parse_coordinate(std::string_view token, float& value) {
   const char* first = token.data();
   const char* const last = first + token.size();
@@ -190,18 +190,18 @@ bool parse_color_channel(std::string_view token, std::uint8_t& value) {
   return true;
 }
 
-class XyzReader final : public io_detail::SingleScanSource {
+class XyzReader final : public detail::SingleScanSource {
  public:
   XyzReader(const std::filesystem::path& path, Vec3f origin)
       : file_name_(path.string()), display_name_(path.filename().string()), origin_(origin) {
-    io_detail::reject_directory(path);
+    detail::reject_directory(path);
     FileHandle file(std::fopen(path.c_str(), "rb"));
     if (!file) throw std::runtime_error("cannot open " + file_name_ + ": " + errno_text(errno));
     struct stat info {};
     if (::fstat(::fileno(file.get()), &info) == 0 && S_ISREG(info.st_mode)) {
       file_size_ = static_cast<std::uint64_t>(info.st_size);
     }
-    const bool compressed = io_detail::has_bz2_suffix(path);
+    const bool compressed = detail::has_bz2_suffix(path);
     if (compressed) check_bz2_signature(file.get());
     input_ = std::make_unique<TextInput>(std::move(file), compressed, file_name_);
   }
@@ -312,7 +312,7 @@ class XyzReader final : public io_detail::SingleScanSource {
       }
     }
     // Grown here, checked against the memory limit: the file does not say how many points follow.
-    if (scan.points.size() == scan.points.capacity()) io_detail::grow_points(scan, has_color, file_name_);
+    if (scan.points.size() == scan.points.capacity()) detail::grow_points(scan, has_color, file_name_);
     scan.points.push_back(point);
     if (has_color) {
       Rgb color;
@@ -340,7 +340,7 @@ class XyzReader final : public io_detail::SingleScanSource {
 }  // namespace
 
 std::unique_ptr<ScanSource> open_xyz_file(const std::filesystem::path& path, Vec3f origin) {
-  return io_detail::naming_bad_alloc(path, [&] { return std::make_unique<XyzReader>(path, origin); });
+  return detail::naming_bad_alloc(path, [&] { return std::make_unique<XyzReader>(path, origin); });
 }
 
 }  // namespace umbra
