@@ -112,9 +112,8 @@ void ProjectiveRule::use_cells(double widest) {
   for (int c = 1; std::ldexp(grid->resolution(), c) <= widest * (1.0 + 1e-9); ++c) {
     if (grid->depth_levels() - c < 3) break;                     // a coarse grid with bricks and room above them
     if (max_range > 0.0 && range_depth != 0 && range_depth < 2 + c) break;  // the range node would split the node
-    auto level = std::make_shared<CellLevel>(CellLevel{Grid(std::ldexp(grid->resolution(), c), grid->depth_levels() - c), *this});
+    auto level = std::make_shared<CellLevel>(*grid, c, *frame, margin);  // margin: the same float
     ProjectiveRule& coarse = level->rule;
-    coarse = ProjectiveRule(level->grid, *frame, -1.0, margin, std::nullopt);  // margin: the same float
     coarse.edge_reach = edge_reach;
     coarse.whole_bricks_seen = true;
     // The finest grid's range: per node in add_cell_misses, or voxel by voxel on the cells' centres.

@@ -118,6 +118,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -284,6 +285,12 @@ struct ProjectiveRule {
 };
 
 struct ProjectiveRule::CellLevel {
+  CellLevel(const Grid& finest, int c, const ProjectiveFrame& frame, double margin)
+      : grid(std::ldexp(finest.resolution(), c), finest.depth_levels() - c),
+        rule(grid, frame, -1.0, margin, std::nullopt) {}
+  CellLevel(const CellLevel&) = delete;  // `rule` points at `grid`
+  CellLevel& operator=(const CellLevel&) = delete;
+
   Grid grid;            ///< 2^c times the resolution, c depth levels fewer
   ProjectiveRule rule;  ///< on `grid`; the finest grid's range and edge reach, no box
 };
