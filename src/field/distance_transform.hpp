@@ -77,6 +77,7 @@ class ChunkTransform {
   int out_;     // output cells per axis
   int span_;    // input cells per axis: out + 2 window
   std::uint32_t e2_;  // 2 E
+  std::uint64_t cap_;  // the largest S within max_distance
   std::vector<std::uint8_t> sites_;    // span^3, bit 0 occupied, bit 1 unknown
   std::vector<std::int8_t> pass_x_;    // [z][y][x out]: x offset of the row's nearest site, or kNoSite
   std::vector<std::uint32_t> column_;  // one column's values
@@ -85,7 +86,8 @@ class ChunkTransform {
   std::array<std::vector<SiteOffset>, 2> result_;  // [kind][z out][y out][x out]
   // The envelope's scratch: parabola sites and boundaries, per side.
   std::vector<int> hull_;
-  std::vector<double> bounds_;
+  std::vector<std::int64_t> hull_c_;  // each hull parabola's C and F (see column())
+  std::vector<std::int64_t> hull_f_;
   std::vector<std::uint32_t> best_;
   std::vector<std::int16_t> from_;
   // The wanted bricks of the current run, by x and by (x, y) (the passes
