@@ -27,6 +27,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -48,6 +49,14 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+/// CPU seconds of the calling thread (a one-thread update runs there
+/// entirely; on a shared machine this is steadier than the wall clock).
+double thread_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
 
 std::size_t rss_bytes() {
   std::ifstream statm("/proc/self/statm");
@@ -154,6 +163,10 @@ struct Row {
   long long box_cells = 0;
   double umbra_build = 0, edt_build = 0;
   std::vector<double> umbra_updates, edt_updates, umbra_parallel_updates;
+  // dynamicEDT3D with unknown as free: umbra's one update keeps both
+  // distances, dynamicEDT3D needs a second field for the occupied one.
+  std::vector<double> edt_free_updates;
+  std::vector<double> umbra_update_cpu, edt_update_cpu, edt_free_update_cpu;  // thread CPU seconds
   double umbra_parallel_build = 0;
   unsigned threads = 1;
   double umbra_query_ns = 0, umbra_query_single_ns = 0, umbra_query_hot_ns = 0, edt_query_ns = 0;
@@ -177,11 +190,15 @@ Row run(const std::string& name, const Options& options) {
   double max_range = 30.0;
   std::unique_ptr<umbra::OccupancyMap> map;
   std::unique_ptr<octomap::OcTree> tree;
+  // The same map again for dynamicEDT3D with unknown as free: its update()
+  // consumes the tree's change set, so two fields cannot share one tree.
+  std::unique_ptr<octomap::OcTree> tree_free;
   umbra::Aabb box;
   if (name == "geb079") {
     const std::string path = options.data_dir + "/octomap/geb079.bt";
     map = std::make_unique<umbra::OccupancyMap>(umbra::load_octomap(path));
     tree = std::make_unique<octomap::OcTree>(path);
+    tree_free = std::make_unique<octomap::OcTree>(path);
     double x0, y0, z0, x1, y1, z1;
     tree->getMetricMin(x0, y0, z0);
     tree->getMetricMax(x1, y1, z1);
@@ -195,6 +212,7 @@ Row run(const std::string& name, const Options& options) {
     const double resolution = name == "tum" ? 0.02 : 0.05;
     map = std::make_unique<umbra::OccupancyMap>(resolution);
     tree = std::make_unique<octomap::OcTree>(resolution);
+    tree_free = std::make_unique<octomap::OcTree>(resolution);
     const umbra::Vec3d o(scans[0].origin);
     // A box around the first sensor position both fields can hold (dynamicEDT3D: dense).
     box = name == "tum" ? umbra::Aabb{o - umbra::Vec3d{3.0, 3.0, 1.5}, o + umbra::Vec3d{3.0, 3.0, 1.5}}
@@ -209,6 +227,8 @@ Row run(const std::string& name, const Options& options) {
     for (const umbra::Vec3f& p : scan.points) cloud.push_back(p.x, p.y, p.z);
     tree->insertPointCloud(cloud, octomap::point3d(scan.origin.x, scan.origin.y, scan.origin.z), max_range, false,
                            false);
+    tree_free->insertPointCloud(cloud, octomap::point3d(scan.origin.x, scan.origin.y, scan.origin.z), max_range,
+                                false, false);
   };
   if (!scans.empty()) insert_scan(scans[0]);
 
@@ -236,6 +256,8 @@ Row run(const std::string& name, const Options& options) {
   edt->update();
   row.edt_build = seconds_since(start);
   row.edt_rss = rss_bytes() - rss;
+  auto edt_free = std::make_unique<DynamicEDTOctomap>(float(options.max_distance), tree_free.get(), bmin, bmax, false);
+  edt_free->update();
   row.edt_bytes = std::size_t(row.box_cells) * (24 + 1);
   {
     umbra::DistanceFieldOptions known = field_options;
@@ -257,7 +279,9 @@ Row run(const std::string& name, const Options& options) {
   for (std::size_t i = 1; i < scans.size(); ++i) {
     insert_scan(scans[i]);
     start = Clock::now();
+    double cpu = thread_cpu_seconds();
     field->update();
+    row.umbra_update_cpu.push_back(thread_cpu_seconds() - cpu);
     row.umbra_updates.push_back(seconds_since(start));
     const umbra::DistanceFieldStats st = field->stats();
     row.bricks_lowered += st.bricks_recomputed - st.bricks_transformed;
@@ -266,11 +290,32 @@ Row run(const std::string& name, const Options& options) {
     parallel.update();
     row.umbra_parallel_updates.push_back(seconds_since(start));
     start = Clock::now();
+    cpu = thread_cpu_seconds();
     edt->update();
+    row.edt_update_cpu.push_back(thread_cpu_seconds() - cpu);
     row.edt_updates.push_back(seconds_since(start));
+    start = Clock::now();
+    cpu = thread_cpu_seconds();
+    edt_free->update();
+    row.edt_free_update_cpu.push_back(thread_cpu_seconds() - cpu);
+    row.edt_free_updates.push_back(seconds_since(start));
   }
 
   if (scans.size() > 1) {
+    const auto median_ms = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return 1e3 * v[v.size() / 2];
+    };
+    std::printf("%s: update per scan, median ms: umbra %.1f (1 thread), %.1f (%u threads); dynamicEDT3D %.1f "
+                "(unknown as occupied), %.1f (unknown as free)\n",
+                name.c_str(), median_ms(row.umbra_updates), median_ms(row.umbra_parallel_updates),
+                std::thread::hardware_concurrency(), median_ms(row.edt_updates), median_ms(row.edt_free_updates));
+    std::printf("%s: update per scan, median thread CPU ms: umbra %.1f (1 thread); dynamicEDT3D %.1f (unknown as "
+                "occupied), %.1f (unknown as free); speed-up %.2fx (against unknown as occupied), %.2fx (against "
+                "both)\n",
+                name.c_str(), median_ms(row.umbra_update_cpu), median_ms(row.edt_update_cpu),
+                median_ms(row.edt_free_update_cpu), median_ms(row.edt_update_cpu) / median_ms(row.umbra_update_cpu),
+                (median_ms(row.edt_update_cpu) + median_ms(row.edt_free_update_cpu)) / median_ms(row.umbra_update_cpu));
     std::printf("%s: updates lowered %.0f and transformed %.0f bricks a scan (of %zu stored)\n", name.c_str(),
                 double(row.bricks_lowered) / double(scans.size() - 1),
                 double(row.bricks_transformed) / double(scans.size() - 1), field->stats().bricks);
@@ -314,12 +359,7 @@ Row run(const std::string& name, const Options& options) {
   const int reach = int(std::ceil(options.max_distance / row.resolution)) + 1;
   const std::size_t n = std::min(options.samples, points.size());
   for (const bool unknown_blocks : {true, false}) {
-    std::unique_ptr<DynamicEDTOctomap> other;
-    if (!unknown_blocks) {
-      other = std::make_unique<DynamicEDTOctomap>(float(options.max_distance), tree.get(), bmin, bmax, false);
-      other->update();
-    }
-    DynamicEDTOctomap& e = unknown_blocks ? *edt : *other;
+    DynamicEDTOctomap& e = unknown_blocks ? *edt : *edt_free;
     std::size_t umbra_exact = 0, edt_exact = 0, agree = 0;
     double umbra_worst = 0, edt_worst = 0, worst_gap = 0;
     for (std::size_t i = 0; i < n; ++i) {

@@ -117,4 +117,53 @@ class BrickTable {
   std::size_t size_ = 0;
 };
 
+/// A set of packed brick indices in the same flat layout (an update's
+/// candidate bricks: millions of inserts per scan, most of them repeats).
+class BrickKeySet {
+ public:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+
+  /// Adds the key; true if it was not there.
+  bool insert(std::uint64_t key) {
+    if (2 * (size_ + 1) > slots_.size()) grow();
+    for (std::size_t i = home(key);; i = (i + 1) & mask_) {
+      if (slots_[i] == key) return false;
+      if (slots_[i] == kEmpty) {
+        slots_[i] = key;
+        ++size_;
+        return true;
+      }
+    }
+  }
+  [[nodiscard]] bool contains(std::uint64_t key) const {
+    if (slots_.empty()) return false;
+    for (std::size_t i = home(key);; i = (i + 1) & mask_) {
+      if (slots_[i] == key) return true;
+      if (slots_[i] == kEmpty) return false;
+    }
+  }
+  [[nodiscard]] std::size_t size() const { return size_; }
+
+ private:
+  [[nodiscard]] std::size_t home(std::uint64_t key) const {
+    return std::size_t((key * 0x9E3779B97F4A7C15ULL) >> shift_);
+  }
+  void grow() {
+    std::vector<std::uint64_t> old = std::move(slots_);
+    const std::size_t capacity = old.empty() ? 1024 : 2 * old.size();
+    slots_.assign(capacity, kEmpty);
+    mask_ = capacity - 1;
+    shift_ = 64 - std::countr_zero(capacity);
+    size_ = 0;
+    for (const std::uint64_t key : old) {
+      if (key != kEmpty) insert(key);
+    }
+  }
+
+  std::vector<std::uint64_t> slots_;
+  std::size_t mask_ = 0;
+  int shift_ = 64;
+  std::size_t size_ = 0;
+};
+
 }  // namespace umbra::detail

@@ -11,6 +11,7 @@
 #include "umbra/field/distance_field.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 #include <mutex>
 #include <stdexcept>
@@ -389,38 +390,46 @@ void DistanceField::State::update() {
   // Which bricks a change may reach: those within reach of it that the
   // field keeps (in the box; without one, stored already or within reach
   // of known space now: a brick not stored is trivial, and only a change
-  // holding known space can make it otherwise). Each remembers the changes
-  // near it that add sites (for lower_by_added_sites).
-  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> targets;
+  // holding known space can make it otherwise).
+  detail::BrickKeySet target_set;
+  std::vector<std::uint64_t> target_keys;
   std::vector<std::uint64_t> removed;
   const int reach = layout.brick_reach();
   for (std::uint32_t c = 0; c < changed.size(); ++c) {
     const BrickIndex b = changed[c];
-    const detail::BrickChange& change = changes.at(b.packed());
-    const bool adds = change.adds(0) || change.adds(1);
     const bool known = known_after(b.packed());
     for_each_neighbour(b, reach, [&](BrickIndex n) {
       const std::uint64_t key = n.packed();
-      if (box_cells ? brick_meets_box(n) : (known || bricks.contains(key))) {
-        std::vector<std::uint32_t>& adders = targets[key];
-        if (adds) adders.push_back(c);
+      if ((box_cells ? brick_meets_box(n) : (known || bricks.contains(key))) && target_set.insert(key)) {
+        target_keys.push_back(key);
       }
     });
   }
   if (!box_cells) {
     // A stored brick with no known space within reach any more goes.
+    detail::BrickKeySet gone;
     for (const BrickIndex b : changed) {
       if (known_after(b.packed()) || !sites_of(b.packed()).known) continue;  // only bricks that became unknown
       for_each_neighbour(b, reach, [&](BrickIndex n) {
-        if (!targets.contains(n.packed())) return;
+        if (!target_set.contains(n.packed()) || gone.contains(n.packed())) return;
         bool near_known = false;
         for_each_neighbour(n, reach, [&](BrickIndex m) { near_known = near_known || known_after(m.packed()); });
         if (!near_known) {
-          targets.erase(n.packed());
+          gone.insert(n.packed());
           removed.push_back(n.packed());
         }
       });
     }
+    if (!removed.empty()) {
+      std::erase_if(target_keys, [&](std::uint64_t key) { return gone.contains(key); });
+    }
+  }
+  // The changes that add sites; a target looks through those within reach
+  // (a scan of a list of a few thousand beats a list per target).
+  std::vector<std::uint32_t> adding;
+  for (std::uint32_t c = 0; c < changed.size(); ++c) {
+    const detail::BrickChange& change = changes.at(changed[c].packed());
+    if (change.adds(0) || change.adds(1)) adding.push_back(c);
   }
   // The sites each change adds, per kind.
   std::vector<std::array<std::vector<detail::CellCoord>, 2>> added(changed.size());
@@ -438,16 +447,11 @@ void DistanceField::State::update() {
   // added ones; one with a cell whose nearest site went is transformed
   // again (site_changes.hpp).
   const detail::BrickOffsets implicit_offsets = detail::trivial_offsets();
-  std::vector<std::pair<std::uint64_t, const std::vector<std::uint32_t>*>> target_list(targets.size());
-  {
-    std::size_t i = 0;
-    for (const auto& [key, adders] : targets) target_list[i++] = {key, &adders};
-  }
   const unsigned workers = pool ? pool->size() : 1;
   std::vector<Computed> lowered_parts(workers);
   std::vector<std::vector<std::pair<std::uint64_t, Partial>>> dirty_parts(workers);
   const auto lower = [&](std::size_t task, unsigned worker) {
-    const auto& [key, adders] = target_list[task];
+    const std::uint64_t key = target_keys[task];
     const BrickIndex b = BrickIndex::unpack(key);
     const FieldBrick* stored = bricks.find(key);
     const detail::BrickOffsets& before = stored != nullptr ? stored->offsets : implicit_offsets;
@@ -457,7 +461,13 @@ void DistanceField::State::update() {
     brick->bits = own != changes.end() ? own->second.after : (stored != nullptr ? stored->bits : default_sites(b));
     brick->offsets = before;
     std::array<std::vector<detail::AddedSites>, 2> near;
-    for (const std::uint32_t c : *adders) {
+    for (const std::uint32_t c : adding) {
+      const BrickIndex a = changed[c];
+      if (std::abs(std::int64_t(a.x) - std::int64_t(b.x)) > reach ||
+          std::abs(std::int64_t(a.y) - std::int64_t(b.y)) > reach ||
+          std::abs(std::int64_t(a.z) - std::int64_t(b.z)) > reach) {
+        continue;
+      }
       for (int kind = 0; kind < 2; ++kind) {
         if ((transform_kinds >> kind & 1) != 0) continue;  // the transform gives that kind
         if (!added[c][std::size_t(kind)].empty()) near[std::size_t(kind)].push_back({changed[c], added[c][std::size_t(kind)]});
@@ -465,7 +475,6 @@ void DistanceField::State::update() {
     }
     const detail::LoweringResult result = detail::lower_by_added_sites(layout, b, brick->offsets, near);
     const bool lowered = result.changed;
-    transform_kinds |= result.tied_kinds;
     if (transform_kinds != 0) {
       dirty_parts[worker].emplace_back(key, Partial{transform_kinds, std::move(brick)});
       return;
@@ -478,10 +487,10 @@ void DistanceField::State::update() {
     }
     out.store.emplace_back(key, std::move(brick));
   };
-  if (pool && target_list.size() > 1) {
-    pool->run(target_list.size(), lower);
+  if (pool && target_keys.size() > 1) {
+    pool->run(target_keys.size(), lower);
   } else {
-    for (std::size_t i = 0; i < target_list.size(); ++i) lower(i, 0);
+    for (std::size_t i = 0; i < target_keys.size(); ++i) lower(i, 0);
   }
   std::vector<std::uint64_t> dirty;
   Partials partials;

@@ -16,7 +16,8 @@ ChunkTransform::ChunkTransform(const FieldLayout& layout)
       bricks_(chunk_bricks(layout.window())),
       out_(chunk_bricks(layout.window()) * kBrickCells),
       span_(out_ + 2 * layout.window()),
-      e2_(2u << layout.depth()) {
+      e2_(2u << layout.depth()),
+      cap_(layout.cap_squared()) {
   const std::size_t span = std::size_t(span_);
   const std::size_t out = std::size_t(out_);
   sites_.resize(span * span * span);
@@ -26,7 +27,8 @@ ChunkTransform::ChunkTransform(const FieldLayout& layout)
   pass_y_offset_.resize(pass_y_.size());
   for (auto& r : result_) r.resize(out * out * out);
   hull_.resize(span);
-  bounds_.resize(span + 1);
+  hull_c_.resize(span);
+  hull_f_.resize(span);
   best_.resize(out);
   from_.resize(out);
 }
@@ -72,56 +74,81 @@ void ChunkTransform::load_sites(BrickIndex first, SiteLookup sites) {
 
 void ChunkTransform::column(const std::uint32_t* values, std::size_t stride, std::uint32_t* best,
                             std::int16_t* from) {
+  // Integers throughout (no rounding), and each side's envelope holds only
+  // the sites on its side of the cell: the pick among equally near sites is
+  // then the canonical one (field_layout.hpp, nearer_tie()), a function of
+  // the sites alone, so that an update's lowering can apply the same rule
+  // and any region of cells can be transformed and agree with a rebuild.
+  __extension__ typedef __int128 Wide;  // products of a parabola's value and a position (deep cells, wide windows)
   const int w = window_;
-  const double cap = std::floor(double(layout_.max_distance()) * 2.0 / layout_.resolution() *
-                                double(layout_.max_distance()) * 2.0 / layout_.resolution());
-  // The site at the cell itself.
+  const std::uint64_t cap = cap_;
+  const std::int64_t e2 = std::int64_t(e2_);
+  // The site at the cell itself (offset 0 comes first among equals).
   for (int t = 0; t < out_; ++t) {
     const std::uint32_t v = values[std::size_t(w + t) * stride];
     best[t] = v;
     from[t] = std::int16_t(v == kNone ? -1 : w + t);
   }
-  const double e2 = double(e2_);
-  for (const double shift : {e2 - 1.0, 1.0 - e2}) {  // sites before the cell, then after it
+  // One side: the sites at positions before the cell, in the order `dir`
+  // walks (+1: smaller positions, the cell's offset negative; -1: larger).
+  // In walking order a site at step u has C_u = e2 u + e2 - 1, so its term
+  // for the cell at step T > u is (e2 T - C_u)^2, a parabola in X = e2 T;
+  // F_u = v_u + C_u^2, and u supersedes q (before it) from
+  // X = (F_u - F_q) / (2 (C_u - C_q)) on. The cells are visited in walking
+  // order too, each after the sites before it joined the envelope.
+  for (const int dir : {1, -1}) {
+    const auto position = [&](int u) { return dir > 0 ? u : span_ - 1 - u; };
     int k = -1;
-    for (int s = 0; s < span_; ++s) {
-      const std::uint32_t v = values[std::size_t(s) * stride];
-      if (v == kNone) continue;
-      const double c = e2 * s + shift;
-      const double f = double(v) + c * c;
-      double start = -std::numeric_limits<double>::infinity();
-      while (k >= 0) {
-        const int q = hull_[std::size_t(k)];
-        const double cq = e2 * q + shift;
-        const double fq = double(values[std::size_t(q) * stride]) + cq * cq;
-        start = (f - fq) / (2.0 * (c - cq));
-        if (start > bounds_[std::size_t(k)]) break;
-        --k;
-        start = -std::numeric_limits<double>::infinity();
-      }
-      ++k;
-      hull_[std::size_t(k)] = s;
-      bounds_[std::size_t(k)] = start;
-    }
-    if (k < 0) continue;
     int j = 0;
-    for (int t = 0; t < out_; ++t) {
-      const double x = e2 * (w + t);
-      while (j < k && bounds_[std::size_t(j + 1)] <= x) ++j;
-      const int s = hull_[std::size_t(j)];
-      // The site's true term (the parabola overestimates the other side's).
-      const std::int64_t n = std::abs(std::int64_t(w + t) - s);
-      const double gap = n == 0 ? 0.0 : double(n - 1) * e2 + 1.0;
-      const double total = double(values[std::size_t(s) * stride]) + gap * gap;
-      if (total < double(best[t])) {
+    int next = 0;  // the next step to join the envelope
+    const int first_cell = dir > 0 ? w : span_ - w - out_;
+    for (int c = 0; c < out_; ++c) {
+      const int cell = first_cell + c;  // step of this cell
+      for (; next < cell; ++next) {
+        const std::uint32_t v = values[std::size_t(position(next)) * stride];
+        if (v == kNone) continue;
+        const std::int64_t cu = e2 * next + e2 - 1;
+        const std::int64_t fu = std::int64_t(v) + cu * cu;
+        while (k >= 1) {
+          // Drop the top q when u supersedes it no later than q superseded p.
+          const std::int64_t cq = hull_c_[std::size_t(k)], fq = hull_f_[std::size_t(k)];
+          const std::int64_t cp = hull_c_[std::size_t(k - 1)], fp = hull_f_[std::size_t(k - 1)];
+          if (Wide(fu - fq) * Wide(cq - cp) > Wide(fq - fp) * Wide(cu - cq)) break;
+          --k;
+        }
+        ++k;
+        hull_[std::size_t(k)] = next;
+        hull_c_[std::size_t(k)] = cu;
+        hull_f_[std::size_t(k)] = fu;
+      }
+      if (k < 0) continue;
+      j = std::min(j, k);
+      const std::int64_t x = e2 * cell;
+      // The last of the equally low (the nearest to the cell) is kept.
+      while (j < k && Wide(hull_f_[std::size_t(j + 1)] - hull_f_[std::size_t(j)]) <=
+                          Wide(2 * x) * Wide(hull_c_[std::size_t(j + 1)] - hull_c_[std::size_t(j)])) {
+        ++j;
+      }
+      const int u = hull_[std::size_t(j)];
+      const std::uint64_t gap = std::uint64_t(cell - u - 1) * std::uint64_t(e2) + 1;
+      const std::uint64_t total = std::uint64_t(values[std::size_t(position(u)) * stride]) + gap * gap;
+      const int t = dir > 0 ? c : out_ - 1 - c;
+      // Equally near (the canonical order, nearer_tie()): the smaller
+      // |offset|, and of -n and +n the negative. A site of this side beats
+      // the one kept so far only when strictly nearer in steps: on the
+      // first side that one is the cell's own, on the second one of the
+      // first side (negative offsets).
+      const int held = from[t] < 0 ? -1 : std::abs(from[t] - (w + t));  // |offset| kept so far
+      const bool tie_wins = total == std::uint64_t(best[t]) && dir < 0 && held > 0 && cell - u < held;
+      if (total < std::uint64_t(best[t]) || tie_wins) {
         best[t] = total > cap ? kNone - 1 : std::uint32_t(total);
-        from[t] = std::int16_t(s);
+        from[t] = std::int16_t(position(u));
       }
     }
   }
   // Beyond the cap nothing counts (and the offsets then fit the window).
   for (int t = 0; t < out_; ++t) {
-    if (best[t] != kNone && double(best[t]) > cap) {
+    if (best[t] != kNone && std::uint64_t(best[t]) > cap) {
       best[t] = kNone;
       from[t] = -1;
     }

@@ -12,11 +12,13 @@
 // The y and z passes are lower envelopes of parabolas, linear in the
 // column's length. The axis term of an offset n != 0 is (2 (|n| - 1) E + 1)^2:
 // for a site before the cell that is the parabola (X - C)^2 with X = 2 E y
-// and C = 2 E s + 2 E - 1, for a site after it the same with C = 2 E s -
-// (2 E - 1); each formula overestimates the other side's sites. So the
+// and C = 2 E s + 2 E - 1, for a site after it the mirror image. So the
 // minimum is that of the site at the cell itself, the envelope of the
-// "before" parabolas and that of the "after" parabolas (every term at
-// least the true one, and the true minimum among them).
+// sites before the cell and that of the sites after it; each envelope is
+// built while walking the column from its end, a site joining before the
+// first cell after it is answered. In integers, and with each side's
+// envelope holding its own side only, the pick among equally near sites
+// is the canonical one of nearer_tie() (field_layout.hpp).
 //
 // A chunk is kChunkBricks(window) bricks per axis: large enough that the
 // window read around it (the sites of window() cells on each side) costs
@@ -77,6 +79,7 @@ class ChunkTransform {
   int out_;     // output cells per axis
   int span_;    // input cells per axis: out + 2 window
   std::uint32_t e2_;  // 2 E
+  std::uint64_t cap_;  // the largest S within max_distance
   std::vector<std::uint8_t> sites_;    // span^3, bit 0 occupied, bit 1 unknown
   std::vector<std::int8_t> pass_x_;    // [z][y][x out]: x offset of the row's nearest site, or kNoSite
   std::vector<std::uint32_t> column_;  // one column's values
@@ -85,7 +88,8 @@ class ChunkTransform {
   std::array<std::vector<SiteOffset>, 2> result_;  // [kind][z out][y out][x out]
   // The envelope's scratch: parabola sites and boundaries, per side.
   std::vector<int> hull_;
-  std::vector<double> bounds_;
+  std::vector<std::int64_t> hull_c_;  // each hull parabola's C and F (see column())
+  std::vector<std::int64_t> hull_f_;
   std::vector<std::uint32_t> best_;
   std::vector<std::int16_t> from_;
   // The wanted bricks of the current run, by x and by (x, y) (the passes

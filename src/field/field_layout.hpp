@@ -47,6 +47,20 @@ inline int cell_in_brick(std::uint32_t cx, std::uint32_t cy, std::uint32_t cz) {
   return int(cx & 7u) + 8 * int(cy & 7u) + 64 * int(cz & 7u);
 }
 
+/// Of two offsets equally near a cell (the same S), whether `a` is the one
+/// a field keeps: the canonical order that the transform and the update's
+/// lowering both follow, so an updated field equals a rebuilt one bit for
+/// bit. Per axis the rank of an offset d is 0 for d = 0, then -1, +1, -2,
+/// +2, ... (nearer first, the negative first); axes compare z, then y,
+/// then x (the order in which the transform's passes decide them last to
+/// first: distance_transform.hpp).
+inline bool nearer_tie(SiteOffset a, SiteOffset b) {
+  const auto rank = [](int d) { return d == 0 ? 0 : 2 * (d < 0 ? -d : d) - (d < 0 ? 1 : 0); };
+  if (rank(a.z) != rank(b.z)) return rank(a.z) < rank(b.z);
+  if (rank(a.y) != rank(b.y)) return rank(a.y) < rank(b.y);
+  return rank(a.x) < rank(b.x);
+}
+
 class FieldLayout {
  public:
   FieldLayout(double resolution, int depth_levels, int depth, double max_distance)
@@ -82,6 +96,8 @@ class FieldLayout {
   [[nodiscard]] std::uint32_t squared(SiteOffset o) const {
     return squared_gap(o.x) + squared_gap(o.y) + squared_gap(o.z);
   }
+  /// The largest S within the cap.
+  [[nodiscard]] std::uint64_t cap_squared() const { return std::uint64_t(std::floor(cap_squared_)); }
   /// S within the cap.
   [[nodiscard]] bool within_cap(std::uint32_t s) const { return double(s) <= cap_squared_; }
   /// Metres of an offset, capped at max_distance.

@@ -114,9 +114,10 @@ class CurrentDistances {
 };
 
 /// Lowers the cells of one kind by one site; returns whether any changed.
-/// Sets `tied` when the site is exactly as near to a cell as its nearest.
+/// A site exactly as near to a cell as its nearest one replaces it when it
+/// comes first in the canonical order (nearer_tie()), as in a rebuild.
 bool lower_by_site(const FieldLayout& layout, const std::int64_t first[3], CellCoord site, int kind,
-                   CurrentDistances& current, BrickOffsets& offsets, bool& tied) {
+                   CurrentDistances& current, BrickOffsets& offsets) {
   const AxisTerms tx = axis_terms(layout, std::uint32_t(first[0]), site.x);
   const AxisTerms ty = axis_terms(layout, std::uint32_t(first[1]), site.y);
   const AxisTerms tz = axis_terms(layout, std::uint32_t(first[2]), site.z);
@@ -136,13 +137,11 @@ bool lower_by_site(const FieldLayout& layout, const std::int64_t first[3], CellC
         const std::uint64_t s = yz + tx.squared[std::size_t(x)];
         const int i = r * kBrickCells + x;
         if (s > current.cell(i) || !layout.within_cap(std::uint32_t(s))) continue;
-        if (s == current.cell(i)) {
-          tied = true;
-          continue;
-        }
-        current.set(i, std::uint32_t(s));
         const SiteOffset o{tx.offset[std::size_t(x)], ty.offset[std::size_t(y)], tz.offset[std::size_t(z)]};
-        (kind == 0 ? offsets[std::size_t(i)].occupied : offsets[std::size_t(i)].unknown) = o;
+        SiteOffset& held = kind == 0 ? offsets[std::size_t(i)].occupied : offsets[std::size_t(i)].unknown;
+        if (s == current.cell(i) && !nearer_tie(o, held)) continue;
+        current.set(i, std::uint32_t(s));
+        held = o;
         row_changed = true;
       }
       if (row_changed) {
@@ -157,6 +156,13 @@ bool lower_by_site(const FieldLayout& layout, const std::int64_t first[3], CellC
   }
   if (changed) current.update_brick();
   return changed;
+}
+
+/// Whether sites at least `least` (S) from every cell of the brick can
+/// lower or replace any cell's site: within the cap, and no farther than
+/// the farthest current site (an equally near one may replace it).
+bool may_lower(const FieldLayout& layout, std::uint32_t least, const CurrentDistances& current) {
+  return least != kFar && layout.within_cap(least) && least <= current.brick();
 }
 
 }  // namespace
@@ -174,14 +180,12 @@ LoweringResult lower_by_added_sites(const FieldLayout& layout, BrickIndex brick,
       const std::int64_t lo[3] = {std::int64_t(group.brick.x) * kBrickCells, std::int64_t(group.brick.y) * kBrickCells,
                                   std::int64_t(group.brick.z) * kBrickCells};
       const std::int64_t hi[3] = {lo[0] + kBrickCells - 1, lo[1] + kBrickCells - 1, lo[2] + kBrickCells - 1};
-      if (least_squared(layout, first, lo, hi) > current.brick()) continue;
-      bool tied = false;
+      if (!may_lower(layout, least_squared(layout, first, lo, hi), current)) continue;
       for (const CellCoord& site : group.sites) {
         const std::int64_t at[3] = {site.x, site.y, site.z};
-        if (least_squared(layout, first, at, at) > current.brick()) continue;
-        result.changed = lower_by_site(layout, first, site, kind, current, offsets, tied) || result.changed;
+        if (!may_lower(layout, least_squared(layout, first, at, at), current)) continue;
+        result.changed = lower_by_site(layout, first, site, kind, current, offsets) || result.changed;
       }
-      if (tied) result.tied_kinds |= 1 << kind;
     }
   }
   return result;

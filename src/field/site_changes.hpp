@@ -5,8 +5,9 @@
 // before it, less the removed ones, plus the added ones. So for a cell
 //   - whose nearest site was not removed, that site is still a nearest one
 //     among the old sites that remain, and the new nearest is the nearer of
-//     it and the nearest added site (an exact minimum; on a tie the brick
-//     goes through the transform, see LoweringResult): lower_by_added_sites();
+//     it and the nearest added site (an exact minimum; of equally near
+//     sites the one first in nearer_tie(), as the transform keeps):
+//     lower_by_added_sites();
 //   - whose nearest site was removed, nothing local tells the new one: its
 //     brick goes through the full transform (distance_transform.hpp).
 // A brick none of whose cells falls in the second case never needs the
@@ -55,13 +56,7 @@ struct AddedSites {
 };
 
 struct LoweringResult {
-  bool changed = false;  ///< some cell got a nearer site
-  /// Kinds (bit 0 occupied, bit 1 unknown) where an added site is exactly
-  /// as near to some cell as the cell's nearest: such a brick goes through
-  /// the transform in that kind, so that an updated field answers as a
-  /// rebuilt one, gradients included (which of two equally near sites the
-  /// transform keeps is its own choice).
-  int tied_kinds = 0;
+  bool changed = false;  ///< some cell got a nearer site (or an equally near one first in nearer_tie())
 };
 
 /// Lowers `offsets` (brick `brick`) by the added sites of each kind

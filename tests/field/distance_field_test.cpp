@@ -28,7 +28,15 @@ struct Expected {
   double occupied;
   double unknown;
   std::vector<Vec3d> gradients;  // away from each nearest blocking site (ties)
+  /// Away from the one nearest blocking site the field keeps (docs/design.md,
+  /// "Distance field": of equally near sites the one first in the order of
+  /// offsets in cells by z, then y, then x, each 0, -1, +1, -2, +2, ...;
+  /// the occupied one when an occupied and an unknown site are equally near).
+  Vec3d canonical;
 };
+
+/// The rank of an offset along one axis in the order above.
+int tie_rank(int d) { return d == 0 ? 0 : 2 * std::abs(d) - (d < 0 ? 1 : 0); }
 
 class BruteForce {
  public:
@@ -53,8 +61,14 @@ class BruteForce {
       hi[a] = cell_min[a] + cell - half;
     }
     const int reach = int(std::ceil(options_.max_distance / cell)) + 2;
-    Expected out{options_.max_distance, options_.max_distance, {}};
+    Expected out{options_.max_distance, options_.max_distance, {}, {}};
     double best_blocking = std::numeric_limits<double>::infinity();
+    // Per kind (occupied, unknown): the kept site's distance, rank and direction.
+    struct Kept {
+      double d = std::numeric_limits<double>::infinity();
+      std::tuple<int, int, int> rank;
+      Vec3d away;
+    } kept[2];
     for (int dz = -reach; dz <= reach; ++dz) {
       for (int dy = -reach; dy <= reach; ++dy) {
         for (int dx = -reach; dx <= reach; ++dx) {
@@ -76,6 +90,12 @@ class BruteForce {
             sum += gap * gap;
           }
           const double d = std::sqrt(sum);
+          const std::tuple<int, int, int> rank{tie_rank(dz), tie_rank(dy), tie_rank(dx)};
+          for (int kind = 0; kind < 2; ++kind) {
+            if (!(kind == 0 ? occupied : unknown)) continue;
+            Kept& held = kept[kind];
+            if (d < held.d - 1e-9 || (d <= held.d + 1e-9 && rank < held.rank)) held = {d, rank, d > 0 ? away * (1.0 / d) : Vec3d{}};
+          }
           if (occupied) out.occupied = std::min(out.occupied, d);
           if (unknown) out.unknown = std::min(out.unknown, d);
           if (d < best_blocking - 1e-9) {
@@ -86,7 +106,11 @@ class BruteForce {
         }
       }
     }
-    if (best_blocking >= options_.max_distance || best_blocking == 0) out.gradients.clear();
+    if (best_blocking >= options_.max_distance || best_blocking == 0) {
+      out.gradients.clear();
+    } else {
+      out.canonical = kept[0].d <= kept[1].d + 1e-9 ? kept[0].away : kept[1].away;
+    }
     return out;
   }
 
@@ -410,6 +434,53 @@ TEST(DistanceField, UpdatedAnswersAsARebuiltOne) {
         ASSERT_EQ(a.gradient.x, b.gradient.x) << "scan " << scan << " at " << p.x << " " << p.y << " " << p.z;
         ASSERT_EQ(a.gradient.y, b.gradient.y) << "scan " << scan << " at " << p.x << " " << p.y << " " << p.z;
         ASSERT_EQ(a.gradient.z, b.gradient.z) << "scan " << scan << " at " << p.x << " " << p.y << " " << p.z;
+      }
+    }
+  }
+}
+
+TEST(DistanceField, KeepsTheCanonicalOneOfEquallyNearSites) {
+  // The transform and the update's lowering keep, of equally near sites,
+  // the one first in a fixed order of offsets (tie_rank): that is what
+  // makes an updated field equal a rebuilt one without transforming again
+  // where an added site ties. Checked on fresh fields at two depths and
+  // after each scan of a sequence (lowered bricks), with and without a box.
+  for (const int depth : {0, 1}) {
+    const OccupancyMap random = random_map(40 + std::uint32_t(depth), true);
+    DistanceFieldOptions options;
+    options.max_distance = 0.5;
+    options.depth = depth;
+    const DistanceField fresh(random, options);
+    BruteForce brute(random, options);
+    std::mt19937 rng(41);
+    for (int i = 0; i < 300; ++i) {
+      const Vec3d p = random_point(rng, 1.6);
+      const Expected e = brute.at(p);
+      const DistanceSample got = fresh.distance_and_gradient(p);
+      ASSERT_NEAR(got.gradient.x, e.canonical.x, 1e-9) << "depth " << depth << " at " << p.x << " " << p.y << " " << p.z;
+      ASSERT_NEAR(got.gradient.y, e.canonical.y, 1e-9) << "depth " << depth << " at " << p.x << " " << p.y << " " << p.z;
+      ASSERT_NEAR(got.gradient.z, e.canonical.z, 1e-9) << "depth " << depth << " at " << p.x << " " << p.y << " " << p.z;
+    }
+  }
+  for (const bool boxed : {false, true}) {
+    OccupancyMap map(kResolution);
+    DistanceFieldOptions options;
+    options.max_distance = 0.45;
+    if (boxed) options.box = Aabb{{-1.3, -1.2, -1.1}, {1.4, 1.3, 1.2}};
+    DistanceField field(map, options);
+    std::mt19937 rng(boxed ? 42 : 43);
+    std::uniform_real_distribution<float> origin(-0.4f, 0.4f);
+    for (int scan = 0; scan < 4; ++scan) {
+      map.insert_point_cloud({origin(rng), origin(rng), origin(rng)}, room_scan(rng, 400));
+      field.update();
+      BruteForce brute(map, options);
+      for (int i = 0; i < 200; ++i) {
+        const Vec3d p = random_point(rng, 1.05);
+        const Expected e = brute.at(p);
+        const DistanceSample got = field.distance_and_gradient(p);
+        ASSERT_NEAR(got.gradient.x, e.canonical.x, 1e-9) << "scan " << scan << " at " << p.x << " " << p.y << " " << p.z;
+        ASSERT_NEAR(got.gradient.y, e.canonical.y, 1e-9) << "scan " << scan << " at " << p.x << " " << p.y << " " << p.z;
+        ASSERT_NEAR(got.gradient.z, e.canonical.z, 1e-9) << "scan " << scan << " at " << p.x << " " << p.y << " " << p.z;
       }
     }
   }
