@@ -57,12 +57,16 @@ struct StudyOptions {
   int yaw_samples = 4;
   bool routing = true;
   double coverage_period = 2.0;
+  std::string clearance = "collision";  ///< umbra's ball and capsule checks: "collision" or "field"
+  double field_max_distance = 1.0;
 };
 
 struct Run {
   ExplorationResult result;
   std::size_t memory_bytes = 0;
   double exclusive_seconds = -1.0;  ///< umbra only
+  double field_update_seconds = -1.0;  ///< umbra with --clearance field only
+  ClearanceCounts clearance_counts;    ///< the same
   double min_clearance = 0.0;
 };
 
@@ -180,6 +184,9 @@ std::string summary_markdown(const std::vector<Run>& runs, const StudyOptions& o
     return std::to_string(p.routes) + " (" + std::to_string(p.route_steps) + ", " + std::to_string(p.routes_blocked) + ")";
   });
   row("roadmap vertices at the end", [](const Run& r) { return std::to_string(r.result.planner.roadmap_vertices); });
+  row("planner time per iteration (simulated, i.e. CPU)", [](const Run& r) {
+    return fixed(1e3 * r.result.planning_time / double(std::max<std::uint64_t>(1, r.result.planner.steps)), 1) + " ms";
+  });
   row("planner iterations per second of planning", [](const Run& r) {
     return fixed(double(r.result.planner.steps) / std::max(1e-9, r.result.planning_time), 2);
   });
@@ -220,6 +227,15 @@ std::string summary_markdown(const std::vector<Run>& runs, const StudyOptions& o
       md << "\n" << run.result.map_name << ": inserting kept queries out for " << fixed(run.exclusive_seconds, 2)
          << " s in all (InsertStats::exclusive_seconds; this waiting is not charged to simulated time).\n";
     }
+    if (run.field_update_seconds >= 0.0) {
+      const ClearanceCounts& c = run.clearance_counts;
+      md << "\n" << run.result.map_name << ": clearance from a distance field (max distance "
+         << fixed(options.field_max_distance, 2) << " m): updating it after each frame took "
+         << fixed(run.field_update_seconds, 2) << " CPU seconds in all (part of the insertion row); balls "
+         << c.balls_by_field << " decided by the field, " << c.balls_by_map << " by the map; capsules "
+         << c.capsules_by_field << " by the field, " << c.capsules_by_map << " by the map; " << c.field_queries
+         << " field queries.\n";
+    }
   }
   return md.str();
 }
@@ -243,7 +259,7 @@ std::string summary_json(const std::vector<Run>& runs, double reachable_m3) {
       << ", \"frames_dropped\": " << r.frames_dropped
       << ", \"queries_during_insertion\": " << r.planner.queries_during_insertion
       << ", \"min_clearance\": " << fixed(runs[i].min_clearance, 4) << ", \"wall_seconds\": " << fixed(r.wall_seconds, 1)
-      << "}";
+      << ", \"field_update_seconds\": " << fixed(runs[i].field_update_seconds, 4) << "}";
   }
   j << "]}\n";
   return j.str();
@@ -268,6 +284,9 @@ int run_study(const StudyOptions& options) {
       UmbraMapOptions umbra_options;
       umbra_options.resolution = options.resolution;
       umbra_options.gain = options.gain == "fast" ? GainMethod::fast : GainMethod::exact;
+      umbra_options.clearance =
+          options.clearance == "field" ? ClearanceSource::distance_field : ClearanceSource::collision_checks;
+      umbra_options.field_max_distance = options.field_max_distance;
       umbra_map = std::make_unique<UmbraExplorationMap>(umbra_options);
     } else {
       map = std::make_unique<OctomapExplorationMap>(options.resolution);
@@ -285,7 +304,13 @@ int run_study(const StudyOptions& options) {
     });
     run.memory_bytes = chosen.memory_bytes();
     run.min_clearance = min_clearance(run.result, plant.scene);
-    if (!map) run.exclusive_seconds = umbra_map->exclusive_seconds();
+    if (!map) {
+      run.exclusive_seconds = umbra_map->exclusive_seconds();
+      if (const FieldClearance* clearance = umbra_map->field_clearance()) {
+        run.field_update_seconds = umbra_map->field_update_seconds();
+        run.clearance_counts = clearance->counts();
+      }
+    }
     std::printf("  %s: coverage %.1f%% at %.0f s, 95%% %s; %.0f s of real time\n", name.c_str(),
                 run.result.coverage.empty() ? 0.0 : 100.0 * run.result.coverage.back().coverage, run.result.end_time,
                 time_or_never(run.result.time_to(0.95)).c_str(), run.result.wall_seconds);
@@ -355,6 +380,15 @@ int main(int argc, char** argv) {
   app.add_option("--coverage-period", options.coverage_period, "seconds of simulated time between coverage samples")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--clearance", options.clearance,
+                 "umbra's ball and capsule checks: the map's collision checks, or a distance field updated after "
+                 "every frame (the same answers; docs/exploration.md)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"collision", "field"}));
+  app.add_option("--field-max-distance", options.field_max_distance,
+                 "the distance field's max distance, metres (with --clearance field)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 10.0));
   CLI11_PARSE(app, argc, argv);
   try {
     return umbra::explore::run_study(options);

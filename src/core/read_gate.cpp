@@ -9,51 +9,99 @@
 namespace umbra::detail {
 namespace {
 
-/// The gates this thread is inside, with how often (nested reads).
+/// A gate this thread is inside, with how often (nested reads).
 struct Held {
   const ReadGate* gate;
   unsigned count;
 };
-thread_local std::vector<Held> t_held;
 
-Held* find_held(const ReadGate* gate) {
-  for (Held& h : t_held) {
-    if (h.gate == gate) return &h;
+/// What a reading thread keeps: its slot and the gates it is inside. The
+/// common case (no more than kInlineHeld maps read at once) lives in one
+/// trivially destructible, constant-initialised thread-local, reached with
+/// the initial-exec TLS model: one instruction from the thread pointer, no
+/// __tls_get_addr call and no initialisation guard (the general-dynamic
+/// lookups of a shared library's thread_locals were half the cost of a
+/// read; docs/benchmarks.md, "Single queries"). Initial-exec takes a few
+/// dozen bytes of the static TLS block, which glibc keeps spare for
+/// libraries loaded later (the Python module's dlopen) too.
+constexpr unsigned kInlineHeld = 4;
+struct ReaderState {
+  unsigned slot = 0;       ///< 1 + this thread's slot; 0 until its first read
+  unsigned inline_used = 0;
+  bool overflowing = false;  ///< t_overflow is in use
+  Held held[kInlineHeld] = {};
+};
+[[gnu::tls_model("initial-exec")]] constinit thread_local ReaderState t_reader;
+/// The gates beyond kInlineHeld held at once (rare: many maps read together).
+thread_local std::vector<Held> t_overflow;
+
+Held* find_held(ReaderState& reader, const ReadGate* gate) {
+  for (unsigned i = 0; i < reader.inline_used; ++i) {
+    if (reader.held[i].gate == gate) return &reader.held[i];
+  }
+  if (reader.overflowing) {
+    for (Held& h : t_overflow) {
+      if (h.gate == gate) return &h;
+    }
   }
   return nullptr;
 }
 
+void add_held(ReaderState& reader, const ReadGate* gate) {
+  if (reader.inline_used < kInlineHeld) {
+    reader.held[reader.inline_used++] = {gate, 1};
+    return;
+  }
+  t_overflow.push_back({gate, 1});
+  reader.overflowing = true;
+}
+
+void remove_held(ReaderState& reader, Held* held) {
+  if (held >= reader.held && held < reader.held + kInlineHeld) {
+    *held = reader.held[--reader.inline_used];
+  } else {
+    *held = t_overflow.back();
+    t_overflow.pop_back();
+    reader.overflowing = !t_overflow.empty();
+  }
+}
+
 /// This thread's slot: threads are spread round robin.
-unsigned my_slot(unsigned slots) {
-  static std::atomic<unsigned> next{0};
-  thread_local const unsigned slot = next.fetch_add(1, std::memory_order_relaxed);
-  return slot % slots;
+unsigned my_slot(ReaderState& reader, unsigned slots) {
+  if (reader.slot == 0) {
+    static std::atomic<unsigned> next{0};
+    reader.slot = next.fetch_add(1, std::memory_order_relaxed) % slots + 1;
+  }
+  return reader.slot - 1;
 }
 
 }  // namespace
 
 void ReadGate::enter() const {
-  if (Held* held = find_held(this)) {
+  ReaderState& reader = t_reader;
+  if (Held* held = find_held(reader, this)) {
     ++held->count;  // nested: already counted in a slot, never wait
     return;
   }
-  std::atomic<std::uint32_t>& readers = slots_[my_slot(kSlots)].readers;
+  std::atomic<std::uint32_t>& readers = slots_[my_slot(reader, kSlots)].readers;
   for (;;) {
     readers.fetch_add(1, std::memory_order_seq_cst);
     if (!closed_.load(std::memory_order_seq_cst)) break;
     readers.fetch_sub(1, std::memory_order_seq_cst);
     closed_.wait(true, std::memory_order_seq_cst);
   }
-  t_held.push_back({this, 1});
+  add_held(reader, this);
 }
 
 void ReadGate::leave() const {
-  Held* held = find_held(this);
+  ReaderState& reader = t_reader;
+  Held* held = find_held(reader, this);
   if (held == nullptr) return;  // not inside (a lock released on another thread): nothing to undo here
   if (--held->count > 0) return;
-  *held = t_held.back();
-  t_held.pop_back();
-  slots_[my_slot(kSlots)].readers.fetch_sub(1, std::memory_order_seq_cst);
+  remove_held(reader, held);
+  // Release: the reads made inside happen before the writer, whose wait
+  // loads the count, changes anything.
+  slots_[my_slot(reader, kSlots)].readers.fetch_sub(1, std::memory_order_release);
 }
 
 void ReadGate::close() {
@@ -83,6 +131,6 @@ void ReadGate::open() {
   closed_.notify_all();
 }
 
-bool ReadGate::held_by_this_thread() const { return find_held(this) != nullptr; }
+bool ReadGate::held_by_this_thread() const { return find_held(t_reader, this) != nullptr; }
 
 }  // namespace umbra::detail

@@ -20,6 +20,10 @@
 // enters again without waiting, so nested queries cannot deadlock against a
 // waiting writer. A thread that holds the gate and tries to close it gets
 // std::logic_error instead of a deadlock.
+//
+// Cost of a read: the increment and decrement of the slot (two locked
+// instructions); the thread's own bookkeeping is a thread-local reached
+// without a call (read_gate.cpp says why and how).
 #pragma once
 
 #include <array>
