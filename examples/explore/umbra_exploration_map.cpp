@@ -9,6 +9,11 @@ UmbraExplorationMap::UmbraExplorationMap(const UmbraMapOptions& options) : map_(
   insert_options_.threads = 1;  // one mapping thread, as the OctoMap twin has
   gain_options_.method = options.gain;
   gain_options_.fast_depth = options.fast_gain_depth;
+  if (options.window_half_extent > 0.0) {
+    MovingWindow window;
+    window.half_extent = options.window_half_extent;
+    map_.set_moving_window(window);
+  }
 }
 
 void UmbraExplorationMap::assume_free(const Sphere& ball) {

@@ -20,6 +20,9 @@ struct UmbraMapOptions {
   IntegratorKind integrator = IntegratorKind::fast;
   GainMethod gain = GainMethod::exact;
   int fast_gain_depth = 2;  ///< GainOptions::fast_depth
+  /// > 0: a map that moves, keeping a box of at least this many metres
+  /// around each frame's origin (MovingWindow; what leaves is dropped).
+  double window_half_extent = 0.0;
 };
 
 class UmbraExplorationMap final : public ExplorationMap {
