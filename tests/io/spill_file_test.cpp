@@ -30,7 +30,7 @@ void write_bytes(const std::filesystem::path& path, const std::vector<char>& byt
 
 /// A short drive with a window spilling to `path` and into `pieces`.
 OccupancyMap drive(const std::filesystem::path& path, std::vector<OccupancyMap>& pieces) {
-  OccupancyMap map(0.1, 6);
+  OccupancyMap map(0.2, 5);  // small, so that the dense comparisons stay quick
   MovingWindow window;
   window.half_extent = 0.5;
   window.step_depth = 1;
@@ -139,7 +139,7 @@ TEST(SpillFile, ADamagedFileIsNamedWithTheByteOffset) {
 
   const auto corrupt = folder / "corrupt.umbs";
   bytes = good;
-  bytes[second + 16 + 130] ^= 0x5a;  // inside the second piece's map file, past its header
+  bytes[second + 16 + 126] ^= 0x5a;  // inside the second piece's map file, just past its header
   write_bytes(corrupt, bytes);
   EXPECT_NE(load_error(corrupt).find("piece 2, its map file starting at byte " + std::to_string(second + 16)),
             std::string::npos)
