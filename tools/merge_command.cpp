@@ -6,8 +6,10 @@
 // quaternion, the other maps' frame to the first's). The output keeps the
 // first map's sensor model, thresholds and color. Inputs may be .umb, .bt or
 // .ot (OctoMap files carry no sensor model: the default one clamps them, as
-// when they are loaded anywhere else). Cost: each load, one walk over each
-// added map's known nodes, one save.
+// when they are loaded anywhere else), or a moving window's spill file
+// (.umbs, umbra/io/spill_file.hpp: its pieces added up first). Cost: each
+// load, one walk over each added map's known nodes, one save.
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -21,6 +23,7 @@
 #include "report.hpp"
 #include "umbra/io/file_saving.hpp"
 #include "umbra/io/map_formats.hpp"
+#include "umbra/io/spill_file.hpp"
 #include "umbra/map/map_statistics.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
@@ -33,6 +36,16 @@ struct MergeOptions {
   std::vector<std::int64_t> offset;  // empty or x y z
   std::vector<double> transform;     // empty or x y z qw qx qy qz
 };
+
+bool is_spill_file(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension == ".umbs";
+}
+
+OccupancyMap load_input(const std::filesystem::path& path) {
+  return is_spill_file(path) ? load_spill(path) : load_any_map(path);
+}
 
 int run_merge(const MergeOptions& options) {
   const std::optional<Pose> transform = as_usage([&]() -> std::optional<Pose> {
@@ -47,13 +60,13 @@ int run_merge(const MergeOptions& options) {
   const VoxelOffset offset =
       options.offset.empty() ? VoxelOffset{} : VoxelOffset{options.offset[0], options.offset[1], options.offset[2]};
   check_can_save(options.output);  // before the (maybe long) loads
-  OccupancyMap merged = load_any_map(options.inputs.front());
+  OccupancyMap merged = load_input(options.inputs.front());
   (void)check_map_output(options.output, merged.depth_levels(), "output");
   std::printf("base %s: %.4g m voxels, %d depth levels\n", options.inputs.front().c_str(), merged.resolution(),
               merged.depth_levels());
   for (std::size_t i = 1; i < options.inputs.size(); ++i) {
     const std::string& path = options.inputs[i];
-    const OccupancyMap other = load_any_map(path);
+    const OccupancyMap other = load_input(path);
     MergeStats stats;
     try {
       stats = transform ? merged.merge(other, *transform) : merged.merge(other, offset);
@@ -65,7 +78,9 @@ int run_merge(const MergeOptions& options) {
     std::printf("added %s: %llu voxels in %llu nodes\n", path.c_str(),
                 static_cast<unsigned long long>(stats.voxels), static_cast<unsigned long long>(stats.nodes));
   }
-  print_format_notes(merged, map_file_format_for(options.inputs.front()), map_file_format_for(options.output));
+  const MapFileFormat base_format =
+      is_spill_file(options.inputs.front()) ? MapFileFormat::umb : map_file_format_for(options.inputs.front());
+  print_format_notes(merged, base_format, map_file_format_for(options.output));
   save_map_as(merged, options.output);
   std::printf("wrote %s (%ju bytes)\n", options.output.c_str(), std::filesystem::file_size(options.output));
   print_statistics(stdout, compute_statistics(merged));
@@ -78,10 +93,14 @@ Command add_merge_command(CLI::App& app) {
   auto options = std::make_shared<MergeOptions>();
   CLI::App* command = app.add_subcommand(
       "merge", "Add maps of other robots or runs into the first map (log-odds summed voxel by voxel, clamped)");
-  command->add_option("inputs", options->inputs, "maps to merge, the first is the base (.umb, .bt, .ot)")
+  command
+      ->add_option("inputs", options->inputs,
+                   "maps to merge, the first is the base (.umb, .bt, .ot; .umbs: a moving window's spill file)")
       ->required()
       ->expected(2, -1)
-      ->check(map_extension());
+      ->check(CLI::Validator(
+          [](std::string& name) { return is_spill_file(name) ? std::string() : map_extension()(name); },
+          "MAP(.umb|.bt|.ot|.umbs)"));
   command->add_option("-o,--output", options->output, "map to write (.umb, .bt, .ot); replaced atomically")
       ->required()
       ->check(map_extension());

@@ -8,17 +8,21 @@
 // same parameters and seed, once on an umbra map and once on an OctoMap map
 // (octomap_exploration_map.hpp), one after the other. Each run maps and
 // plans in two threads on its map. Written to --out:
-//   coverage.csv   explored volume and coverage of the reachable free space
-//                  over simulated time, both explorers
+//   coverage.csv   explored volume, coverage of the reachable free space and
+//                  the map's memory over simulated time, both explorers
 //   coverage.png   the plot of it (plot_coverage.py, matplotlib)
 //   umbra.umb      the umbra map at the end
 //   umbra.html     the umbra map in the viewer of `umbra view`
 //   summary.md     the figures (times to coverage, iterations per second,
 //                  time per query kind), also printed
 //   summary.json   the same for programs
-// docs/exploration.md reports a run.
+// --window-half-extent R runs the umbra explorer on a map that moves (a box
+// of at least R metres around the robot, umbra/map/moving_window.hpp; what
+// leaves is dropped), to measure the memory it saves and what it costs in
+// coverage. docs/exploration.md reports a run.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -59,6 +63,7 @@ struct StudyOptions {
   double coverage_period = 2.0;
   std::string clearance = "collision";  ///< umbra's ball and capsule checks: "collision" or "field"
   double field_max_distance = 1.0;
+  double window_half_extent = 0.0;  ///< umbra's moving window; 0: none
 };
 
 struct Run {
@@ -68,6 +73,9 @@ struct Run {
   double field_update_seconds = -1.0;  ///< umbra with --clearance field only
   ClearanceCounts clearance_counts;    ///< the same
   double min_clearance = 0.0;
+  /// The map's memory_bytes() at each coverage sample (same index).
+  std::vector<std::size_t> memory;
+  std::size_t peak_memory_bytes = 0;
 };
 
 ExplorerConfig config_for(const StudyOptions& options, const sim::IndustrialPlant& plant) {
@@ -109,12 +117,13 @@ void write_text(const std::filesystem::path& path, const std::string& text, cons
   write_file_atomically(path, {std::span<const std::uint8_t>(bytes, text.size())}, kind);
 }
 
-/// Coverage at `time`: the last sample at or before it (the map only changes when a frame is inserted).
-const CoverageSample* sample_at(const ExplorationResult& result, double time) {
-  const CoverageSample* found = nullptr;
-  for (const CoverageSample& s : result.coverage) {
-    if (s.time > time + 1e-9) break;
-    found = &s;
+/// Index of the coverage sample at `time`: the last at or before it (the
+/// map only changes when a frame is inserted); -1 before the first.
+std::ptrdiff_t sample_at(const ExplorationResult& result, double time) {
+  std::ptrdiff_t found = -1;
+  for (std::size_t i = 0; i < result.coverage.size(); ++i) {
+    if (result.coverage[i].time > time + 1e-9) break;
+    found = static_cast<std::ptrdiff_t>(i);
   }
   return found;
 }
@@ -122,13 +131,19 @@ const CoverageSample* sample_at(const ExplorationResult& result, double time) {
 std::string coverage_csv(const std::vector<Run>& runs, double budget, double period) {
   std::ostringstream csv;
   csv << "time_s";
-  for (const Run& run : runs) csv << ',' << run.result.map_name << "_explored_m3," << run.result.map_name << "_coverage_percent";
+  for (const Run& run : runs) {
+    const std::string& name = run.result.map_name;
+    csv << ',' << name << "_explored_m3," << name << "_coverage_percent," << name << "_memory_mib";
+  }
   csv << '\n';
   for (double t = 0.0; t <= budget + 1e-9; t += period) {
     csv << fixed(t, 1);
     for (const Run& run : runs) {
-      const CoverageSample* s = sample_at(run.result, t);
-      csv << ',' << (s ? fixed(s->explored_m3, 2) : "0.00") << ',' << (s ? fixed(100.0 * s->coverage, 3) : "0.000");
+      const std::ptrdiff_t i = sample_at(run.result, t);
+      const CoverageSample* s = i < 0 ? nullptr : &run.result.coverage[static_cast<std::size_t>(i)];
+      const std::size_t bytes = i < 0 ? 0 : run.memory[static_cast<std::size_t>(i)];
+      csv << ',' << (s ? fixed(s->explored_m3, 2) : "0.00") << ',' << (s ? fixed(100.0 * s->coverage, 3) : "0.000")
+          << ',' << fixed(double(bytes) / 1048576.0, 2);
     }
     csv << '\n';
   }
@@ -153,6 +168,10 @@ std::string summary_markdown(const std::vector<Run>& runs, const StudyOptions& o
   md << "Reachable free space: " << fixed(reachable_m3, 1) << " m^3 (robot radius 0.3 m, " << options.resolution
      << " m cells); budget " << fixed(options.budget, 0) << " s of simulated time, "
      << (options.real_time ? "real time" : "accelerated (CPU time charged)") << ", seed " << options.seed << ".\n\n";
+  if (options.window_half_extent > 0.0) {
+    md << "umbra's map moves with the robot: a box of at least " << fixed(options.window_half_extent, 1)
+       << " m around it, what leaves dropped (coverage counts what the map still holds).\n\n";
+  }
   md << "| | " ;
   for (const Run& run : runs) md << run.result.map_name << " | ";
   md << "\n|---|";
@@ -202,6 +221,7 @@ std::string summary_markdown(const std::vector<Run>& runs, const StudyOptions& o
   row("planner queries while inserting", [](const Run& r) { return std::to_string(r.result.planner.queries_during_insertion); });
   row("closest approach to a surface", [](const Run& r) { return fixed(r.min_clearance, 3) + " m"; });
   row("map memory at the end", [](const Run& r) { return fixed(double(r.memory_bytes) / 1048576.0, 1) + " MiB"; });
+  row("map memory, peak over the run", [](const Run& r) { return fixed(double(r.peak_memory_bytes) / 1048576.0, 1) + " MiB"; });
   row("real time of the run", [](const Run& r) { return fixed(r.result.wall_seconds, 0) + " s"; });
   md << "\nTime per query kind (wall clock inside the calls; share of their sum; mean per call):\n\n";
   md << "| query | ";
@@ -259,7 +279,9 @@ std::string summary_json(const std::vector<Run>& runs, double reachable_m3) {
       << ", \"frames_dropped\": " << r.frames_dropped
       << ", \"queries_during_insertion\": " << r.planner.queries_during_insertion
       << ", \"min_clearance\": " << fixed(runs[i].min_clearance, 4) << ", \"wall_seconds\": " << fixed(r.wall_seconds, 1)
-      << ", \"field_update_seconds\": " << fixed(runs[i].field_update_seconds, 4) << "}";
+      << ", \"field_update_seconds\": " << fixed(runs[i].field_update_seconds, 4)
+      << ", \"memory_bytes\": " << runs[i].memory_bytes << ", \"peak_memory_bytes\": " << runs[i].peak_memory_bytes
+      << "}";
   }
   j << "]}\n";
   return j.str();
@@ -287,6 +309,7 @@ int run_study(const StudyOptions& options) {
       umbra_options.clearance =
           options.clearance == "field" ? ClearanceSource::distance_field : ClearanceSource::collision_checks;
       umbra_options.field_max_distance = options.field_max_distance;
+      umbra_options.window_half_extent = options.window_half_extent;
       umbra_map = std::make_unique<UmbraExplorationMap>(umbra_options);
     } else {
       map = std::make_unique<OctomapExplorationMap>(options.resolution);
@@ -297,12 +320,16 @@ int run_study(const StudyOptions& options) {
     double reported = -1e9;
     Run run;
     run.result = explore(chosen, plant.scene, truth, start, config, [&](const CoverageSample& s) {
+      // Called with the mapping thread paused: the map holds still.
+      run.memory.push_back(chosen.memory_bytes());
+      run.peak_memory_bytes = std::max(run.peak_memory_bytes, run.memory.back());
       if (s.time - reported >= 60.0) {
         reported = s.time;
         std::fprintf(stderr, "  %s: %5.0f s simulated, coverage %5.1f%%\n", name.c_str(), s.time, 100.0 * s.coverage);
       }
     });
     run.memory_bytes = chosen.memory_bytes();
+    run.peak_memory_bytes = std::max(run.peak_memory_bytes, run.memory_bytes);
     run.min_clearance = min_clearance(run.result, plant.scene);
     if (!map) {
       run.exclusive_seconds = umbra_map->exclusive_seconds();
@@ -389,6 +416,11 @@ int main(int argc, char** argv) {
                  "the distance field's max distance, metres (with --clearance field)")
       ->capture_default_str()
       ->check(CLI::Range(0.01, 10.0));
+  app.add_option("--window-half-extent", options.window_half_extent,
+                 "umbra's map keeps only a box of at least this many metres around the robot (a map that moves; "
+                 "0: the whole map)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
   try {
     return umbra::explore::run_study(options);

@@ -15,7 +15,7 @@ endforeach()
 file(STRINGS "${OUT}/coverage.csv" rows)
 list(LENGTH rows row_count)
 list(GET rows 0 header)
-if(NOT header STREQUAL "time_s,umbra_explored_m3,umbra_coverage_percent,octomap_explored_m3,octomap_coverage_percent"
+if(NOT header STREQUAL "time_s,umbra_explored_m3,umbra_coverage_percent,umbra_memory_mib,octomap_explored_m3,octomap_coverage_percent,octomap_memory_mib"
    OR NOT row_count EQUAL 8)
   message(FATAL_ERROR "coverage.csv: unexpected header or ${row_count} rows (want a header and 7 rows of 0.5 s):\n${header}")
 endif()

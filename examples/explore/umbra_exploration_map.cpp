@@ -21,6 +21,11 @@ UmbraExplorationMap::UmbraExplorationMap(const UmbraMapOptions& options) : map_(
   if (options.clearance == ClearanceSource::distance_field) {
     clearance_ = std::make_unique<FieldClearance>(map_, options.field_max_distance);
   }
+  if (options.window_half_extent > 0.0) {
+    MovingWindow window;
+    window.half_extent = options.window_half_extent;
+    map_.set_moving_window(window);
+  }
 }
 
 void UmbraExplorationMap::assume_free(const Sphere& ball) {

@@ -41,6 +41,9 @@ struct UmbraMapOptions {
   /// voxel's diagonal; larger lets capsule walks take longer steps but
   /// makes updates dearer.
   double field_max_distance = 1.0;
+  /// > 0: a map that moves, keeping a box of at least this many metres
+  /// around each frame's origin (MovingWindow; what leaves is dropped).
+  double window_half_extent = 0.0;
 };
 
 class UmbraExplorationMap final : public ExplorationMap {

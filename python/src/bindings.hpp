@@ -80,6 +80,7 @@ void bind_sim(py::module_& m);
 void bind_navigation(py::module_& m, MapClass& map);
 void bind_field(py::module_& m);
 void bind_merge(py::module_& m, MapClass& map);
+void bind_window(py::module_& m, MapClass& map);
 /// Gives every function of m and its submodules a __text_signature__ (text_signatures.cpp); call last.
 void add_text_signatures(py::module_& m);
 

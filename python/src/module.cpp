@@ -21,6 +21,7 @@ PYBIND11_MODULE(_umbra, m) {
   bind_depth(m, map);
   bind_navigation(m, map);
   bind_merge(m, map);
+  bind_window(m, map);
   bind_sim(m);
   bind_field(m);
   add_text_signatures(m);

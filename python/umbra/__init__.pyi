@@ -155,6 +155,18 @@ class MergeStats:
     def nodes(self) -> int:
         """Node additions applied to the tree (fewer than voxels where pruned blocks land whole)."""
 
+class WindowMove:
+    """What one move of the moving window did."""
+    @property
+    def moved(self) -> bool:
+        """False when the box was already there."""
+    @property
+    def groups_freed(self) -> int:
+        """Groups of eight nodes returned to the tree's pools."""
+    @property
+    def spilled(self) -> bool:
+        """Whether a piece was appended to the spill file."""
+
 class MapStatistics:
     """What `umbra info` reports. Voxel counts are in finest voxels; bounds are those of the known space (None when nothing is known)."""
     @property
@@ -459,6 +471,21 @@ class OccupancyMap:
     ) -> MergeStats:
         """Adds other's log-odds to this map's, voxel by voxel, clamped to this map's sensor model; voxels other never observed change nothing. offset (3 ints): other's voxel k lands on k + offset. transform ((4, 4) or (3, 4), other's frame to this map's, rigid): each voxel takes other's voxel its centre maps back into. Colors average by their sample counts where both maps have color. ValueError for other resolutions or depth levels, a transform that is not rigid, or both offset and transform; IndexError when a known voxel of other lands outside this map (the map is unchanged then). Returns MergeStats."""
 
+    # --- a map that moves
+    def set_moving_window(
+        self,
+        half_extent: Optional[float],
+        spill_path: Optional[PathLike] = None,
+        step_depth: int = -1,
+        follow_scans: bool = True,
+    ) -> None:
+        """Keeps only a box around the robot: every point within half_extent metres of it on each axis, in whole nodes of depth step_depth (-1: automatic). With follow_scans every insert first re-centres the box on its origin, and scans change only the box. What leaves the box is appended to spill_path (a spill file, see load_spill) or dropped, then forgotten (unknown, memory freed). None: no window (the map keeps what it holds). ValueError for a bad half_extent or step_depth."""
+    def move_window(self, position: ArrayLike) -> WindowMove:
+        """Re-centres the moving window's box on position (the robot); what leaves goes to the spill file or is dropped. RuntimeError without a window, IndexError outside the map. Returns a WindowMove."""
+    @property
+    def window_box(self) -> Optional[Tuple[Tuple[int, int, int], Tuple[int, int, int]]]:
+        """The moving window's box as ((lo keys), (hi keys)), inclusive; None before it is placed."""
+
     # --- inserting and changing voxels
     def insert(
         self,
@@ -617,6 +644,9 @@ class OccupancyMap:
     # --- the navigation grid
     def project(self, z_min: float, z_max: float, *, depth: int = 0, rule: str = "all_known") -> NavigationGrid:
         """The map projected between heights z_min and z_max (metres): a NavigationGrid. A cell (the column of a depth-`depth` node) is occupied if a voxel of its band (the voxel rows from the one holding z_min to the one holding z_max) is occupied; free if every voxel of the band is free (rule 'all_known') or if at least one is (rule 'any_free', octomap_server's); unknown otherwise. The grid spans the cells whose band holds a known voxel (empty when none does). ValueError for z_min >= z_max, a bad depth or rule; IndexError when the band lies outside the map."""
+
+def load_spill(path: PathLike) -> OccupancyMap:
+    """Every piece of a moving window's spill file merged into one map (log-odds added); merge the window's map into it to get the whole run. FormatError naming the byte offset for a damaged file."""
 
 def load(path: PathLike, sensor_model: Optional[SensorModel] = None) -> OccupancyMap:
     """Loads a map from a .umb, .bt or .ot file (by extension). sensor_model applies to OctoMap files only (they store none)."""

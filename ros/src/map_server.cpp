@@ -9,6 +9,7 @@
 #include "cloud_message.hpp"
 #include "crash_log.hpp"
 #include "map_messages.hpp"
+#include "umbra/io/spill_file.hpp"
 
 namespace umbra::ros_io {
 namespace {
@@ -57,6 +58,13 @@ MapServer::MapServer(ros::NodeHandle& node, ros::NodeHandle& private_node, Serve
                    [this](const sensor_msgs::Image::ConstPtr& depth, DepthImageInput::Drop why) { drop_image(depth, why); }) {
   map_.set_auto_prune(settings_.compress_map);
   map_.set_decay(settings_.decay);
+  if (settings_.window_half_extent > 0.0) {
+    // Re-centred on each cloud's or image's sensor origin as it is inserted.
+    MovingWindow window;
+    window.half_extent = settings_.window_half_extent;
+    if (!settings_.window_spill_path.empty()) window.spill = spill_to_file(settings_.window_spill_path);
+    map_.set_moving_window(window);
+  }
   cloud_filter_.registerCallback(&MapServer::insert_cloud, this);
   cloud_filter_.registerFailureCallback(
       [this](const sensor_msgs::PointCloud2::ConstPtr& cloud, tf2_ros::filter_failure_reasons::FilterFailureReason why) {

@@ -1,6 +1,7 @@
 // umbra_server's parameters: see server_settings.hpp.
 #include "server_settings.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "cloud_message.hpp"
@@ -113,6 +114,18 @@ ServerSettings read_settings(const ros::NodeHandle& node) {
   s.decay.occupied_per_second = param(node, "decay/occupied_per_second", s.decay.occupied_per_second);
   s.decay.free_per_second = param(node, "decay/free_per_second", s.decay.free_per_second);
   check("~decay/{occupied_per_second,free_per_second}", [&] { s.decay.validate(); });
+
+  // A map that moves (off by default).
+  s.window_half_extent = param(node, "window/half_extent", s.window_half_extent);
+  s.window_spill_path = param(node, "window/spill_path", s.window_spill_path);
+  if (!(std::isfinite(s.window_half_extent) && s.window_half_extent >= 0.0)) {
+    throw std::invalid_argument("bad parameter ~window/half_extent: " + std::to_string(s.window_half_extent) +
+                                " (metres, finite and >= 0; 0: no window)");
+  }
+  if (!s.window_spill_path.empty() && s.window_half_extent == 0.0) {
+    throw std::invalid_argument("bad parameter ~window/spill_path: '" + s.window_spill_path +
+                                "' needs ~window/half_extent > 0 (without a window nothing leaves the map)");
+  }
 
   const auto ignored_if = [&](const std::string& name, const std::string& instead) {
     if (param(node, name, false)) s.ignored.push_back(name + ": " + instead);

@@ -23,6 +23,10 @@
 // Decay toward unknown: decay/occupied_per_second, decay/free_per_second
 // (log-odds per second, default 0: off), applied on the clock of the
 // messages' stamps as each cloud or image arrives (umbra/map/decay.hpp).
+// A map that moves: window/half_extent (metres, default 0: off) keeps only
+// a box around each scan's sensor origin; window/spill_path (default empty:
+// dropped) appends what leaves it to that spill file
+// (umbra/map/moving_window.hpp, umbra/io/spill_file.hpp).
 #pragma once
 
 #include <ros/node_handle.h>
@@ -59,6 +63,9 @@ struct ServerSettings {
   bool image_colors = false;  ///< image_colors: colors from rgb/image (needs keep_colors)
   // --- decay toward unknown ---
   DecayRates decay;  ///< decay/{occupied,free}_per_second; off by default
+  // --- a map that moves ---
+  double window_half_extent = 0.0;  ///< window/half_extent; 0: no window
+  std::string window_spill_path;    ///< window/spill_path; empty: what leaves is dropped
 
   /// octomap_server parameters that are set but not implemented, as "name: what happens instead".
   std::vector<std::string> ignored;

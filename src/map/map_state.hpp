@@ -20,6 +20,7 @@
 #include "umbra/core/aabb.hpp"
 #include "umbra/core/log_odds.hpp"
 #include "umbra/map/decay.hpp"
+#include "umbra/map/moving_window.hpp"
 
 namespace umbra::detail {
 
@@ -45,6 +46,10 @@ struct MapState {
   DecayRates decay;
   std::optional<OccupancyTree::KeyBox> decay_keys;
   std::optional<double> clock;
+  // A map that moves (map_window.cpp): the window's settings, and its box
+  // as keys once it has been placed (nothing before the first move).
+  std::optional<MovingWindow> window;
+  std::optional<OccupancyTree::KeyBox> window_keys;
   std::mutex writer;
   ReadGate gate;
 };

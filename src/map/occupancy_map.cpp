@@ -9,6 +9,7 @@
 #include "tree/make_node.hpp"
 #include "map/map_decay.hpp"
 #include "map/map_state.hpp"
+#include "map/map_window.hpp"
 
 namespace umbra {
 
@@ -209,19 +210,25 @@ InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f
 
 namespace {
 
-/// One scan: with a stamp, the clock's advance (decay toward unknown, its
-/// own exclusive phase; `check` first throws for what trace would refuse,
-/// so that a refused scan leaves the map unchanged); then `trace` (which
-/// only reads the tree: readers go on meanwhile), then the apply phase.
+/// One scan: with a moving window that follows scans, the window's move to
+/// `sensor` (its own exclusive phase); with a stamp, the clock's advance
+/// (decay toward unknown, its own exclusive phase). `check` first throws
+/// for what trace would refuse, so that a refused scan leaves the map
+/// unchanged. Then `trace(box)` (which only reads the tree: readers go on
+/// meanwhile) with the box the scan is clipped to, then the apply phase.
 template <typename Check, typename Trace>
-InsertStats insert_scan(detail::MapState& state, const std::optional<double>& stamp, Check&& check, Trace&& trace) {
+InsertStats insert_scan(detail::MapState& state, const Grid& grid, Vec3d sensor, const std::optional<double>& stamp,
+                        Check&& check, Trace&& trace) {
   if (state.gate.held_by_this_thread()) state.gate.close();  // throws: this thread is reading the map
   std::lock_guard writer(state.writer);
-  if (stamp) {
-    std::forward<Check>(check)();
-    detail::advance_clock_locked(state, *stamp);
-  }
-  InsertStats stats = std::forward<Trace>(trace)();
+  const bool follow = state.window && state.window->follow_scans;
+  if (stamp || follow) std::forward<Check>(check)();
+  // The move first: if its spill throws, nothing has changed yet.
+  if (follow) detail::move_window_locked(state, grid, grid.key(sensor));
+  if (stamp) detail::advance_clock_locked(state, *stamp);
+  const detail::InsertionBox box = detail::insertion_box(state, grid);
+  if (box.empty) return InsertStats{};  // the bounding box and the window do not meet
+  InsertStats stats = std::forward<Trace>(trace)(box.box);
   {
     const auto start = std::chrono::steady_clock::now();
     detail::ClosedGate closed(state.gate);
@@ -250,8 +257,8 @@ InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f
     if (!origin.is_finite()) throw std::invalid_argument("sensor origin is not finite");
     static_cast<void>(grid_.key(Vec3d(origin)));  // throws std::out_of_range outside the map
   };
-  return insert_scan(state, options.stamp, check, [&] {
-    return state.integrator.trace(state.tree, grid_, origin, points, colors, options, state.bounding_box);
+  return insert_scan(state, grid_, Vec3d(origin), options.stamp, check, [&](const std::optional<Aabb>& box) {
+    return state.integrator.trace(state.tree, grid_, origin, points, colors, options, box);
   });
 }
 
@@ -271,8 +278,8 @@ InsertStats OccupancyMap::insert_depth_image(const DepthImage& depth, const Pinh
     if (!pose.is_rigid()) throw std::invalid_argument("the camera pose must be a rotation and a translation");
     static_cast<void>(grid_.key(Vec3d(pose.translation())));  // throws std::out_of_range outside the map
   };
-  return insert_scan(state, options.stamp, check, [&] {
-    return state.integrator.trace_image(state.tree, grid_, depth, camera, pose, colors, options, state.bounding_box);
+  return insert_scan(state, grid_, Vec3d(pose.translation()), options.stamp, check, [&](const std::optional<Aabb>& box) {
+    return state.integrator.trace_image(state.tree, grid_, depth, camera, pose, colors, options, box);
   });
 }
 

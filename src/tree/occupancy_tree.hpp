@@ -273,6 +273,18 @@ class OccupancyTree {
   void decay(DecayStep step, const std::optional<KeyBox>& region, std::vector<DecayChange>* changes = nullptr,
              int change_depth = 0);
 
+  // --- a map that moves (tree_window.cpp; docs/design.md, "A map that moves")
+  /// Makes every finest voxel outside `keep` unknown as if never observed
+  /// (color dropped) and frees the subtrees that lie wholly outside it. The
+  /// walk descends only into nodes that `keep`'s faces cut and that hold
+  /// something known, so with a box aligned to depth-d nodes its cost is the
+  /// nodes it frees plus the cut nodes above depth d. Subtrees are freed even
+  /// with automatic pruning off (as clear() does). With `changes`, appends
+  /// the nodes of depth >= `change_depth` (childless coarser ones at their
+  /// own depth) that held something known outside `keep`. Returns the
+  /// number of groups of eight nodes freed.
+  std::size_t forget_outside(const KeyBox& keep, std::vector<DecayChange>* changes = nullptr, int change_depth = 0);
+
   // --- statistics, checks ------------------------------------------------
   [[nodiscard]] NodeCounts count_nodes() const;
   /// Bytes allocated for the tree (capacity, not use).
@@ -373,6 +385,12 @@ class OccupancyTree {
                    const std::optional<KeyBox>& region, std::vector<DecayChange>* changes, int change_depth);
   /// Drops a node's color (no-op without color).
   void forget_color(int depth, std::uint32_t group, unsigned slot);
+  /// forget_outside() below node (depth, group, slot) whose first voxel is
+  /// `code`; true when something known below was forgotten.
+  bool forget_outside_below(int depth, std::uint32_t group, unsigned slot, std::uint64_t code, const KeyBox& keep,
+                            std::vector<DecayChange>* changes, int change_depth, std::size_t& freed);
+  /// Returns group `group` of depth `depth` and every group below it to their pools.
+  void release_subtree(int depth, std::uint32_t group, std::size_t& freed);
   std::string check_node(int depth, std::uint32_t group, unsigned slot, std::vector<std::vector<bool>>& seen) const;
 
   int depth_levels_;

@@ -11,29 +11,12 @@
 #include <optional>
 #include <vector>
 
+#include "tree/key_box_overlap.hpp"
 #include "tree/occupancy_tree.hpp"
 
 namespace umbra {
-namespace {
-
-enum class Overlap { outside, partial, inside };
-
-/// How the depth-`depth` node whose first voxel is `code` meets `region`.
-Overlap overlap(std::uint64_t code, int depth, const std::optional<OccupancyTree::KeyBox>& region) {
-  if (!region) return Overlap::inside;
-  const Key corner = morton::decode(code);
-  const std::uint64_t last = (std::uint64_t{1} << depth) - 1;
-  bool inside = true;
-  for (int axis = 0; axis < 3; ++axis) {
-    const std::uint64_t begin = corner[axis];
-    const std::uint64_t end = begin + last;
-    if (end < region->lo[axis] || begin > region->hi[axis]) return Overlap::outside;
-    inside &= begin >= region->lo[axis] && end <= region->hi[axis];
-  }
-  return inside ? Overlap::inside : Overlap::partial;
-}
-
-}  // namespace
+using detail::Overlap;
+using detail::overlap;
 
 void OccupancyTree::forget_color(int depth, std::uint32_t group, unsigned slot) {
   // A voxel decayed to unknown is as if never observed: no color either.

@@ -11,8 +11,8 @@
 // collision checks, whole-map iterations and counts; every iteration also
 // checks that each inner node it meets agrees with its children (never a
 // coarse node that disagrees with them). Integrators, thread counts, color
-// and automatic pruning vary, and decay steps (advance_clock) run between
-// the scans in one test. The same test runs under ThreadSanitizer in
+// and automatic pruning vary, and decay steps (advance_clock) or moves of a
+// moving window (move_window) run between the scans in two tests. The same test runs under ThreadSanitizer in
 // the `tsan` label (tests/map/run_tsan_stress.sh).
 #include <atomic>
 #include <cmath>
@@ -68,6 +68,7 @@ struct Setup {
   bool color;
   bool auto_prune;
   bool decay = false;  ///< each scan preceded by a decay step (advance_clock), a step of its own
+  bool window = false;  ///< each scan preceded by a move of a moving window to its origin, a step of its own
 };
 
 /// One question a reader asks; its answer as a string (comparable across maps).
@@ -176,16 +177,27 @@ void run_contract(const Setup& setup, std::size_t scan_count, int readers, int r
   };
   // The writer's steps, each seen whole by readers: the scans, and with
   // decay a clock step before each (fast rates: states change every step).
-  const std::size_t step_count = setup.decay ? 2 * scan_count : scan_count;
+  // With a moving window the move to each scan's origin before it.
+  const bool two_steps = setup.decay || setup.window;
+  const std::size_t step_count = two_steps ? 2 * scan_count : scan_count;
   auto step = [&](OccupancyMap& map, std::size_t s) {
-    if (!setup.decay) return insert(map, s);
-    if (s % 2 == 0) return map.advance_clock(0.5 * static_cast<double>(s));
+    if (!two_steps) return insert(map, s);
+    if (s % 2 == 0) {
+      if (setup.decay) return map.advance_clock(0.5 * static_cast<double>(s));
+      return static_cast<void>(map.move_window(Vec3d(scans.origins[s / 2])));
+    }
     insert(map, s / 2);
   };
   auto new_map = [&] {
     OccupancyMap map(config);
     map.set_auto_prune(setup.auto_prune);
     if (setup.decay) map.set_decay({1.0, 0.4, std::nullopt});
+    if (setup.window) {
+      MovingWindow window;
+      window.half_extent = 2.0;  // the demo path's poses lie metres apart: every move forgets something
+      window.follow_scans = false;
+      map.set_moving_window(window);
+    }
     return map;
   };
 
@@ -264,6 +276,12 @@ TEST(Concurrency, ReadersSeeWholeScansWithEveryIntegrator) {
 TEST(Concurrency, ReadersSeeWholeDecaySteps) {
   run_contract({IntegratorKind::discrete, 1, false, true, true}, 6, 2, 1);
   run_contract({IntegratorKind::fast, 2, true, false, true}, 5, 2, 1);
+}
+
+/// Moves of a moving window between the scans: readers see each move whole.
+TEST(Concurrency, ReadersSeeWholeWindowMoves) {
+  run_contract({IntegratorKind::discrete, 1, false, true, false, true}, 6, 2, 1);
+  run_contract({IntegratorKind::fast, 2, true, false, false, true}, 5, 2, 1);
 }
 
 TEST(Concurrency, ReadersSeeWholeScansWithThreadsColorAndNoPruning) {

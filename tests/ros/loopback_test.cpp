@@ -61,6 +61,7 @@
 #include "ros_test_support.hpp"
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
+#include "umbra/io/spill_file.hpp"
 #include "umbra/sim/depth_camera.hpp"
 #include "umbra/sim/scene.hpp"
 
@@ -878,6 +879,38 @@ TEST_F(Loopback, DecayParametersForgetAnObstacle) {
   ASSERT_NO_FATAL_FAILURE(expect_published(expected));
 }
 
+/// A map that moves: the server keeps a box around each cloud's sensor origin
+/// and appends what leaves it to the spill file; the published map is the
+/// library's with the same window, and the file holds the pieces the
+/// library's window handed out.
+TEST_F(Loopback, WindowParametersKeepABoxAroundTheSensor) {
+  const double resolution = 0.1;
+  const std::vector<RosScan> scans = office_scans(4);
+  const fs::path spill = dir_ / "run.umbs";
+  ASSERT_NO_FATAL_FAILURE(
+      start_server(resolution, {"_window/half_extent:=1.0", "_window/spill_path:=" + spill.string()}));
+  ASSERT_NO_FATAL_FAILURE(publish(scans, 4000.0));
+
+  OccupancyMap expected(resolution, kOctoMapDepthLevels);
+  OccupancyMap without_window(resolution, kOctoMapDepthLevels);
+  std::vector<OccupancyMap> pieces;
+  MovingWindow window;
+  window.half_extent = 1.0;
+  window.spill = [&](const OccupancyMap& piece) { pieces.push_back(piece); };
+  expected.set_moving_window(window);
+  for (const RosScan& scan : scans) {
+    expected.insert_point_cloud(Vec3f(scan.position), scan.points);
+    without_window.insert_point_cloud(Vec3f(scan.position), scan.points);
+  }
+  ASSERT_LT(expected.node_counts().total(), without_window.node_counts().total()) << "the window changed nothing";
+  ASSERT_NO_FATAL_FAILURE(expect_published(expected));
+  if (pieces.empty()) {
+    EXPECT_FALSE(fs::exists(spill));
+  } else {
+    EXPECT_EQ(for_each_spill_piece(spill, [](OccupancyMap&&) {}), pieces.size());
+  }
+}
+
 TEST_F(Loopback, BadParametersStopTheNodeWithAMessage) {
   const std::vector<std::pair<std::string, std::string>> cases{
       {"_integrator:=bogus", "bad parameter ~integrator"},
@@ -887,6 +920,8 @@ TEST_F(Loopback, BadParametersStopTheNodeWithAMessage) {
       {"_decay/occupied_per_second:=-1.0", "bad parameter ~decay/{occupied_per_second,free_per_second}: decay rate "
                                            "occupied_per_second must be finite and >= 0"},
       {"_image_colors:=true", "bad parameter ~image_colors: true needs ~keep_colors true"},
+      {"_window/half_extent:=-2.0", "bad parameter ~window/half_extent: -2.000000"},
+      {"_window/spill_path:=/tmp/x.umbs", "bad parameter ~window/spill_path: '/tmp/x.umbs' needs ~window/half_extent > 0"},
       {"_projected_map_rule:=most_free",
        "bad parameter ~projected_map_rule: unknown projection rule 'most_free' (the rules: all_known, any_free)"},
       {"_projected_map_depth:=17", "bad parameter ~projected_map_depth: 17 (must be 0 to 16)"},

@@ -24,7 +24,8 @@
 //    phase: a query waits at most for one such phase.
 //  - everything else that changes the map (single-voxel updates, colors,
 //    prune(), set_auto_prune(), thresholds, sensor model, clear(), the box,
-//    a decay step of advance_clock or a stamped scan) is exclusive in the same way; two writers take turns.
+//    a decay step of advance_clock or a stamped scan, a move of the moving
+//    window) is exclusive in the same way; two writers take turns.
 //  - an open query range holds the map for reading until it is destroyed; a
 //    thread that changes the map while it holds a range of its own gets
 //    std::logic_error (it would wait for itself). Destroy a range on the
@@ -51,6 +52,8 @@
 #include "umbra/integrate/depth_image.hpp"
 #include "umbra/integrate/insert_options.hpp"
 #include "umbra/map/decay.hpp"
+#include "umbra/map/moving_window.hpp"
+#include "umbra/map/voxel_box.hpp"
 #include "umbra/query/collision.hpp"
 #include "umbra/query/information_gain.hpp"
 #include "umbra/query/predicate.hpp"
@@ -162,6 +165,25 @@ class OccupancyMap {
   /// The clock's time; nothing before the first advance_clock or stamp.
   [[nodiscard]] std::optional<double> clock() const;
 
+  // --- a map that moves (umbra/map/moving_window.hpp; src/map/map_window.cpp) ---
+  /// Keeps only a box around the robot from now on (nothing: no limit; the
+  /// map keeps what it holds). The box is placed by the next move_window, or
+  /// by the next scan with window.follow_scans; until then scans are not
+  /// limited. Setting a window forgets the box of an earlier one. Throws
+  /// std::invalid_argument for a bad window (MovingWindow::validate).
+  void set_moving_window(const std::optional<MovingWindow>& window);
+  [[nodiscard]] std::optional<MovingWindow> moving_window() const;
+  /// Re-centres the box on `position` (the robot): when the step holding it
+  /// changed, the voxels that leave the box go to window.spill and are then
+  /// forgotten (unknown, nodes freed), in one exclusive phase that readers
+  /// see whole; the first call places the box and does the same for
+  /// everything outside it. Throws std::logic_error without a window,
+  /// std::out_of_range for a position outside the map, and what spill
+  /// throws (the map is then unchanged).
+  WindowMove move_window(Vec3d position);
+  /// The window's box as keys; nothing before it is placed or without a window.
+  [[nodiscard]] std::optional<VoxelBox> window_box() const;
+
   // --- inserting scans ----------------------------------------------------
   /// Integrates one scan. Simple and discrete integrators: OctoMap's
   /// insertPointCloud (discretize false / true), voxel for voxel: one miss
@@ -169,7 +191,9 @@ class OccupancyMap {
   /// most once per scan, a hit winning over a miss; points beyond max_range
   /// clear up to it without a hit; NaN points and points outside the map are
   /// skipped and counted. Fast: free space cleared a coarse node at a time
-  /// (see InsertOptions). Throws std::invalid_argument for a non-finite origin
+  /// (see InsertOptions). With a moving window that follows scans, the box
+  /// first moves to the origin, and the scan changes only the box's voxels.
+  /// Throws std::invalid_argument for a non-finite origin
   /// or bad options and std::out_of_range for an origin outside the map; the
   /// map is unchanged then.
   InsertStats insert_point_cloud(Vec3f origin, std::span<const Vec3f> points,

@@ -752,6 +752,8 @@ std::uint64_t bytes_to_load(const MapFileInfo& info) {
 }
 
 OccupancyMap load_body(const detail::InputFile& file, const std::filesystem::path& path, const MapFileInfo& info);
+/// The map from a whole file's bytes (their size checked against the header).
+OccupancyMap decode_body(const std::string& name, std::span<const std::uint8_t> bytes, const MapFileInfo& info);
 
 }  // namespace
 
@@ -765,8 +767,18 @@ void MapSaveOptions::validate() const {
   }
 }
 
-void save_map(const OccupancyMap& map, const std::filesystem::path& path, const MapSaveOptions& options) {
-  options.validate();
+namespace {
+
+/// A map file's bytes in its parts, as save_map writes them one after another.
+struct EncodedMap {
+  std::array<std::uint8_t, kHeaderBytes> header;
+  std::vector<std::uint8_t> structure_frame;
+  std::vector<std::uint8_t> values_frame;
+  std::vector<std::uint8_t> colors_frame;
+  std::array<std::uint8_t, kChecksumBytes> trailer;
+};
+
+EncodedMap encode_map(const OccupancyMap& map, const MapSaveOptions& options) {
   // Every thread but the caller's (which walks the tree) compresses the
   // values and color streams, which are nearly all the bytes; the small
   // structure stream stays on the caller's thread. At most 2 each: the walk
@@ -816,8 +828,45 @@ void save_map(const OccupancyMap& map, const std::filesystem::path& path, const 
   std::array<std::uint8_t, kChecksumBytes> trailer{};
   put_u32(trailer.data(), crc);
 
-  write_file_atomically(path, {header, structure_frame, values_frame, colors_frame, trailer}, "map");
+  return EncodedMap{header, std::move(structure_frame), std::move(values_frame), std::move(colors_frame), trailer};
 }
+
+
+}  // namespace
+
+void save_map(const OccupancyMap& map, const std::filesystem::path& path, const MapSaveOptions& options) {
+  options.validate();
+  const EncodedMap file = encode_map(map, options);
+  write_file_atomically(path, {file.header, file.structure_frame, file.values_frame, file.colors_frame, file.trailer},
+                        "map");
+}
+
+namespace detail {
+
+std::vector<std::uint8_t> encode_map_file(const OccupancyMap& map) {
+  MapSaveOptions one_thread;
+  one_thread.threads = 1;
+  const EncodedMap file = encode_map(map, one_thread);
+  std::vector<std::uint8_t> bytes;
+  bytes.reserve(file.header.size() + file.structure_frame.size() + file.values_frame.size() +
+                file.colors_frame.size() + file.trailer.size());
+  for (const std::span<const std::uint8_t> part :
+       {std::span<const std::uint8_t>(file.header), std::span<const std::uint8_t>(file.structure_frame),
+        std::span<const std::uint8_t>(file.values_frame), std::span<const std::uint8_t>(file.colors_frame),
+        std::span<const std::uint8_t>(file.trailer)}) {
+    bytes.insert(bytes.end(), part.begin(), part.end());
+  }
+  return bytes;
+}
+
+OccupancyMap decode_map_file(const std::string& name, std::span<const std::uint8_t> bytes) {
+  const MapFileInfo info = decode_header(name, bytes.first(std::min(bytes.size(), kHeaderBytes)), bytes.size());
+  const std::uint64_t need = bytes_to_load(info);
+  require_memory(name, "loading this map (" + std::to_string(info.inner_nodes) + " nodes with children)", need);
+  return naming_bad_alloc(name, "loading the map", need, [&] { return decode_body(name, bytes, info); });
+}
+
+}  // namespace detail
 
 MapFileInfo read_map_info(const std::filesystem::path& path) {
   const detail::InputFile file(path, {}, "map file");
@@ -851,9 +900,13 @@ OccupancyMap load_body(const detail::InputFile& file, const std::filesystem::pat
     throw FormatError::at_byte(name, got, "truncated while reading: header declares " + std::to_string(bytes.size()) +
                                               " bytes, read " + std::to_string(got) + " (is the file being written?)");
   }
+  return decode_body(name, bytes, info);
+}
+
+OccupancyMap decode_body(const std::string& name, std::span<const std::uint8_t> bytes, const MapFileInfo& info) {
   const std::size_t crc_at = bytes.size() - kChecksumBytes;
   const std::uint32_t stored = get_u32(&bytes[crc_at]);
-  const std::uint32_t computed = crc32_of(std::span(bytes).first(crc_at));
+  const std::uint32_t computed = crc32_of(bytes.first(crc_at));
   if (stored != computed) {
     throw FormatError::at_byte(name, crc_at, "checksum mismatch: stored " + hex32(stored) + ", computed " +
                                                  hex32(computed) + " (the file is corrupt)");
@@ -861,7 +914,7 @@ OccupancyMap load_body(const detail::InputFile& file, const std::filesystem::pat
 
   // 3. The tree, rebuilt from both streams in one walk; inner nodes recomputed at the end.
   OccupancyMap map(info.config);  // subdivide(), set_childless_value() and refresh_all() never prune
-  const std::span<const std::uint8_t> all(bytes);
+  const std::span<const std::uint8_t> all = bytes;
   const std::uint64_t values_at = kHeaderBytes + info.structure_compressed_bytes;
   FrameReader structure(name, kHeaderBytes, "structure stream",
                         all.subspan(kHeaderBytes, static_cast<std::size_t>(info.structure_compressed_bytes)),
