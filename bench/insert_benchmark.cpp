@@ -35,10 +35,11 @@
 //
 // --serial-share adds a table of where the CPU time of the umbra methods goes
 // (umbra::job_cpu_times(): the pools' jobs counted per worker): the serial
-// part (CPU time outside the jobs), its share s of the one-thread CPU time
-// and Amdahl's bound on two threads 1 / (s + (1 - s) / 2); and the critical
-// path, serial + the busiest worker of each job, with its bound one-thread
-// CPU time / critical path (which also counts uneven jobs). CPU times are
+// part (CPU time outside the jobs), its share s of the run's CPU time and
+// Amdahl's bound on two threads 1 / (s + (1 - s) / 2); and the critical
+// path, serial + the busiest worker of each job, with its bound CPU time /
+// critical path (which also counts uneven jobs). Both within one run: the
+// one-thread run is another process under another load. CPU times are
 // steadier than wall-clock ratios on a machine shared with other work.
 #include <malloc.h>
 #include <sys/types.h>
@@ -317,13 +318,12 @@ int main(int argc, char** argv) {
         << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::ostringstream share_table;
   share_table << "| dataset | res (m) | threads | method | CPU ms/scan | serial CPU ms/scan | serial share s | "
-                 "Amdahl bound, 2 threads | critical path ms/scan | one-thread CPU / critical path |\n"
+                 "Amdahl bound, 2 threads | critical path ms/scan | CPU / critical path |\n"
               << "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Dataset& data : loaded) {
     for (const std::string& res_text : split_list(sweep.resolutions)) {
       const double resolution = std::stod(res_text);
       std::map<std::string, Result> octomap_results;
-      std::map<std::string, double> one_thread_cpu;  // method -> CPU ms/scan with one thread
       for (const std::string& threads_text : split_list(sweep.threads)) {
         const unsigned threads = static_cast<unsigned>(std::stoul(threads_text));
         std::map<std::string, std::vector<std::vector<double>>> times;  // method -> scan -> repeats
@@ -400,25 +400,17 @@ int main(int argc, char** argv) {
           table << row;
           std::fputs(row, stderr);
           if (!serial_share || method.octomap) continue;
-          if (threads == 1) one_thread_cpu[method.name] = mine.cpu_ms_per_scan;
-          std::string share = "-";
-          std::string amdahl = "-";
-          std::string critical_bound = "-";
-          if (one_thread_cpu.count(method.name)) {
-            const double t1 = one_thread_cpu[method.name];
-            const double s = mine.serial_ms_per_scan / t1;
-            char text[64];
-            std::snprintf(text, sizeof text, "%.1f%%", 100.0 * s);
-            share = text;
-            std::snprintf(text, sizeof text, "%.2fx", 1.0 / (s + (1.0 - s) / 2.0));
-            amdahl = text;
-            std::snprintf(text, sizeof text, "%.2fx", t1 / mine.critical_ms_per_scan);
-            critical_bound = text;
-          }
+          const double s = mine.serial_ms_per_scan / mine.cpu_ms_per_scan;
+          char share[32];
+          std::snprintf(share, sizeof share, "%.1f%%", 100.0 * s);
+          char amdahl[32];
+          std::snprintf(amdahl, sizeof amdahl, "%.2fx", 1.0 / (s + (1.0 - s) / 2.0));
+          char critical_bound[32];
+          std::snprintf(critical_bound, sizeof critical_bound, "%.2fx", mine.cpu_ms_per_scan / mine.critical_ms_per_scan);
           std::snprintf(row, sizeof row, "| %s | %.3g | %s | %s | %.1f | %.1f | %s | %s | %.1f | %s |\n",
                         data.name.c_str(), resolution, threads_text.c_str(), method.name.c_str(),
-                        mine.cpu_ms_per_scan, mine.serial_ms_per_scan, share.c_str(), amdahl.c_str(),
-                        mine.critical_ms_per_scan, critical_bound.c_str());
+                        mine.cpu_ms_per_scan, mine.serial_ms_per_scan, share, amdahl, mine.critical_ms_per_scan,
+                        critical_bound);
           share_table << row;
           std::fputs(row, stderr);
         }
