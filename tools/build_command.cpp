@@ -31,6 +31,7 @@
 #include "umbra/io/file_saving.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/scan_source.hpp"
+#include "umbra/map/decay.hpp"
 #ifdef UMBRA_WITH_ROS
 #include "umbra_ros/rosbag_source.hpp"
 #endif
@@ -60,6 +61,9 @@ struct BuildOptions {
   std::vector<std::string> topics;
   std::string frame = "map";
   bool resolution_given = false;  ///< --res was on the command line
+  double decay_occupied = 0.0;    ///< log-odds per second (DecayRates)
+  double decay_free = 0.0;
+  double scan_period = 0.0;       ///< > 0: scan k is stamped k * scan_period seconds
 };
 
 struct ScanRow {
@@ -91,7 +95,11 @@ struct BuildPlan {
   MapConfig config;
   std::optional<Aabb> box;
   InsertOptions insert;
+  DecayRates decay;
 };
+
+/// The formats whose scans carry their time (Scan::stamp).
+bool format_has_stamps(const std::string& format) { return format == "tum" || format == "rosbag"; }
 
 BuildPlan plan_build(const BuildOptions& options) {
   return as_usage([&] {
@@ -138,6 +146,18 @@ BuildPlan plan_build(const BuildOptions& options) {
     plan.insert.fine_steps = options.fine_steps;
     plan.insert.threads = options.threads;
     plan.insert.validate(plan.config.depth_levels);
+    plan.decay.occupied_per_second = options.decay_occupied;
+    plan.decay.free_per_second = options.decay_free;
+    plan.decay.validate();
+    if (plan.decay.enabled() && options.scan_period <= 0.0) {
+      for (const std::string& input : options.inputs) {
+        std::error_code ignored;
+        if (!std::filesystem::exists(input, ignored) || format_has_stamps(scan_format_for(input, options.format))) continue;
+        throw std::invalid_argument("--decay-occupied / --decay-free need the time of each scan, and " + input + " (" +
+                                    scan_format_for(input, options.format) +
+                                    ") does not carry it (TUM sequences and ROS bags do): give --scan-period SECONDS");
+      }
+    }
     return plan;
   });
 }
@@ -274,12 +294,18 @@ int run_build(const BuildOptions& options) {
   const BuildPlan plan = plan_build(options);
   OccupancyMap map(plan.config);
   if (plan.box) map.set_bounding_box(plan.box);
-  const InsertOptions& insert = plan.insert;
+  if (plan.decay.enabled()) map.set_decay(plan.decay);
+  InsertOptions insert = plan.insert;
   Problems problems(options.keep_going);
   // The resolution decides everything about the map: say it, and say when it is the default.
   std::printf("%g m voxels%s, %d depth levels (the map spans +-%g m), integrator %s\n", map.resolution(),
               options.resolution_given ? "" : " (the default; set it with --res)", map.depth_levels(),
               map.grid().half_extent(), to_string(insert.integrator));
+  if (plan.decay.enabled()) {
+    std::printf("decay toward unknown: %g log-odds per second off occupied voxels, %g onto free ones, by %s\n",
+                plan.decay.occupied_per_second, plan.decay.free_per_second,
+                options.scan_period > 0.0 ? "--scan-period" : "the scans' own times");
+  }
   const std::vector<CheckedInput> checked = preflight(options, plan, map.grid(), problems);
 
   std::vector<ScanRow> rows;
@@ -296,6 +322,7 @@ int run_build(const BuildOptions& options) {
   }
   ProgressBar bar("building");
   const auto start = std::chrono::steady_clock::now();
+  std::size_t scans_read = 0;  // over all inputs, for --scan-period
   for (std::size_t file = 0; file < options.inputs.size(); ++file) {
     if (checked[file].skipped) continue;
     const std::string where = input_text(options, file);
@@ -318,7 +345,19 @@ int run_build(const BuildOptions& options) {
         problems.report(scan_where, current_error("reading it"), "the rest of that input");
         break;
       }
+      const std::size_t scan_number = scans_read++;
       if (checked[file].bad_scans.count(index) != 0) continue;  // reported by the pre-flight
+      if (plan.decay.enabled()) {
+        if (options.scan_period > 0.0) {
+          insert.stamp = static_cast<double>(scan_number) * options.scan_period;
+        } else if (scan.stamp) {
+          insert.stamp = scan.stamp;
+        } else {
+          problems.report(scan_where + " (" + scan.name + ")",
+                          "the scan has no time stamp, which decay needs (give --scan-period SECONDS)", "that scan");
+          continue;
+        }
+      }
       ScanRow row;
       row.name = scan.name;
       row.read_seconds = seconds_since(read_start);
@@ -456,6 +495,20 @@ Command add_build_command(CLI::App& app) {
   command->add_flag("--color", options->color, "keep an RGB color per voxel (inputs with colors: xyz rgb, PLY, PCD, TUM)");
   command->add_option("--origin", options->origin, "sensor origin x,y,z for files without poses (.xyz, .ply, .pcd, lone .bin)")
       ->capture_default_str();
+  command->add_option("--decay-occupied", options->decay_occupied,
+                      "log-odds per second that occupied voxels lose toward unknown (0: none; needs the scans' "
+                      "times: TUM, ROS bags, or --scan-period)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command->add_option("--decay-free", options->decay_free,
+                      "log-odds per second that free voxels lose toward unknown (0: none)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command->add_option("--scan-period", options->scan_period,
+                      "seconds between scans for decay: scan k (from 0, over all inputs) is taken at k times this, "
+                      "instead of the inputs' own times (0: theirs)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   command->add_option("--format", options->format, "input format for every input (default: by name)")
       ->check(CLI::IsMember({"graph", "xyz", "ply", "pcd", "kitti", "tum", "rosbag"}));
   command->add_option("--poses", options->poses, "kitti: poses file (12 numbers per line)");

@@ -40,6 +40,7 @@ struct RenderCommandOptions {
   std::string min_z;    // METRES, "auto" or "none"; empty: auto for a top view colored by state, else none
   std::string max_z;    // METRES, "auto" or "none"; empty: auto for top and iso views, else none
   std::string section;  // METRES, "middle" or "none"; empty: middle for front and side views
+  std::string frame;    // minx,miny,minz,maxx,maxy,maxz; empty: what is drawn
   bool bare = false;
 };
 
@@ -130,6 +131,11 @@ RenderOptions render_options(const RenderCommandOptions& command) {
     options.view = slice_view(options.slice->axis);
   }
   options.color = command.color.empty() ? default_color(options) : color_named(command.color);
+  if (!command.frame.empty()) {
+    const std::vector<double> b = parse_numbers(command.frame, 6, "--frame");
+    options.frame = Aabb{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}};
+    options.frame->validate();
+  }
   if (options.slice && (!command.min_z.empty() || !command.max_z.empty() || !command.section.empty())) {
     throw std::invalid_argument(std::string(!command.min_z.empty() ? "--min-z" : (!command.max_z.empty() ? "--max-z" : "--section")) +
                                 " is for views; a slice is one layer already");
@@ -284,6 +290,9 @@ Command add_render_command(CLI::App& app) {
   command->add_option("--width", options->width, "picture width in pixels (at least 200 unless --bare)")
       ->capture_default_str()
       ->check(CLI::Range(17, kMaxRenderPixels));
+  command->add_option("--frame", options->frame,
+                      "frame the box minx,miny,minz,maxx,maxy,maxz (metres) instead of what is drawn, so that "
+                      "pictures of several maps line up");
   command->add_flag("--bare", options->bare, "the map drawing alone: no title, axes, legend or scale bar");
   add_memory_option(*command);
   return [options] { return run_render(*options); };

@@ -67,7 +67,10 @@ class ScanReader {
       py::gil_scoped_release released;
       std::lock_guard lock(mutex_);  // a reader serves one thread at a time
       more = file_operation([&] { return source_->next(scan); });
-      if (more) name_ = scan.name;
+      if (more) {
+        name_ = scan.name;
+        stamp_ = scan.stamp;
+      }
     }
     if (!more) throw py::stop_iteration();
     const auto n = static_cast<py::ssize_t>(scan.points.size());
@@ -96,10 +99,15 @@ class ScanReader {
     std::lock_guard lock(mutex_);
     return name_;
   }
+  [[nodiscard]] std::optional<double> stamp() {
+    std::lock_guard lock(mutex_);
+    return stamp_;
+  }
 
  private:
   std::unique_ptr<ScanSource> source_;
   std::string name_;
+  std::optional<double> stamp_;
   std::mutex mutex_;
 };
 
@@ -174,6 +182,9 @@ void bind_io(py::module_& m, MapClass& map) {
                              "Number of scans when the format says so up front, else 0.")
       .def_property_readonly("progress", &ScanReader::progress, "Fraction of the input read, 0..1.")
       .def_property_readonly("name", &ScanReader::name, "Where the last scan came from, e.g. 'run.graph scan 3'.")
+      .def_property_readonly("stamp", &ScanReader::stamp,
+                             "The last scan's time in seconds where the input states it (TUM: the depth image's "
+                             "name; ROS bags: header.stamp), else None: pass it to Map.insert(stamp=...) for decay.")
       .def("__repr__",
            [](py::handle self) { return repr_of_attributes(self, "ScanReader", {"name", "scan_count", "progress"}); });
 

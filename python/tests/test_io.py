@@ -95,6 +95,19 @@ def test_read_xyz(tmp_path):
     assert colors is None
     assert reader.progress == 1.0
     assert "cloud.xyz" in reader.name
+    assert reader.stamp is None  # .xyz files carry no time
+
+
+def test_tum_frames_carry_their_time(shared_data):
+    # TUM names each depth image by its time: the reader's stamp, for decay.
+    folder = shared_data / "tum_fr2_pioneer_slam2"
+    association = next(folder.glob("*assoc*.txt"))
+    rows = [line.split() for line in association.read_text().splitlines() if line and not line.startswith("#")]
+    # The first row whose images are on disk (the reader skips the others).
+    first_depth = next(r[1] for r in rows if (folder / r[1]).exists() and (folder / r[0]).exists())
+    reader = umbra.read_scans(folder)
+    next(reader)
+    assert reader.stamp == pytest.approx(float(first_depth[len("depth/"):-len(".png")]), abs=1e-6)
 
 
 def test_read_colored_ply(tmp_path):

@@ -99,6 +99,7 @@ class RosbagSource final : public RosbagScanSource {
           }
         }
         cloud_to_scan(cloud.cloud, to_map, colors_, decoded_, scan, label);
+        scan.stamp = stamp_of(cloud.header, label).toSec();
       } catch (const FormatError& e) {
         throw bag_->error(message, e.what());
       } catch (const MemoryLimitError& e) {  // the decoded points: named like the other errors

@@ -22,7 +22,7 @@ ProjectiveTracer::Decision ProjectiveTracer::classify(std::uint64_t code, int de
   return classify_node(morton::decode(code), depth);
 }
 
-ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth) const {
+ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth, bool* all_in_range) const {
   UMBRA_ASSERT(depth >= 2);
   const Grid& grid = *rule_.grid;
   const ProjectiveFrame& frame = *rule_.frame;
@@ -62,6 +62,7 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth)
       within_range = distances.farthest_squared * (1.0 + 1e-9) <= limit;
     }
   }
+  if (all_in_range != nullptr) *all_in_range = within_range;
 
   // The eight corners of that box in the camera frame.
   const Vec3d c0 = frame.to_camera(lo);
@@ -189,9 +190,12 @@ bool ProjectiveTracer::holds_obstacle(std::uint64_t code, int depth) const {
   return cursor_ && cursor_->max_log_odds(code, depth) > rule_.occupied_log_odds;
 }
 
-void ProjectiveTracer::trace_brick(std::uint64_t brick, Key first, UpdateBatch& batch) const {
-  // Its range node was classified on the way down unless it is the brick itself.
-  if (rule_.range_depth == 2 && !rule_.within_range(first)) return;
+void ProjectiveTracer::trace_brick(std::uint64_t brick, Key first, bool in_range, UpdateBatch& batch) const {
+  // Its range node was classified on the way down unless it is the brick
+  // itself; a brick whose parent lies within range as a whole needs no test
+  // (at 2 cm with a 5 m range the bricks are the range nodes: the test per
+  // brick was 4% of a TUM frame).
+  if (rule_.range_depth == 2 && !in_range && !rule_.within_range(first)) return;
   std::uint64_t voxels = rule_.cleared_in_range(brick, first);
   if (voxels != 0 && rule_.box_keys) voxels &= rule_.brick_voxels_in_box(brick);
   if (voxels != 0 && holds_obstacle(brick, 2)) {
@@ -204,7 +208,8 @@ void ProjectiveTracer::trace_brick(std::uint64_t brick, Key first, UpdateBatch& 
 }
 
 void ProjectiveTracer::trace_node(std::uint64_t code, Key first, int depth, UpdateBatch& batch) const {
-  switch (classify_node(first, depth)) {
+  bool in_range = false;  // every voxel centre of the node within max_range (set for a split node)
+  switch (classify_node(first, depth, &in_range)) {
     case Decision::none:
       return;
     case Decision::all:
@@ -215,7 +220,7 @@ void ProjectiveTracer::trace_node(std::uint64_t code, Key first, int depth, Upda
       break;
   }
   if (depth == 2) {
-    trace_brick(code, first, batch);
+    trace_brick(code, first, in_range, batch);
     return;
   }
   if (rule_.decided_by_cells(first, depth)) {
@@ -232,7 +237,7 @@ void ProjectiveTracer::trace_node(std::uint64_t code, Key first, int depth, Upda
     // asking the pyramid about it first: the children of a split node are
     // evaluated directly.
     if (child_depth == 2) {
-      trace_brick(child, child_first, batch);
+      trace_brick(child, child_first, in_range, batch);
     } else {
       trace_node(child, child_first, child_depth, batch);
     }

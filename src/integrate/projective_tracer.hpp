@@ -70,10 +70,14 @@ class ProjectiveTracer {
  private:
   /// classify() and trace() of a node whose first voxel's key is `first`
   /// (the walk keeps keys, so that nodes are not decoded).
-  [[nodiscard]] Decision classify_node(Key first, int depth) const;
+  /// With `all_in_range`: whether every voxel centre of the node lies
+  /// within max_range (true without a range), set unless the node lies
+  /// outside the box.
+  [[nodiscard]] Decision classify_node(Key first, int depth, bool* all_in_range = nullptr) const;
   void trace_node(std::uint64_t code, Key first, int depth, UpdateBatch& batch) const;
-  /// A split brick: the voxels it clears, in the box.
-  void trace_brick(std::uint64_t brick, Key first, UpdateBatch& batch) const;
+  /// A split brick: the voxels it clears, in the box. `in_range`: known to
+  /// lie within max_range as a whole (its parent does).
+  void trace_brick(std::uint64_t brick, Key first, bool in_range, UpdateBatch& batch) const;
   /// Whether the map holds an obstacle in the depth-`depth` node `code`.
   [[nodiscard]] bool holds_obstacle(std::uint64_t code, int depth) const;
 

@@ -65,16 +65,35 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
   }
   // Every point into every image that holds it; each pixel keeps the
   // nearest depth; every image knows its points' rays.
-  std::array<std::vector<std::uint32_t>, kFaces> ray_pixels;
-  std::array<std::vector<std::uint32_t>, kFaces> ray_points;
+  // A point lies in few of the ten images: its camera-frame depth and then
+  // its sideways coordinates are computed one at a time, and the image is
+  // left as soon as the point is behind it or beyond its width or height
+  // (a pixel's margin over the exact test, which follows with the same
+  // coordinates), before the two divisions: projecting every point into
+  // every image was a fifth of a 3DTK scan's insertion.
+  std::array<double, kFaces> reach_x;  // |x| / z beyond this: outside the image
+  std::array<double, kFaces> reach_y;
+  for (std::size_t k = 0; k < faces_.size(); ++k) {
+    const ProjectiveFrame& face = faces_[k];
+    reach_x[k] = (0.5 * face.width + 1.0) / face.fx;  // u = fx x / z + width / 2 lies in [0, width)
+    reach_y[k] = (0.5 * face.height + 1.0) / face.fy;
+    ray_pixels_[k].clear();
+    ray_points_[k].clear();
+  }
   for (std::size_t index = 0; index < points.size(); ++index) {
     const Vec3f& p = points[index];
     if (!p.is_finite()) continue;
     const Vec3d d = Vec3d(p) - o;
     for (std::size_t k = 0; k < faces_.size(); ++k) {
       ProjectiveFrame& face = faces_[k];
-      const Vec3d c = face.rotate(d);
+      const auto& r = face.rotation;  // as ProjectiveFrame::rotate computes it
+      Vec3d c;
+      c.z = r[2][0] * d.x + r[2][1] * d.y + r[2][2] * d.z;
       if (!(c.z > 0.0)) continue;
+      c.x = r[0][0] * d.x + r[0][1] * d.y + r[0][2] * d.z;
+      if (std::abs(c.x) > reach_x[k] * c.z) continue;
+      c.y = r[1][0] * d.x + r[1][1] * d.y + r[1][2] * d.z;
+      if (std::abs(c.y) > reach_y[k] * c.z) continue;
       const double u = face.fx * (c.x / c.z) + face.cx + 0.5;
       const double v = face.fy * (c.y / c.z) + face.cy + 0.5;
       if (!(u >= 0.0 && u < face.width && v >= 0.0 && v < face.height)) continue;
@@ -89,8 +108,8 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
       float& half = face.depth_halves[std::size_t(static_cast<int>(2.0 * v)) * std::size_t(2 * face.width) +
                                       std::size_t(static_cast<int>(2.0 * u))];
       if (half == 0.0f || depth < half) half = depth;
-      ray_pixels[k].push_back(static_cast<std::uint32_t>(at));
-      ray_points[k].push_back(static_cast<std::uint32_t>(index));
+      ray_pixels_[k].push_back(static_cast<std::uint32_t>(at));
+      ray_points_[k].push_back(static_cast<std::uint32_t>(index));
     }
   }
   for (std::size_t k = 0; k < faces_.size(); ++k) {
@@ -108,20 +127,81 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
     }
     face.pyramid.build(face.depth.data(), farthest.data(), face.width, face.height);
     // The image's rays, by pixel (set_rays numbers them in the order given).
-    face.set_rays(points, ray_pixels[k]);
+    face.set_rays(points, ray_pixels_[k]);
     if (face.ray_order.empty()) {
-      face.ray_order.assign(ray_points[k].begin(), ray_points[k].end());
+      face.ray_order.assign(ray_points_[k].begin(), ray_points_[k].end());
     } else {
-      for (std::uint32_t& ray : face.ray_order) ray = ray_points[k][ray];
+      for (std::uint32_t& ray : face.ray_order) ray = ray_points_[k][ray];
     }
   }
 }
 
 std::size_t ScanImages::memory_bytes() const {
   std::size_t bytes = 0;
-  for (const ProjectiveFrame& face : faces_) bytes += face.memory_bytes();
+  for (std::size_t k = 0; k < faces_.size(); ++k) {
+    bytes += faces_[k].memory_bytes() + (ray_pixels_[k].capacity() + ray_points_[k].capacity()) * sizeof(std::uint32_t);
+  }
   return bytes;
 }
+
+namespace detail {
+
+// Found with one sweep each way per row and per column, keeping the nearest
+// filled cell behind the sweep (a search of `reach` cells each way from
+// every empty cell was a tenth of a 3DTK scan's insertion).
+ScanGaps count_scan_gaps(std::span<const std::uint8_t> filled, int images, int wide, int high, int reach,
+                         std::vector<std::uint8_t>& scratch) {
+  ScanGaps gaps;
+  const int none = -(reach + 1);  // "no filled cell behind": farther than `reach` from any cell
+  // Bit 0: a filled cell within `reach` before it along its row; bit 1: along its column.
+  scratch.assign(filled.size(), 0);
+  for (int k = 0; k < images; ++k) {
+    const std::size_t image_start = std::size_t(k) * std::size_t(wide) * std::size_t(high);
+    const std::uint8_t* image = filled.data() + image_start;
+    std::uint8_t* near = scratch.data() + image_start;
+    const auto at = [&](int i, int j) { return std::size_t(j) * std::size_t(wide) + std::size_t(i); };
+    for (int j = 0; j < high; ++j) {
+      int last = none;  // the nearest filled cell to the left
+      for (int i = 0; i < wide; ++i) {
+        if (image[at(i, j)]) {
+          ++gaps.filled;
+          last = i;
+        } else if (i - last <= reach) {
+          near[at(i, j)] |= 1u;
+        }
+      }
+      int next = wide - none;  // to the right
+      for (int i = wide - 1; i >= 0; --i) {
+        if (image[at(i, j)]) {
+          next = i;
+        } else if (next - i <= reach && (near[at(i, j)] & 1u)) {
+          ++gaps.row_gaps;
+        }
+      }
+    }
+    for (int i = 0; i < wide; ++i) {
+      int last = none;  // the nearest filled cell above
+      for (int j = 0; j < high; ++j) {
+        if (image[at(i, j)]) {
+          last = j;
+        } else if (j - last <= reach) {
+          near[at(i, j)] |= 2u;
+        }
+      }
+      int next = high - none;  // below
+      for (int j = high - 1; j >= 0; --j) {
+        if (image[at(i, j)]) {
+          next = j;
+        } else if (next - j <= reach && (near[at(i, j)] & 2u)) {
+          ++gaps.column_gaps;
+        }
+      }
+    }
+  }
+  return gaps;
+}
+
+}  // namespace detail
 
 ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> points, ScanResolution given) {
   const Vec3d o(origin);
@@ -139,6 +219,8 @@ ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> poi
   std::vector<OnFace> middle;
   middle.reserve(points.size());
   std::size_t count = 0;
+  std::array<FaceAxes, ScanImages::kSideFaces> side_axes;  // once, not a sin and cos per point
+  for (int k = 0; k < ScanImages::kSideFaces; ++k) side_axes[static_cast<std::size_t>(k)] = face_axes(k);
   constexpr double kMiddle = 0.5;  // |v| below this: where pixels keep about their nominal height
   for (const Vec3f& p : points) {
     if (!p.is_finite()) continue;
@@ -161,7 +243,7 @@ ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> poi
     const double azimuth = std::atan2(d.y, d.x);
     const int side = static_cast<int>(std::lround(azimuth / (2.0 * std::numbers::pi / ScanImages::kSideFaces)) +
                                       ScanImages::kSideFaces) % ScanImages::kSideFaces;
-    const FaceAxes axes = face_axes(side);
+    const FaceAxes& axes = side_axes[static_cast<std::size_t>(side)];
     const double z = d.dot(axes.normal);
     if (!(z > 0.0)) continue;
     const double v = d.dot(axes.down) / z;
@@ -186,6 +268,7 @@ ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> poi
   ScanResolution result{given.horizontal > 0.0 ? given.horizontal : 0.8 * mean_spacing,
                         given.vertical > 0.0 ? given.vertical : 0.8 * mean_spacing};
   std::vector<std::uint8_t> filled;
+  std::vector<std::uint8_t> reached;
   constexpr int kReach = 4;  // a gap is at most this many pixels from a filled one on either side
   for (int round = 0; round < 16; ++round) {
     const int wide = 2 * static_cast<int>(std::ceil(kSideHalfWidth / result.horizontal));
@@ -196,33 +279,10 @@ ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> poi
       const int j = std::clamp(static_cast<int>((q.v / kMiddle + 1.0) * 0.5 * high), 0, high - 1);
       filled[(std::size_t(q.face) * std::size_t(high) + std::size_t(j)) * std::size_t(wide) + std::size_t(i)] = 1;
     }
-    std::size_t cells = 0;
-    std::size_t row_gaps = 0;
-    std::size_t column_gaps = 0;
-    for (int k = 0; k < ScanImages::kSideFaces; ++k) {
-      const std::uint8_t* face = &filled[std::size_t(k) * std::size_t(wide) * std::size_t(high)];
-      auto at = [&](int i, int j) { return face[std::size_t(j) * std::size_t(wide) + std::size_t(i)] != 0; };
-      for (int j = 0; j < high; ++j) {
-        for (int i = 0; i < wide; ++i) {
-          if (at(i, j)) {
-            ++cells;
-            continue;
-          }
-          bool left = false;
-          bool right = false;
-          bool above = false;
-          bool below = false;
-          for (int step = 1; step <= kReach; ++step) {
-            left = left || (i - step >= 0 && at(i - step, j));
-            right = right || (i + step < wide && at(i + step, j));
-            above = above || (j - step >= 0 && at(i, j - step));
-            below = below || (j + step < high && at(i, j + step));
-          }
-          row_gaps += left && right ? 1 : 0;
-          column_gaps += above && below ? 1 : 0;
-        }
-      }
-    }
+    const detail::ScanGaps gaps = detail::count_scan_gaps(filled, ScanImages::kSideFaces, wide, high, kReach, reached);
+    const std::size_t cells = gaps.filled;
+    const std::size_t row_gaps = gaps.row_gaps;
+    const std::size_t column_gaps = gaps.column_gaps;
     const bool coarser_rows = given.horizontal <= 0.0 && row_gaps * 50 > cells;
     const bool coarser_columns = given.vertical <= 0.0 && column_gaps * 50 > cells;
     if (!coarser_rows && !coarser_columns) break;

@@ -37,7 +37,9 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <span>
+#include <vector>
 
 #include "umbra/core/vec3.hpp"
 #include "umbra/integrate/insert_options.hpp"
@@ -62,6 +64,10 @@ class ScanImages {
 
  private:
   std::array<ProjectiveFrame, kFaces> faces_;
+  // Each image's rays (pixel, point) as the points are drawn in; kept
+  // between scans so that their buffers are reused.
+  std::array<std::vector<std::uint32_t>, kFaces> ray_pixels_;
+  std::array<std::vector<std::uint32_t>, kFaces> ray_points_;
 };
 
 /// The angular resolution of a scan's images (radians), where `given` has 0:
@@ -71,5 +77,20 @@ class ScanImages {
 /// two filled ones at most four pixels away along it. `given` as it is when
 /// the scan has fewer than 16 finite points that are not at the origin.
 ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> points, ScanResolution given);
+
+namespace detail {
+struct ScanGaps {
+  std::size_t filled = 0;
+  std::size_t row_gaps = 0;
+  std::size_t column_gaps = 0;
+};
+/// Over `images` images of `wide` x `high` cells, row by row (`filled`:
+/// nonzero where a point fell): the filled cells, and the empty cells with
+/// a filled cell at most `reach` cells away on both sides along their row
+/// (row_gaps) and along their column (column_gaps). `scratch` is reused.
+/// estimate_scan_resolution's test of too fine an image.
+ScanGaps count_scan_gaps(std::span<const std::uint8_t> filled, int images, int wide, int high, int reach,
+                         std::vector<std::uint8_t>& scratch);
+}  // namespace detail
 
 }  // namespace umbra

@@ -595,6 +595,99 @@ TEST(ProjectiveIntegrator, ScanImagesFollowTheRule) {
   EXPECT_GT(cleared_bricks, 1000u);
 }
 
+TEST(ProjectiveIntegrator, ScanImagesHoldEveryPointOfEveryImage) {
+  // Each image's pixels and half pixels hold the nearest of the points that
+  // project into them, and its rays are exactly those points, by brute force
+  // (every point projected into every image with ProjectiveFrame::rotate):
+  // ScanImages::build leaves an image early for points it cannot hold, which
+  // must never drop one it does hold. Coarse resolutions too, where the
+  // images' overlap reaches far past their share of the directions.
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 6; ++trial) {
+    const Vec3f origin{0.3f * static_cast<float>(u(rng)), -0.2f, 0.1f * trial};
+    std::vector<Vec3f> points = random_room_scan(rng, origin);
+    for (int i = 0; i < 2000; ++i) {  // and every direction, the caps' included
+      const Vec3d d{u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5};
+      if (d.norm() > 1e-3) points.push_back(Vec3f(Vec3d(origin) + d * (3.0 / d.norm())));
+    }
+    const double step = trial < 3 ? 0.004 + 0.01 * trial : 0.1 + 0.2 * (trial - 3);  // radians
+    ScanImages images;
+    images.build(origin, points, {step, 1.5 * step});
+    std::size_t held = 0;
+    for (const ProjectiveFrame& face : images.faces()) {
+      std::vector<float> depth(face.depth.size(), 0.0f);
+      std::vector<float> halves(face.depth_halves.size(), 0.0f);
+      std::vector<std::uint32_t> rays(face.depth.size(), 0);
+      for (const Vec3f& p : points) {
+        const Vec3d c = face.rotate(Vec3d(p) - face.origin);
+        if (!(c.z > 0.0)) continue;
+        const double pu = face.fx * (c.x / c.z) + face.cx + 0.5;
+        const double pv = face.fy * (c.y / c.z) + face.cy + 0.5;
+        if (!(pu >= 0.0 && pu < face.width && pv >= 0.0 && pv < face.height)) continue;
+        const std::size_t at = std::size_t(static_cast<int>(pv)) * std::size_t(face.width) + std::size_t(static_cast<int>(pu));
+        const std::size_t half = std::size_t(static_cast<int>(2.0 * pv)) * std::size_t(2 * face.width) +
+                                 std::size_t(static_cast<int>(2.0 * pu));
+        const auto z = static_cast<float>(c.z);
+        if (depth[at] == 0.0f || z < depth[at]) depth[at] = z;
+        if (halves[half] == 0.0f || z < halves[half]) halves[half] = z;
+        ++rays[at];
+        ++held;
+      }
+      ASSERT_EQ(face.depth, depth) << "trial " << trial;
+      ASSERT_EQ(face.depth_halves, halves) << "trial " << trial;
+      for (std::size_t at = 0; at < rays.size(); ++at) {
+        ASSERT_EQ(face.pixel_rays[at + 1] - face.pixel_rays[at], rays[at]) << "trial " << trial << " pixel " << at;
+      }
+    }
+    EXPECT_GT(held, points.size()) << "trial " << trial;  // the images overlap
+  }
+}
+
+TEST(ProjectiveIntegrator, ScanGapsAreTheEmptyCellsBetweenNearFilledOnes) {
+  // count_scan_gaps against a search of `reach` cells each way from every
+  // empty cell, on random images of several fill rates.
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<std::uint8_t> scratch;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int images = 1 + trial % 3;
+    const int wide = 1 + static_cast<int>(30 * u(rng));
+    const int high = 1 + static_cast<int>(30 * u(rng));
+    const int reach = 1 + trial % 5;
+    const double fill = u(rng);
+    std::vector<std::uint8_t> filled(std::size_t(images) * std::size_t(wide) * std::size_t(high));
+    for (std::uint8_t& cell : filled) cell = u(rng) < fill ? 1 : 0;
+    detail::ScanGaps expected;
+    for (int k = 0; k < images; ++k) {
+      const auto at = [&](int i, int j) {
+        return filled[(std::size_t(k) * std::size_t(high) + std::size_t(j)) * std::size_t(wide) + std::size_t(i)] != 0;
+      };
+      for (int j = 0; j < high; ++j) {
+        for (int i = 0; i < wide; ++i) {
+          if (at(i, j)) {
+            ++expected.filled;
+            continue;
+          }
+          bool left = false, right = false, above = false, below = false;
+          for (int step = 1; step <= reach; ++step) {
+            left = left || (i - step >= 0 && at(i - step, j));
+            right = right || (i + step < wide && at(i + step, j));
+            above = above || (j - step >= 0 && at(i, j - step));
+            below = below || (j + step < high && at(i, j + step));
+          }
+          expected.row_gaps += left && right ? 1 : 0;
+          expected.column_gaps += above && below ? 1 : 0;
+        }
+      }
+    }
+    const detail::ScanGaps gaps = detail::count_scan_gaps(filled, images, wide, high, reach, scratch);
+    EXPECT_EQ(gaps.filled, expected.filled) << "trial " << trial;
+    EXPECT_EQ(gaps.row_gaps, expected.row_gaps) << "trial " << trial;
+    EXPECT_EQ(gaps.column_gaps, expected.column_gaps) << "trial " << trial;
+  }
+}
+
 TEST(ProjectiveIntegrator, EstimatesTheScanResolutionPerAxis) {
   // A LiDAR with rings 2 degrees apart and 0.5 degree steps: the images'
   // rows must be coarser than their columns, neither far from the scan's.

@@ -327,6 +327,51 @@ TEST(MapRenderSlice, ThroughAKnownFreeBoxIsFreeInsideAndUnknownAround) {
   }
 }
 
+TEST(MapRenderSlice, AFrameLinesUpPicturesOfDifferentMaps) {
+  // Two maps whose known space differs; framed by the same box, their slices
+  // have the same camera and size, and each pixel still shows its map.
+  const OccupancyMap small = free_box_map();
+  OccupancyMap large = free_box_map();
+  for (int i = 10; i < 20; ++i) large.set_log_odds(voxel(i, 0, 1), -1.0f);
+  RenderOptions options;
+  options.slice = RenderSlice{2, 0.15};
+  options.view = slice_view(2);
+  options.color = RenderColor::state;
+  options.width = 160;
+  options.frame = Aabb{{-0.5, -0.5, 0.0}, {2.5, 1.0, 0.4}};
+  const MapPicture a = render_map(small, options);
+  const MapPicture b = render_map(large, options);
+  EXPECT_EQ(a.camera.left, b.camera.left);
+  EXPECT_EQ(a.camera.top, b.camera.top);
+  EXPECT_EQ(a.camera.metres_per_pixel, b.camera.metres_per_pixel);
+  ASSERT_EQ(a.image.width, b.image.width);
+  ASSERT_EQ(a.image.height, b.image.height);
+  // The box is in the picture (without a frame the small map's picture ends near x = 1).
+  EXPECT_LE(a.camera.left, -0.5);
+  EXPECT_GE(a.camera.left + a.image.width * a.camera.metres_per_pixel, 2.5);
+  EXPECT_GE(a.camera.top, 1.0);
+  EXPECT_LE(a.camera.top - a.image.height * a.camera.metres_per_pixel, -0.5);
+  std::size_t differ = 0;
+  for (int row = 0; row < a.image.height; ++row) {
+    for (int column = 0; column < a.image.width; ++column) {
+      const double x = a.camera.left + (column + 0.5) * a.camera.metres_per_pixel;
+      const double y = a.camera.top - (row + 0.5) * a.camera.metres_per_pixel;
+      const bool extra = x > 1.0 && x < 2.0 && y > 0.0 && y < 0.1;  // only the large map knows it
+      if (extra && (std::fmod(x, kResolution) < 0.01 || std::fmod(y, kResolution) < 0.01)) continue;  // edges
+      EXPECT_EQ(a.image.at(column, row) != b.image.at(column, row), extra) << column << ", " << row;
+      differ += a.image.at(column, row) != b.image.at(column, row) ? 1 : 0;
+    }
+  }
+  EXPECT_GT(differ, 0u);
+  options.frame = Aabb{{1.0, 0.0, 0.0}, {0.0, 1.0, 1.0}};
+  try {
+    (void)render_map(small, options);
+    ADD_FAILURE() << "a frame with min > max was accepted";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("frame"), std::string::npos) << error.what();
+  }
+}
+
 TEST(MapRenderSlice, CoarseLayerShowsTheMaximumOfItsVoxels) {
   const OccupancyMap map = free_box_map();
   RenderOptions options;

@@ -102,6 +102,9 @@ void expect_tum_frames(const std::vector<Scan>& scans, const TumFixture& fixture
     expect_near_point(scan.origin, fixture.origins[frame], 1e-6, what + " origin");
     EXPECT_TRUE(contains(scan.name, frame == 0 ? "depth/1.001.png" : "depth/3.001.png")) << scan.name;
     EXPECT_TRUE(contains(scan.name, "frame " + std::to_string(frame + 1) + " of 2")) << scan.name;
+    // TUM names images by their time: the depth image's name is the scan's stamp.
+    ASSERT_TRUE(scan.stamp.has_value()) << what;
+    EXPECT_DOUBLE_EQ(*scan.stamp, frame == 0 ? 1.001 : 3.001) << what;
     ASSERT_EQ(scan.colors.size(), scan.points.size()) << what;
     std::size_t k = 0;
     for (std::uint32_t v = 0; v < fixture.height; ++v) {
@@ -156,6 +159,19 @@ TEST(TumReader, FramesOnDiskAreBackProjected) {
   EXPECT_EQ(fr2.cx, 308.8);
   EXPECT_EQ(fr2.cy, 253.0);
   EXPECT_EQ(fr2.depth_scale, 5000.0);
+}
+
+TEST(TumReader, ImagesNotNamedByTheirTimeGiveNoStamp) {
+  const TumFixture fixture = tum_fixture(test::scratch_dir());
+  fs::copy_file(fixture.folder / "depth" / "1.001.png", fixture.folder / "depth" / "first.png");
+  write_file(fixture.association, "rgb/1.000.png depth/first.png 1 2 3 0 0 0 1\nrgb/1.000.png depth/1.001.png 1 2 3 0 0 0 1\n");
+  ScanSourceOptions options;
+  options.depth_camera = fixture.camera;
+  const std::vector<Scan> scans = read_all(fixture.folder, options);
+  ASSERT_EQ(scans.size(), 2u);
+  EXPECT_FALSE(scans[0].stamp.has_value()) << *scans[0].stamp;
+  ASSERT_TRUE(scans[1].stamp.has_value());
+  EXPECT_DOUBLE_EQ(*scans[1].stamp, 1.001);
 }
 
 TEST(TumReader, AssociationDiscoveryAndErrors) {

@@ -120,6 +120,8 @@ TEST(Rosbag, ScansEqualTheSimulatorsPoints) {
     while (source->next(scan)) {
       ASSERT_LT(count, scans.size());
       EXPECT_EQ(scan.origin, Vec3f(scans[count].position));
+      ASSERT_TRUE(scan.stamp.has_value());  // the cloud's header.stamp, for decay
+      EXPECT_DOUBLE_EQ(*scan.stamp, scan_time(count).toSec());
       EXPECT_TRUE(contains(scan.name, "office.bag message " + std::to_string(count + 2) + " on /points")) << scan.name;
       map.insert_point_cloud(scan.origin, scan.points);
       ++count;

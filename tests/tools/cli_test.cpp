@@ -13,7 +13,9 @@
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/scan_graph.hpp"
+#include "umbra/map/decay.hpp"
 #include "umbra/map/map_statistics.hpp"
+#include "umbra/sim/moving_scene.hpp"
 
 namespace umbra {
 namespace {
@@ -105,6 +107,87 @@ TEST(Cli, BuildFromAScanGraphAndInfoAsJson) {
   const CommandResult text = run(cli() + " info " + quoted(dir / "two.umb"));
   EXPECT_EQ(text.exit_code, 0);
   EXPECT_NE(text.output.find("known space"), std::string::npos) << text.output;
+}
+
+/// Every leaf of a map as (code * 32 + depth, log-odds), for comparing maps.
+std::vector<std::pair<std::uint64_t, float>> leaves_of(const OccupancyMap& map) {
+  std::vector<std::pair<std::uint64_t, float>> leaves;
+  map.for_each_leaf([&](const Node& l) { leaves.emplace_back(morton::encode(l.key) * 32 + l.depth, l.log_odds); });
+  return leaves;
+}
+
+TEST(Cli, BuildWithDecayMatchesTheLibrary) {
+  const auto dir = test::scratch_dir();
+  // The whole room, then 2 s later only its +x wall from elsewhere: the rest decays for 2 s.
+  Scan first;
+  first.origin = {0.0f, 0.0f, 0.0f};
+  first.points = room_scan();
+  Scan second;
+  second.origin = {0.5f, 0.0f, 0.0f};
+  for (const Vec3f& p : first.points) {
+    if (p.x > 2.0f) second.points.push_back(p);
+  }
+  write_scan_graph(dir / "two.graph", {first, second});
+  const std::string build = cli() + " build " + quoted(dir / "two.graph") + " --res 0.1 --integrator discrete";
+  const CommandResult decayed = run(build + " -o " + quoted(dir / "decayed.umb") +
+                                    " --decay-occupied 0.5 --decay-free 0.25 --scan-period 2");
+  ASSERT_EQ(decayed.exit_code, 0) << decayed.output;
+  EXPECT_NE(decayed.output.find("decay toward unknown: 0.5"), std::string::npos) << decayed.output;
+
+  OccupancyMap expected(0.1);
+  DecayRates rates;
+  rates.occupied_per_second = 0.5;
+  rates.free_per_second = 0.25;
+  expected.set_decay(rates);
+  InsertOptions options;
+  options.integrator = IntegratorKind::discrete;
+  options.stamp = 0.0;
+  expected.insert_point_cloud(first.origin, first.points, options);
+  options.stamp = 2.0;
+  expected.insert_point_cloud(second.origin, second.points, options);
+  EXPECT_EQ(leaves_of(load_map(dir / "decayed.umb")), leaves_of(expected));
+
+  // Without decay the map differs (the options did something).
+  ASSERT_EQ(run(build + " -o " + quoted(dir / "kept.umb")).exit_code, 0);
+  EXPECT_NE(leaves_of(load_map(dir / "kept.umb")), leaves_of(expected));
+
+  // A ScanGraph carries no times: decay without --scan-period is a usage error naming the input.
+  const CommandResult untimed = run(build + " -o " + quoted(dir / "no.umb") + " --decay-free 0.25");
+  EXPECT_EQ(untimed.exit_code, 2) << untimed.output;
+  EXPECT_NE(untimed.output.find("two.graph (graph) does not carry it"), std::string::npos) << untimed.output;
+  EXPECT_NE(untimed.output.find("--scan-period"), std::string::npos) << untimed.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "no.umb"));
+}
+
+TEST(Cli, MovingDemoForgetsWhatItNoLongerSees) {
+  const auto dir = test::scratch_dir();
+  const CommandResult demo = run(cli() + " demo --moving -o " + quoted(dir));
+  ASSERT_EQ(demo.exit_code, 0) << demo.output;
+  for (const char* name : {"moving-t03", "moving-t07", "moving-t14"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / (std::string(name) + ".png"))) << name;
+  }
+  const OccupancyMap early = load_map(dir / "moving-t03.umb");
+  const OccupancyMap middle = load_map(dir / "moving-t07.umb");
+  const OccupancyMap late = load_map(dir / "moving-t14.umb");
+  // The corridor's west end, behind the sensor once it is in the meeting
+  // room (from 9 s): seen free at 3 s, unknown again at 14 s.
+  const Vec3d west{2.0, 6.0, 1.2};
+  EXPECT_EQ(early.state(west), OccupancyState::free);
+  EXPECT_EQ(late.state(west), OccupancyState::unknown);
+  // A wall beside the corridor, seen at 3 s, out of view from 7 s on: an
+  // obstacle faded to unknown (occupied log-odds <= 3.5 at 1.0 a second).
+  const Vec3d wall{6.0, 5.025, 1.225};
+  EXPECT_EQ(early.state(wall), OccupancyState::occupied);
+  EXPECT_EQ(middle.state(wall), OccupancyState::unknown);
+  EXPECT_EQ(late.state(wall), OccupancyState::unknown);
+  // The sliding door's west edge: occupied while closed (3 s), seen free
+  // once it has slid open (7 s): re-observed, not merely forgotten.
+  const sim::MovingScene scene = sim::make_demo_moving_scene();
+  const Vec3d door{9.575, 6.925, 1.225};
+  ASSERT_TRUE(scene.at(3.0).is_inside_solid(door));
+  ASSERT_FALSE(scene.at(7.0).is_inside_solid(door));
+  EXPECT_EQ(early.state(door), OccupancyState::occupied);
+  EXPECT_EQ(middle.state(door), OccupancyState::free);
 }
 
 TEST(Cli, BadInputGivesAClearErrorAndNoMap) {

@@ -70,6 +70,7 @@
 #include <optional>
 #include <utility>
 
+#include "umbra/core/aabb.hpp"
 #include "umbra/core/color.hpp"
 #include "umbra/core/vec3.hpp"
 #include "umbra/io/png_writer.hpp"
@@ -114,6 +115,11 @@ struct RenderOptions {
   /// y, side: x): only nodes whose cube reaches behind it, as the viewer sees
   /// it (front: y >= section, side: x <= section), are drawn.
   std::optional<double> section;
+  /// The box (metres) the picture frames instead of what it draws (a view's
+  /// nodes, a slice's known space): pictures of several maps, or of one map
+  /// at several moments, then line up pixel for pixel. Drawing is unchanged
+  /// (nodes outside the frame fall off the picture).
+  std::optional<Aabb> frame;
   /// Title, axes, scale bar and legend around the drawing (see the top).
   bool annotate = false;
   int width = 1024;       ///< pixels, in [2 * margin_pixels + 1, kMaxRenderPixels]

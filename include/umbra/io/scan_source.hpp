@@ -82,6 +82,11 @@ struct Scan {
   std::vector<Vec3f> points;  ///< map frame
   std::vector<Rgb> colors;    ///< empty, or one per point
   std::string name;           ///< where it came from, e.g. "run.graph scan 3"
+  /// When the scan was taken (seconds, the input's own epoch), from readers
+  /// whose input says so: TUM (the depth image's file name, e.g.
+  /// depth/1311877812.987032.png) and ROS bags (the cloud's header.stamp);
+  /// nothing otherwise. InsertOptions::stamp takes it for decay.
+  std::optional<double> stamp;
   /// Set by readers of depth images: the image the points came from.
   std::optional<ScanImage> image;
 };

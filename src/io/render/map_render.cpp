@@ -50,6 +50,14 @@ struct RampRange {
   }
 };
 
+/// What a picture frames: RenderOptions::frame when given, else `drawn`.
+Bounds framed(const RenderOptions& options, const Bounds& drawn) {
+  if (!options.frame) return drawn;
+  Bounds box;
+  box.add(options.frame->min, options.frame->max);
+  return box;
+}
+
 struct Frame {
   RenderCamera camera;
   int width = 0;
@@ -166,7 +174,7 @@ MapPicture render_view(const OccupancyMap& map, const RenderOptions& options) {
   if (by_state) {
     for (const Node& node : map.query(window && pred::free(), options.depth)) known.add(node.min_corner(), node.max_corner());
   }
-  const Frame frame = frame_for(options.view, by_state ? known : content, options);
+  const Frame frame = frame_for(options.view, framed(options, by_state ? known : content), options);
   MapPicture picture;
   picture.image = Image(frame.width, frame.height, options.background);
   picture.camera = frame.camera;
@@ -229,7 +237,7 @@ MapPicture render_slice(const OccupancyMap& map, const RenderOptions& options) {
         << known.min[axis] << " to " << known.max[axis] << " m";
     throw std::invalid_argument(out.str());
   }
-  const Frame frame = frame_for(options.view, known, options);
+  const Frame frame = frame_for(options.view, framed(options, known), options);
 
   // The plane through the layer's centre, over the picture (margins
   // included, shrunk by a millionth of a pixel so that nodes merely touching
@@ -369,6 +377,13 @@ void RenderOptions::validate() const {
     }
   }
   if (section && !std::isfinite(*section)) bad_option("section", "finite", *section);
+  if (frame) {
+    try {
+      frame->validate();
+    } catch (const std::invalid_argument& error) {
+      bad_option("frame", "a box with finite corners and min <= max", error.what());
+    }
+  }
   if (section && view != RenderView::front && view != RenderView::side) {
     bad_option("section", "unset for a " + std::string(to_string(view)) +
                               " view (a section is for front and side views; a top view has max_z)",

@@ -226,6 +226,7 @@ class KittiReader final : public ScanSource {
     scan.points.clear();
     scan.colors.clear();
     scan.points.reserve(static_cast<std::size_t>(point_count));
+    scan.stamp.reset();  // this format carries no times
     scan.name = entry.file.filename().string();
     if (entry.pose_line) scan.name += " (pose line " + std::to_string(*entry.pose_line) + ")";
     const bool posed = entry.pose_line.has_value();

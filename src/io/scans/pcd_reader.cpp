@@ -413,6 +413,7 @@ class PcdReader final : public detail::SingleScanSource {
     scan.origin = transform ? viewpoint_.translation() : origin_;
     scan.points.clear();
     scan.colors.clear();
+    scan.stamp.reset();  // this format carries no times
     scan.name = display_name_;
     // Safe: the count was checked against the file size when it was opened.
     scan.points.reserve(static_cast<std::size_t>(point_count_));

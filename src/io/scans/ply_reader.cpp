@@ -133,6 +133,7 @@ class PlyReader final : public detail::SingleScanSource {
     scan.origin = origin_;
     scan.points.clear();
     scan.colors.clear();
+    scan.stamp.reset();  // this format carries no times
     scan.name = display_name_;
     // Safe: the count was checked against the file size when it was opened.
     scan.points.reserve(static_cast<std::size_t>(elements_[vertex_element_].count));

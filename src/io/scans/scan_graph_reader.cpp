@@ -129,6 +129,7 @@ class ScanGraphReader final : public ScanSource {
     scan.colors.clear();
     // Safe: the count was checked against the file size when it was opened.
     scan.points.reserve(node.point_count);
+    scan.stamp.reset();  // this format carries no times
     scan.name = display_name_ + " scan " + std::to_string(next_node_);
     if (node.id != next_node_) scan.name += " (id " + std::to_string(node.id) + ")";
 

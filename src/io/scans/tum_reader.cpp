@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -175,9 +176,19 @@ struct Frame {
   fs::path depth;
   fs::path color;
   std::string depth_text;  // as written in the association file
+  std::optional<double> stamp;  // the depth file name's stem, when it is a number (TUM's timestamps)
   std::uint64_t line = 0;
   Pose pose;  // camera (optical frame) to world
 };
+
+/// TUM names each image by the time it was taken ("1311877812.987032.png");
+/// other names give no stamp.
+std::optional<double> stamp_of(const fs::path& image) {
+  const std::string stem = image.stem().string();
+  double seconds = 0.0;
+  if (detail::parse_double(stem, seconds) && std::isfinite(seconds)) return seconds;
+  return std::nullopt;
+}
 
 bool file_exists(const fs::path& path) {
   std::error_code ignored;
@@ -227,6 +238,7 @@ class TumReader final : public ScanSource {
       frame.color = folder / fs::path(std::string(first));
       frame.depth = folder / fs::path(std::string(second));
       frame.depth_text = std::string(second);
+      frame.stamp = stamp_of(frame.depth);
       frame.line = lines.line_number();
       try {
         // TUM order: tx ty tz qx qy qz qw.
@@ -282,6 +294,7 @@ class TumReader final : public ScanSource {
                                                    " x " + std::to_string(depth_.height));
     }
     scan.origin = frame.pose.translation();
+    scan.stamp = frame.stamp;
     scan.name = association_name_ + " frame " + std::to_string(next_frame_ + 1) + " of " +
                 std::to_string(frames_.size()) + " (line " + std::to_string(frame.line) + ", " + frame.depth_text + ")";
     // The image is kept with the scan (the projective integrator reads it),

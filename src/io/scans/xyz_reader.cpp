@@ -233,6 +233,7 @@ class XyzReader final : public detail::SingleScanSource {
     scan.origin = origin_;
     scan.points.clear();
     scan.colors.clear();
+    scan.stamp.reset();  // this format carries no times
     scan.name = display_name_;
 
     std::vector<char> text(kTextChunkBytes);
