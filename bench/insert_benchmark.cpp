@@ -31,7 +31,16 @@
 //
 // Usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum,sim-camera]
 //          [--res 0.05,0.02] [--methods LIST] [--threads 1,2] [--repeat 3]
-//          [--max-range 30] [--tum-max-range 5] [--color] [--markdown FILE]
+//          [--max-range 30] [--tum-max-range 5] [--color] [--serial-share] [--markdown FILE]
+//
+// --serial-share adds a table of where the CPU time of the umbra methods goes
+// (umbra::job_cpu_times(): the pools' jobs counted per worker): the serial
+// part (CPU time outside the jobs), its share s of the run's CPU time and
+// Amdahl's bound on two threads 1 / (s + (1 - s) / 2); and the critical
+// path, serial + the busiest worker of each job, with its bound CPU time /
+// critical path (which also counts uneven jobs). Both within one run: the
+// one-thread run is another process under another load. CPU times are
+// steadier than wall-clock ratios on a machine shared with other work.
 #include <malloc.h>
 #include <sys/types.h>
 #include <sys/wait.h>
@@ -54,6 +63,7 @@
 #include "bench_data.hpp"
 #include "common/argument_cursor.hpp"
 #include "common/sweep_flags.hpp"
+#include "umbra/core/job_cpu_times.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace {
@@ -90,6 +100,8 @@ struct Measurement {
   int scans = 0;
   double scan_seconds[kMaxScans] = {};
   double scan_cpu_seconds[kMaxScans] = {};  // CPU time of the process (all threads)
+  double scan_job_seconds[kMaxScans] = {};      // --serial-share: CPU time in the pools' jobs
+  double scan_busiest_seconds[kMaxScans] = {};  // --serial-share: per job the busiest worker's, summed
   std::uint64_t map_bytes = 0;        // memoryUsage() / memory_bytes()
   std::uint64_t peak_rss_growth = 0;  // bytes, peak RSS minus RSS before inserting
   bool ok = false;
@@ -129,8 +141,9 @@ std::uint64_t peak_rss_bytes() {
 }
 
 Measurement measure_in_this_process(const Dataset& data, const Method& method, double resolution, unsigned threads,
-                                    bool color) {
+                                    bool color, bool serial_share) {
   Measurement m;
+  if (serial_share) umbra::set_job_cpu_accounting(true);
   m.scans = static_cast<int>(std::min<std::size_t>(data.scans.size(), Measurement::kMaxScans));
   // Hand the heap the parent freed (parsing buffers) back to the system, or
   // the child reuses those resident pages and its growth reads near zero.
@@ -164,6 +177,7 @@ Measurement measure_in_this_process(const Dataset& data, const Method& method, d
       const umbra::Scan& scan = data.scans[i];
       const auto start = Clock::now();
       const double cpu_start = process_cpu_seconds();
+      const umbra::JobCpuTimes jobs_start = umbra::job_cpu_times();
       if (method.kind == umbra::IntegratorKind::projective && scan.image) {
         const umbra::ScanImage& image = *scan.image;
         map.insert_depth_image(image.view(), image.camera, image.pose,
@@ -176,6 +190,9 @@ Measurement measure_in_this_process(const Dataset& data, const Method& method, d
       }
       m.scan_seconds[i] = std::chrono::duration<double>(Clock::now() - start).count();
       m.scan_cpu_seconds[i] = process_cpu_seconds() - cpu_start;
+      const umbra::JobCpuTimes jobs_end = umbra::job_cpu_times();
+      m.scan_job_seconds[i] = jobs_end.all_seconds - jobs_start.all_seconds;
+      m.scan_busiest_seconds[i] = jobs_end.busiest_seconds - jobs_start.busiest_seconds;
     }
     m.map_bytes = map.memory_bytes();
   }
@@ -186,7 +203,7 @@ Measurement measure_in_this_process(const Dataset& data, const Method& method, d
 }
 
 Measurement measure_in_child(const Dataset& data, const Method& method, double resolution, unsigned threads,
-                             bool color) {
+                             bool color, bool serial_share) {
   int fds[2];
   if (::pipe(fds) != 0) throw std::runtime_error("pipe failed");
   std::fflush(nullptr);
@@ -196,7 +213,7 @@ Measurement measure_in_child(const Dataset& data, const Method& method, double r
     ::close(fds[0]);
     Measurement m;
     try {
-      m = measure_in_this_process(data, method, resolution, threads, color);
+      m = measure_in_this_process(data, method, resolution, threads, color, serial_share);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "%s failed: %s\n", method.name.c_str(), e.what());
     }
@@ -239,6 +256,8 @@ std::string mib(std::uint64_t bytes) {
 struct Result {
   double ms_per_scan = 0.0;
   double cpu_ms_per_scan = 0.0;
+  double serial_ms_per_scan = 0.0;    // --serial-share: CPU time outside the pools' jobs
+  double critical_ms_per_scan = 0.0;  // --serial-share: serial + the busiest worker of each job
   Measurement last;
 };
 
@@ -249,15 +268,17 @@ int main(int argc, char** argv) {
   sweep.datasets = "scan.dat,3dtk";
   sweep.methods = "octomap-plain,umbra-simple,octomap-discrete,umbra-discrete";
   bool color = false;
+  bool serial_share = false;
   for (umbra_bench::ArgumentCursor args{argc, argv}; args.next();) {
     const std::string arg = args.flag();
     if (sweep.take(arg, args)) continue;
     if (arg == "--color") color = true;
+    else if (arg == "--serial-share") serial_share = true;
     else if (arg == "--help" || arg == "-h") {
       std::printf(
           "usage: umbra_insert_benchmark [--data DIR] [--datasets scan.dat,3dtk,tum,sim-camera] [--res 0.05,0.02]\n"
           "         [--methods LIST] [--threads 1,2] [--repeat 3] [--max-range 30] [--tum-max-range 5]\n"
-          "         [--color] [--markdown FILE]\n"
+          "         [--color] [--serial-share] [--markdown FILE]\n"
           "methods:");
       for (const Method& m : kAllMethods) std::printf(" %s", m.name.c_str());
       std::printf("\n");
@@ -295,6 +316,10 @@ int main(int argc, char** argv) {
   table << "| dataset | res (m) | threads | method | ms/scan | scans/s | speed-up vs OctoMap | map (MiB) | "
            "map vs OctoMap | peak RSS growth (MiB) | CPU ms/scan | CPU speed-up |\n"
         << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  std::ostringstream share_table;
+  share_table << "| dataset | res (m) | threads | method | CPU ms/scan | serial CPU ms/scan | serial share s | "
+                 "Amdahl bound, 2 threads | critical path ms/scan | CPU / critical path |\n"
+              << "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Dataset& data : loaded) {
     for (const std::string& res_text : split_list(sweep.resolutions)) {
       const double resolution = std::stod(res_text);
@@ -303,19 +328,28 @@ int main(int argc, char** argv) {
         const unsigned threads = static_cast<unsigned>(std::stoul(threads_text));
         std::map<std::string, std::vector<std::vector<double>>> times;  // method -> scan -> repeats
         std::map<std::string, std::vector<std::vector<double>>> cpu_times;
+        std::map<std::string, std::vector<std::vector<double>>> serial_times;
+        std::map<std::string, std::vector<std::vector<double>>> critical_times;
         std::map<std::string, Measurement> last;
         for (int r = 0; r < sweep.repeat; ++r) {
           for (const Method& method : methods) {
             if (method.octomap && octomap_results.count(method.name)) continue;  // OctoMap: once
-            const Measurement m = measure_in_child(data, method, resolution, threads, color);
+            const Measurement m = measure_in_child(data, method, resolution, threads, color, serial_share);
             auto& per_scan = times[method.name];
             per_scan.resize(static_cast<std::size_t>(m.scans));
             auto& cpu_per_scan = cpu_times[method.name];
             cpu_per_scan.resize(static_cast<std::size_t>(m.scans));
+            auto& serial_per_scan = serial_times[method.name];
+            serial_per_scan.resize(static_cast<std::size_t>(m.scans));
+            auto& critical_per_scan = critical_times[method.name];
+            critical_per_scan.resize(static_cast<std::size_t>(m.scans));
             double total = 0;
             for (int s = 0; s < m.scans; ++s) {
               per_scan[static_cast<std::size_t>(s)].push_back(m.scan_seconds[s]);
               cpu_per_scan[static_cast<std::size_t>(s)].push_back(m.scan_cpu_seconds[s]);
+              const double serial = m.scan_cpu_seconds[s] - m.scan_job_seconds[s];
+              serial_per_scan[static_cast<std::size_t>(s)].push_back(serial);
+              critical_per_scan[static_cast<std::size_t>(s)].push_back(serial + m.scan_busiest_seconds[s]);
               total += m.scan_seconds[s];
             }
             last[method.name] = m;
@@ -330,8 +364,13 @@ int main(int argc, char** argv) {
           for (const auto& repeats : per_scan) sum += median(repeats);
           double cpu_sum = 0;
           for (const auto& repeats : cpu_times[name]) cpu_sum += median(repeats);
+          double serial_sum = 0;
+          for (const auto& repeats : serial_times[name]) serial_sum += median(repeats);
+          double critical_sum = 0;
+          for (const auto& repeats : critical_times[name]) critical_sum += median(repeats);
           const auto scans = static_cast<double>(per_scan.size());
-          results[name] = {1e3 * sum / scans, 1e3 * cpu_sum / scans, last[name]};
+          results[name] = {1e3 * sum / scans, 1e3 * cpu_sum / scans, 1e3 * serial_sum / scans,
+                           1e3 * critical_sum / scans, last[name]};
         }
         for (const Method& method : methods) {
           if (method.octomap) octomap_results[method.name] = results[method.name];
@@ -360,14 +399,30 @@ int main(int argc, char** argv) {
                         mib(mine.last.peak_rss_growth).c_str(), mine.cpu_ms_per_scan, cpu_speedup.c_str());
           table << row;
           std::fputs(row, stderr);
+          if (!serial_share || method.octomap) continue;
+          const double s = mine.serial_ms_per_scan / mine.cpu_ms_per_scan;
+          char share[32];
+          std::snprintf(share, sizeof share, "%.1f%%", 100.0 * s);
+          char amdahl[32];
+          std::snprintf(amdahl, sizeof amdahl, "%.2fx", 1.0 / (s + (1.0 - s) / 2.0));
+          char critical_bound[32];
+          std::snprintf(critical_bound, sizeof critical_bound, "%.2fx", mine.cpu_ms_per_scan / mine.critical_ms_per_scan);
+          std::snprintf(row, sizeof row, "| %s | %.3g | %s | %s | %.1f | %.1f | %s | %s | %.1f | %s |\n",
+                        data.name.c_str(), resolution, threads_text.c_str(), method.name.c_str(),
+                        mine.cpu_ms_per_scan, mine.serial_ms_per_scan, share, amdahl, mine.critical_ms_per_scan,
+                        critical_bound);
+          share_table << row;
+          std::fputs(row, stderr);
         }
       }
     }
   }
   std::printf("%s", table.str().c_str());
+  if (serial_share) std::printf("\n%s", share_table.str().c_str());
   if (!sweep.markdown.empty()) {
     std::ofstream out(sweep.markdown);
     out << table.str();
+    if (serial_share) out << "\n" << share_table.str();
   }
   return 0;
 }

@@ -124,8 +124,21 @@ void ImagePoints::build(const Grid& grid, const DepthImage& depth, const Pinhole
 }
 
 void ImagePoints::for_each_voxel(FunctionRef<void(std::uint64_t)> visit) const {
+  for_each_voxel_in(0, ~std::uint64_t{0}, visit);
+}
+
+void ImagePoints::for_each_voxel_in(std::uint64_t first, std::uint64_t end,
+                                    FunctionRef<void(std::uint64_t)> visit) const {
+  // Each band's codes in [first, end): a contiguous run of its sorted list.
+  const auto run = [&](const std::vector<std::uint64_t>& list) {
+    const auto begin = std::lower_bound(list.begin(), list.end(), first);
+    return std::pair{static_cast<std::size_t>(begin - list.begin()),
+                     static_cast<std::size_t>(std::lower_bound(begin, list.end(), end) - list.begin())};
+  };
   if (bands_.size() == 1) {
-    for (const std::uint64_t code : bands_[0].candidates) visit(code);
+    const std::vector<std::uint64_t>& list = bands_[0].candidates;
+    const auto [begin, stop] = run(list);
+    for (std::size_t i = begin; i < stop; ++i) visit(list[i]);
     return;
   }
   // A merge of the bands' sorted lists through a heap of their heads (a few
@@ -134,12 +147,14 @@ void ImagePoints::for_each_voxel(FunctionRef<void(std::uint64_t)> visit) const {
     std::uint64_t code;
     std::size_t band;
     std::size_t next;  // index of the band's next code
+    std::size_t stop;  // index of the band's first code at or beyond `end`
   };
   const auto later = [](const Head& a, const Head& b) { return a.code > b.code; };
   std::vector<Head> heads;
   heads.reserve(bands_.size());
   for (std::size_t b = 0; b < bands_.size(); ++b) {
-    if (!bands_[b].candidates.empty()) heads.push_back({bands_[b].candidates[0], b, 1});
+    const auto [begin, stop] = run(bands_[b].candidates);
+    if (begin < stop) heads.push_back({bands_[b].candidates[begin], b, begin + 1, stop});
   }
   std::make_heap(heads.begin(), heads.end(), later);
   std::uint64_t last = kNonFiniteCode;  // no voxel has this code
@@ -149,7 +164,7 @@ void ImagePoints::for_each_voxel(FunctionRef<void(std::uint64_t)> visit) const {
     if (head.code != last) visit(head.code);
     last = head.code;
     const std::vector<std::uint64_t>& list = bands_[head.band].candidates;
-    if (head.next < list.size()) {
+    if (head.next < head.stop) {
       head.code = list[head.next++];
       std::push_heap(heads.begin(), heads.end(), later);
     } else {

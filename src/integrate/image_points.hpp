@@ -65,6 +65,8 @@ class ImagePoints {
   /// code order, each once (a merge of the bands' sorted voxels: run it
   /// alongside other work, it is serial).
   void for_each_voxel(FunctionRef<void(std::uint64_t)> visit) const;
+  /// The same for the voxels whose codes lie in [first, end) (a subtree's, for its worker).
+  void for_each_voxel_in(std::uint64_t first, std::uint64_t end, FunctionRef<void(std::uint64_t)> visit) const;
   [[nodiscard]] std::size_t non_finite() const { return non_finite_; }
   [[nodiscard]] std::size_t out_of_bounds() const { return out_of_bounds_; }
 

@@ -82,6 +82,9 @@ InsertStats& InsertStats::operator+=(const InsertStats& other) {
 
 namespace {
 
+/// Subtrees per thread the projective integrator's walk is split into (trace_projective_misses).
+constexpr std::size_t kTasksPerThread = 64;
+
 /// The voxels of the map that a box covers (the box is cut to the map).
 KeyBox key_box(const Grid& grid, const Aabb& box) {
   const double inside = grid.half_extent() - 0.5 * grid.resolution();
@@ -342,6 +345,7 @@ InsertStats Integrator::trace(const OccupancyTree& tree, const Grid& grid, Vec3f
   ThreadPool* const pool = threads > 1 ? pool_.get() : nullptr;
   if (!colors.empty()) pending_colors_ = color_samples(grid, origin, points, colors, options, scan.box_keys, pool);
   pending_threads_ = threads;
+  pending_batches_ = 1;
   return stats;
 }
 
@@ -392,19 +396,29 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   // misses (serial, but off the critical path). A depth image's rays are as
   // dense as its pixels: the rule alone decides its misses, known obstacles
   // included (projective_frame.hpp).
+  // On several threads the hits go to the batches of the subtrees that hold
+  // them instead (hits_in), so that no batch holds hits all over the image.
+  InsertStats hit_stats;
+  const auto add_hits_in = [&](std::uint64_t first, std::uint64_t end, UpdateBatch& batch, InsertStats& counts) {
+    image_points_.for_each_voxel_in(first, end, [&](std::uint64_t code) {
+      if (add_end_voxel_hit(grid, origin, code, options.max_range, box, box_keys, batch, counts)) ++counts.hits;
+    });
+  };
   const auto side_job = [&](std::size_t job, UpdateBatch& batch) {
     if (job == 0) {
-      image_points_.for_each_voxel([&](std::uint64_t code) {
-        if (add_end_voxel_hit(grid, origin, code, options.max_range, box, box_keys, batch, stats)) ++stats.hits;
-      });
-      stats.rays = stats.hits;
+      add_hits_in(0, ~std::uint64_t{0}, batch, hit_stats);
     } else {
       queue_end_voxel_colors(grid, origin, image_points_.points(), image_points_.colors(), image_points_.codes(),
                              options, box_keys);
     }
   };
+  const HitsInRange hits_in(add_hits_in);
   trace_projective_misses(nullptr, grid, options, box_keys, std::span<const ProjectiveFrame>(&frame_, 1), threads,
-                          colors.empty() ? 1 : 2, side_job);
+                          colors.empty() ? 1 : 2, side_job, &hits_in, &hit_stats);
+  stats.hits = hit_stats.hits;
+  stats.truncated = hit_stats.truncated;
+  stats.outside_box = hit_stats.outside_box;
+  stats.rays = stats.hits;
   pending_threads_ = threads;
   return stats;
 }
@@ -446,6 +460,7 @@ InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const G
     trace_projective_misses(&tree, grid, options, box_keys, scan_images_.faces(), threads, side_jobs, side_job);
   } else {
     for (std::size_t job = 0; job < side_jobs; ++job) side_job(job, tracers_[0]->batch());
+    pending_batches_ = 1;
   }
   pending_threads_ = threads;
   return stats;
@@ -454,7 +469,8 @@ InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const G
 void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& grid, const InsertOptions& options,
                                          const std::optional<KeyBox>& box_keys,
                                          std::span<const ProjectiveFrame> frames, unsigned threads,
-                                         std::size_t side_jobs, FunctionRef<void(std::size_t, UpdateBatch&)> side_job) {
+                                         std::size_t side_jobs, FunctionRef<void(std::size_t, UpdateBatch&)> side_job,
+                                         const HitsInRange* hits_in, InsertStats* hit_stats) {
   // One rule and tracer per image (the six faces of a scan, or one depth
   // image); a voxel gets a miss when any of them clears it.
   std::vector<ProjectiveRule> rules;
@@ -472,10 +488,15 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
   if (threads == 1) {
     for (std::size_t job = 0; job < side_jobs; ++job) side_job(job, tracers_[0]->batch());
     for (const ProjectiveRule& rule : rules) ProjectiveTracer(rule).trace(0, root_depth, tracers_[0]->batch());
+    pending_batches_ = 1;
     return;
   }
   // Subtrees for the threads: the nodes the walks open, down to the first
-  // depth that yields 16 per thread (several per thread balance uneven ones).
+  // depth that yields kTasksPerThread per thread. The work is where the
+  // surfaces are, so subtrees are very uneven: with 16 a thread, the two
+  // workers' CPU time in a TUM frame's trace at 4 mm differed by up to 6x
+  // (118 and 19 ms); with 64 mostly within 1.1x (job CPU accounting,
+  // umbra_insert_benchmark --serial-share).
   struct Task {
     std::size_t image;
     ProjectiveTracer::Task node;
@@ -492,39 +513,58 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
       ProjectiveTracer(rules[i]).collect(0, root_depth, depth, nodes);
       for (const ProjectiveTracer::Task& node : nodes) tasks.push_back({i, node});
     }
-    if (tasks.size() >= std::size_t{threads} * 16) break;
+    if (tasks.size() >= std::size_t{threads} * kTasksPerThread) break;
   }
+  // Hits routed to the tasks need the tasks disjoint and in code order: one image's are (collect).
+  const bool route_hits = hits_in != nullptr && rules.size() == 1;
+  std::vector<InsertStats> task_hit_stats(route_hits ? tasks.size() + 1 : 0);  // the last: outside every task
+  const auto task_end = [](const Task& task) { return task.node.code + (std::uint64_t{1} << (3 * task.node.depth)); };
   // The side jobs are the first tasks: the pool hands tasks out in order, so they start first.
   pool_->run(side_jobs + tasks.size(), [&](std::size_t i, unsigned worker) {
+    UpdateBatch& batch = tracers_[worker]->batch();
     if (i < side_jobs) {
-      side_job(i, tracers_[worker]->batch());
+      if (i > 0 || !route_hits) {
+        side_job(i, batch);
+        return;
+      }
+      std::uint64_t first = 0;  // the hits between the tasks
+      InsertStats& counts = task_hit_stats.back();
+      for (const Task& task : tasks) {
+        if (task.node.code > first) (*hits_in)(first, task.node.code, batch, counts);
+        first = task_end(task);
+      }
+      (*hits_in)(first, ~std::uint64_t{0}, batch, counts);
       return;
     }
     const Task& task = tasks[i - side_jobs];
-    ProjectiveTracer(rules[task.image]).trace(task.node.code, task.node.depth, tracers_[worker]->batch());
+    ProjectiveTracer(rules[task.image]).trace(task.node.code, task.node.depth, batch);
+    if (route_hits) (*hits_in)(task.node.code, task_end(task), batch, task_hit_stats[i - side_jobs]);
   });
-  UpdateBatch& merged = tracers_[0]->batch();
-  for (unsigned w = 1; w < threads; ++w) {
-    merged.merge(tracers_[w]->batch());
-    tracers_[w]->start(grid.depth_levels());
-  }
+  // In a fixed order: the counts do not depend on which worker ran what.
+  for (const InsertStats& counts : task_hit_stats) *hit_stats += counts;
+  pending_batches_ = threads;
 }
 
 void Integrator::apply(OccupancyTree& tree, const SensorModel& sensor) {
   if (pending_threads_ == 0) throw std::logic_error("Integrator::apply: nothing traced");
   const unsigned threads = pending_threads_;
   pending_threads_ = 0;
-  tree.apply(tracers_[0]->batch(), sensor.hit_log_odds(), sensor.miss_log_odds(),
-             threads > 1 ? pool_.get() : nullptr);
-  tracers_[0]->start(tree.depth_levels());
+  tree.apply(pending_batches(), sensor.hit_log_odds(), sensor.miss_log_odds(), threads > 1 ? pool_.get() : nullptr);
+  for (unsigned w = 0; w < pending_batches_; ++w) tracers_[w]->start(tree.depth_levels());
+  pending_batches_ = 0;
   if (!pending_colors_.empty()) tree.add_colors(pending_colors_, threads > 1 ? pool_.get() : nullptr);
   std::vector<OccupancyTree::ColorSample>().swap(pending_colors_);
 }
 
-const UpdateBatch& Integrator::pending_batch() const { return tracers_[0]->batch(); }
+std::vector<const UpdateBatch*> Integrator::pending_batches() const {
+  std::vector<const UpdateBatch*> batches;
+  for (unsigned w = 0; w < pending_batches_; ++w) batches.push_back(&tracers_[w]->batch());
+  return batches;
+}
 
 void Integrator::discard() {
   pending_threads_ = 0;  // the next trace() empties the batches
+  pending_batches_ = 0;
   std::vector<OccupancyTree::ColorSample>().swap(pending_colors_);
 }
 

@@ -94,8 +94,10 @@ class Integrator {
   /// Writes the pending update of the last trace() into `tree` (the same
   /// tree, unchanged since) and forgets it.
   void apply(OccupancyTree& tree, const SensorModel& sensor);
-  /// The update apply() will write (between trace() and apply()).
-  [[nodiscard]] const UpdateBatch& pending_batch() const;
+  /// The update apply() will write (between trace() and apply()): one batch,
+  /// or one per worker (the projective integrator's, applied side by side
+  /// without a merge: OccupancyTree::apply of several batches).
+  [[nodiscard]] std::vector<const UpdateBatch*> pending_batches() const;
   /// Forgets the pending update (after a failed trace).
   void discard();
 
@@ -115,20 +117,30 @@ class Integrator {
   InsertStats trace_scan_projective(const OccupancyTree& tree, const Grid& grid, Vec3f origin, std::span<const Vec3f> points,
                                     std::span<const Rgb> colors, const InsertOptions& options,
                                     const std::optional<Aabb>& box);
+  /// Adds the hits whose voxel codes lie in [first, end) to a batch, counting them in the stats.
+  using HitsInRange = FunctionRef<void(std::uint64_t first, std::uint64_t end, UpdateBatch&, InsertStats&)>;
   /// The projective integrator's misses for `frames`, into the tracers'
-  /// batches (merged into tracers_[0]'s); with `tree`, its obstacles are
-  /// cleared only where the frames' rays cross them. side_job(0 ..
-  /// side_jobs - 1, a batch) run first, each on one worker while the others
-  /// trace (the hits, into that worker's batch, and the colors).
+  /// batches (one per worker, all pending: no merge); with `tree`, its
+  /// obstacles are cleared only where the frames' rays cross them.
+  /// side_job(0 .. side_jobs - 1, a batch) run first, each on one worker
+  /// while the others trace (the hits, into that worker's batch, and the
+  /// colors). With `hits_in` (one frame only), side job 0 is not run on
+  /// several threads: each subtree task adds the hits inside it to its own
+  /// batch after its misses, and side job 0's place takes the hits outside
+  /// every task (counted into `hit_stats`), so that the batches meet only
+  /// above the tasks (tree/apply_batches.cpp).
   void trace_projective_misses(const OccupancyTree* tree, const Grid& grid, const InsertOptions& options,
                                const std::optional<KeyBox>& box_keys, std::span<const ProjectiveFrame> frames,
                                unsigned threads, std::size_t side_jobs,
-                               FunctionRef<void(std::size_t, UpdateBatch&)> side_job);
+                               FunctionRef<void(std::size_t, UpdateBatch&)> side_job,
+                               const HitsInRange* hits_in = nullptr, InsertStats* hit_stats = nullptr);
 
   std::unique_ptr<ThreadPool> pool_;
   std::vector<std::unique_ptr<RayTracer>> tracers_;  // one per worker
-  // Pending between trace() and apply(): the merged batch is tracers_[0]'s.
+  // Pending between trace() and apply(): the batches of tracers_[0 ..
+  // pending_batches_) (one when merged into tracers_[0]'s).
   unsigned pending_threads_ = 0;  // 0: nothing pending
+  unsigned pending_batches_ = 0;
   std::vector<OccupancyTree::ColorSample> pending_colors_;
   // The projective integrator's image and the points of the last depth
   // image, kept between scans (their buffers are reused).

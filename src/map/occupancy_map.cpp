@@ -232,7 +232,7 @@ InsertStats insert_scan(detail::MapState& state, const Grid& grid, Vec3d sensor,
   {
     const auto start = std::chrono::steady_clock::now();
     detail::ClosedGate closed(state.gate);
-    state.journal->record_batch(state.integrator.pending_batch());
+    for (const UpdateBatch* batch : state.integrator.pending_batches()) state.journal->record_batch(*batch);
     state.integrator.apply(state.tree, state.sensor);
     stats.exclusive_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }

@@ -367,9 +367,17 @@ void OccupancyTree::add_colors_in_parallel(std::span<const ColorSample> samples,
       deeper = true;
       std::size_t begin = 0;
       while (begin < task.samples.size()) {
+        // The run of this slot's samples, by binary search: scanning every
+        // sample on every level was serial work on the whole scan's samples
+        // (1.7 ms a TUM frame at 4 mm, a quarter of two threads' serial part).
         const unsigned slot = morton::slot(task.samples[begin].code, task.depth);
-        std::size_t end = begin + 1;
-        while (end < task.samples.size() && morton::slot(task.samples[end].code, task.depth) == slot) ++end;
+        const auto rest = task.samples.subspan(begin);
+        const std::size_t end =
+            begin + static_cast<std::size_t>(std::partition_point(rest.begin(), rest.end(),
+                                                                  [&](const ColorSample& sample) {
+                                                                    return morton::slot(sample.code, task.depth) == slot;
+                                                                  }) -
+                                             rest.begin());
         if (inner_[task.depth][task.group].child[slot] == kNoGroup) expand(task.depth, task.group, slot);
         parents.push_back({task.depth, task.group, slot});
         const std::uint32_t child = inner_[task.depth][task.group].child[slot];

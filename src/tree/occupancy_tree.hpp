@@ -198,6 +198,12 @@ class OccupancyTree {
   /// its misses. With a thread pool, independent subtrees are updated in
   /// parallel; the result is the same, bit for bit.
   void apply(const UpdateBatch& batch, float hit, float miss, ThreadPool* pool = nullptr);
+  /// apply() of several batches at once, as if they were merged into one
+  /// (UpdateBatch::merge): a voxel with a hit in any of them gets a hit, else
+  /// one with a miss in any gets a miss; the map is the one apply() of the
+  /// merged batch gives, bit for bit. For batches filled by different
+  /// workers, with no serial merge (tree/apply_batches.cpp).
+  void apply(std::span<const UpdateBatch* const> batches, float hit, float miss, ThreadPool* pool = nullptr);
   /// One addition for add_to_nodes: `delta` to every voxel of the
   /// depth-`depth` node whose first finest voxel is `code`.
   struct NodeDelta {
@@ -349,6 +355,25 @@ class OccupancyTree {
   void apply_group(int depth, std::uint32_t group, const UpdateBatch& batch, std::uint32_t batch_group,
                    float hit, float miss);
   void apply_in_parallel(const UpdateBatch& batch, float hit, float miss, ThreadPool& pool);
+  /// A group of one of the batches apply(batches) writes, at the walk's depth.
+  struct BatchGroup {
+    const UpdateBatch* batch;
+    std::uint32_t group;
+  };
+  /// apply(batches) below map group `group` at `depth`: `todo` holds the
+  /// batches' groups there (all of the same node), `missed` says every voxel
+  /// below gets a miss from a full node above. `scratch` has room for one
+  /// list of batch groups per depth (tree/apply_batches.cpp).
+  void apply_groups(int depth, std::uint32_t group, std::span<const BatchGroup> todo, bool missed, float hit,
+                    float miss, std::span<BatchGroup> scratch);
+  /// What apply(batches) does to a slot of a node: nothing, a miss to its
+  /// whole region, or a walk below (`children`, the batches' groups there).
+  enum class SlotUpdate : std::uint8_t { none, everywhere, below };
+  SlotUpdate slot_update(int depth, unsigned slot, std::span<const BatchGroup> todo, bool missed,
+                         std::span<BatchGroup> scratch, std::span<const BatchGroup>& children,
+                         bool& children_missed) const;
+  void apply_batches_in_parallel(std::span<const UpdateBatch* const> batches, float hit, float miss,
+                                 ThreadPool& pool);
   /// A node above the subtrees of a parallel phase, refreshed after it.
   struct SplitNode {
     int depth;

@@ -458,21 +458,59 @@ TEST(ProjectiveIntegrator, SameMapForAnyThreadCountWithCells) {
   // At 4 mm, where far nodes are decided by cells (projective_frame.hpp):
   // the threads' subtrees must not cut a node that cells decide. A range
   // of 2.5 m keeps the map small and still holds cells (their range nodes
-  // are 3 deep).
+  // are 3 deep). With color, and with automatic pruning off too: on
+  // several threads each worker's batch holds the misses and hits of its
+  // own subtrees and the batches are applied side by side without a merge
+  // (tree/apply_batches.cpp); a node missed whole between two workers'
+  // batches must still be one miss for the node, as one thread's batch has
+  // it, or an unpruned map keeps its eight children. The hit counts must
+  // not depend on how the hits were split between the subtrees either.
   const std::vector<sim::SimulatedDepthImage> frames = sim::demo_depth_images(3);
-  std::vector<std::vector<std::tuple<std::uint64_t, int, float>>> results;
-  for (const unsigned threads : {1u, 2u, 3u, 16u}) {
-    OccupancyMap map(0.004);
-    InsertOptions options;
-    options.integrator = IntegratorKind::projective;
-    options.max_range = 2.5;
-    options.threads = threads;
-    for (std::size_t i = 0; i < 2; ++i) map.insert_depth_image(frames[i].view(), frames[i].camera, frames[i].pose, {}, options);
-    ASSERT_TRUE(test::check_invariants(map).empty());
-    results.push_back(leaves_of(test::tree_of(map)));
+  std::vector<std::vector<Rgb>> frame_colors(2);
+  for (std::size_t i = 0; i < frame_colors.size(); ++i) {
+    for (std::size_t p = 0; p < frames[i].view().pixel_count(); ++p) {
+      frame_colors[i].push_back(Rgb{static_cast<std::uint8_t>(p * 5), static_cast<std::uint8_t>(p >> 4),
+                                    static_cast<std::uint8_t>(60 + i)});
+    }
   }
-  EXPECT_GT(results[0].size(), 1000u);
-  for (std::size_t i = 1; i < results.size(); ++i) EXPECT_EQ(results[i], results[0]) << "run " << i;
+  using Leaf = std::tuple<std::uint64_t, int, float, std::uint8_t, std::uint8_t, std::uint8_t>;
+  for (const bool auto_prune : {true, false}) {
+    SCOPED_TRACE(auto_prune ? "pruned" : "not pruned");
+    std::vector<std::vector<Leaf>> results;
+    std::vector<std::vector<std::size_t>> counts;
+    for (const unsigned threads : {1u, 2u, 3u, 16u}) {
+      MapConfig config;
+      config.resolution = 0.004;
+      config.color = true;
+      OccupancyMap map(config);
+      map.set_auto_prune(auto_prune);
+      InsertOptions options;
+      options.integrator = IntegratorKind::projective;
+      options.max_range = 2.5;
+      options.threads = threads;
+      std::vector<std::size_t> hit_counts;
+      for (std::size_t i = 0; i < 2; ++i) {
+        const InsertStats stats =
+            map.insert_depth_image(frames[i].view(), frames[i].camera, frames[i].pose, frame_colors[i], options);
+        hit_counts.insert(hit_counts.end(), {stats.hits, stats.truncated, stats.rays});
+      }
+      ASSERT_TRUE(test::check_invariants(map).empty());
+      const OccupancyTree& tree = test::tree_of(map);
+      std::vector<Leaf> leaves;
+      tree.for_each_leaf([&](NodeRef node, std::uint64_t code) {
+        const Rgb c = tree.color(node).value_or(Rgb{});
+        leaves.emplace_back(code, node.depth, tree.log_odds(node), c.r, c.g, c.b);
+      });
+      results.push_back(std::move(leaves));
+      counts.push_back(std::move(hit_counts));
+    }
+    EXPECT_GT(results[0].size(), 1000u);
+    EXPECT_GT(counts[0][0], 1000u);
+    for (std::size_t i = 1; i < results.size(); ++i) {
+      EXPECT_EQ(results[i], results[0]) << "run " << i;
+      EXPECT_EQ(counts[i], counts[0]) << "run " << i;
+    }
+  }
 }
 
 TEST(ProjectiveIntegrator, AgreesWithSimpleOnTheSimulatedCamera) {

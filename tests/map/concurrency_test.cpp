@@ -288,6 +288,9 @@ TEST(Concurrency, ReadersSeeWholeScansWithThreadsColorAndNoPruning) {
   run_contract({IntegratorKind::discrete, 2, false, true}, 8, 2, 1);
   run_contract({IntegratorKind::fast, 2, false, false}, 8, 2, 1);
   run_contract({IntegratorKind::discrete, 1, true, true}, 6, 2, 1);
+  // The projective integrator's workers' batches are applied side by side
+  // (tree/apply_batches.cpp), inside the same exclusive phase.
+  run_contract({IntegratorKind::projective, 2, true, false}, 6, 2, 1);
 }
 
 /// The distance field's contract (distance_field.hpp): a writer inserts a
