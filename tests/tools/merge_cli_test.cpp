@@ -14,6 +14,8 @@
 #include "support/test_support.hpp"
 #include "umbra/io/map_file.hpp"
 #include "umbra/io/map_formats.hpp"
+#include "umbra/io/spill_file.hpp"
+#include "umbra/map/moving_window.hpp"
 
 namespace umbra {
 namespace {
@@ -79,6 +81,52 @@ TEST(MergeCli, WritesTheLibrarysMerge) {
   expected.merge(c_read, turn);
   EXPECT_EQ(leaves(merged_by_cli(" --transform 0.05 0 0 0.9961946980917455 0 0 0.08715574274765817")),
             leaves(expected));
+}
+
+TEST(MergeCli, PutsAMovingWindowsRunBackTogether) {
+  // A run on a map that keeps 1 m around the sensor, what left spilled to
+  // run.umbs: `umbra merge run.umbs final.umb` is the library's load_spill
+  // plus the final window.
+  const fs::path dir = test::scratch_dir();
+  OccupancyMap map(0.1);
+  MovingWindow window;
+  window.half_extent = 1.0;
+  window.spill = spill_to_file(dir / "run.umbs");
+  map.set_moving_window(window);
+  for (int stop = 0; stop < 4; ++stop) {
+    const Vec3f origin{2.5f * static_cast<float>(stop), 0.0f, 0.0f};
+    std::vector<Vec3f> points;
+    for (int i = -8; i <= 8; ++i) {
+      for (int j = -8; j <= 8; ++j) {
+        const float a = static_cast<float>(i) * 0.1f + 0.03f;
+        const float b = static_cast<float>(j) * 0.1f + 0.03f;
+        points.push_back(origin + Vec3f{0.83f, a, b});
+        points.push_back(origin + Vec3f{a, -0.77f, b});
+      }
+    }
+    map.insert_point_cloud(origin, points);
+  }
+  save_map(map, dir / "final.umb");
+  std::size_t pieces = 0;
+  (void)for_each_spill_piece(dir / "run.umbs", [&](OccupancyMap&&) { ++pieces; });
+  EXPECT_GE(pieces, 2u);
+
+  const CommandResult r = run("merge " + quoted(dir / "run.umbs") + " " + quoted(dir / "final.umb") + " -o " +
+                              quoted(dir / "whole.umb"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  OccupancyMap expected = load_spill(dir / "run.umbs");
+  expected.merge(load_map(dir / "final.umb"));
+  const OccupancyMap whole = load_map(dir / "whole.umb");
+  EXPECT_EQ(leaves(whole), leaves(expected));
+  EXPECT_GT(leaves(whole).size(), leaves(load_map(dir / "final.umb")).size());
+
+  // A damaged spill file: exit code 1, the file named, nothing written.
+  fs::resize_file(dir / "run.umbs", fs::file_size(dir / "run.umbs") - 5);
+  const CommandResult bad = run("merge " + quoted(dir / "run.umbs") + " " + quoted(dir / "final.umb") + " -o " +
+                                quoted(dir / "bad.umb"));
+  EXPECT_EQ(bad.exit_code, 1) << bad.output;
+  EXPECT_TRUE(contains(bad.output, (dir / "run.umbs").string())) << bad.output;
+  EXPECT_FALSE(fs::exists(dir / "bad.umb"));
 }
 
 TEST(MergeCli, BadInputNamesTheFileOrOptionAndWritesNothing) {
