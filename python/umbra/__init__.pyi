@@ -758,6 +758,9 @@ class ScanReader:
     @property
     def name(self) -> str:
         """Where the last scan came from, e.g. 'run.graph scan 3'."""
+    @property
+    def stamp(self) -> Optional[float]:
+        """The last scan's time in seconds where the input states it (TUM: the depth image's name; ROS bags: header.stamp), else None: pass it to Map.insert(stamp=...) for decay."""
 
 def read_scans(
     path: PathLike,
