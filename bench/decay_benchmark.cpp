@@ -26,6 +26,7 @@
 
 #include <octomap/OcTree.h>
 
+#include "common/argument_cursor.hpp"
 #include "bench_data.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
@@ -166,29 +167,22 @@ void run(const std::string& name, const Options& options) {
 
 int main(int argc, char** argv) {
   Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::cerr << arg << " needs a value\n";
-        std::exit(2);
-      }
-      return argv[++i];
-    };
+  for (umbra_bench::ArgumentCursor args{argc, argv}; args.next();) {
+    const std::string arg = args.flag();
     if (arg == "--data" || arg == "--data-dir") {
-      options.data_dir = value();
+      options.data_dir = args.value();
     } else if (arg == "--datasets") {
-      options.datasets = umbra::bench::split_list(value());
+      options.datasets = umbra::bench::split_list(args.value());
     } else if (arg == "--steps") {
-      options.steps = std::stoi(value());
+      options.steps = std::stoi(args.value());
     } else if (arg == "--dt") {
-      options.dt = std::stod(value());
+      options.dt = std::stod(args.value());
     } else if (arg == "--occupied") {
-      options.occupied = std::stod(value());
+      options.occupied = std::stod(args.value());
     } else if (arg == "--free") {
-      options.free = std::stod(value());
+      options.free = std::stod(args.value());
     } else if (arg == "--region") {
-      options.region = std::stod(value());
+      options.region = std::stod(args.value());
     } else {
       std::cerr << "usage: umbra_decay_benchmark [--data DIR] [--datasets 3dtk,tum] [--steps N] [--dt S] "
                    "[--occupied R] [--free R] [--region M]\n";

@@ -39,6 +39,7 @@
 #include <dynamicEDT3D/dynamicEDTOctomap.h>
 #include <octomap/OcTree.h>
 
+#include "common/argument_cursor.hpp"
 #include "bench_data.hpp"
 #include "umbra/io/octomap_files.hpp"
 #include "umbra/map/occupancy_map.hpp"
@@ -396,25 +397,18 @@ double sum(const std::vector<double>& v) {
 
 int main(int argc, char** argv) {
   Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::cerr << arg << " needs a value\n";
-        std::exit(2);
-      }
-      return argv[++i];
-    };
+  for (umbra_bench::ArgumentCursor args{argc, argv}; args.next();) {
+    const std::string arg = args.flag();
     if (arg == "--data" || arg == "--data-dir") {  // scripts/bench.sh passes --data, as to every benchmark
-      options.data_dir = value();
+      options.data_dir = args.value();
     } else if (arg == "--datasets") {
-      options.datasets = umbra::bench::split_list(value());
+      options.datasets = umbra::bench::split_list(args.value());
     } else if (arg == "--max-distance") {
-      options.max_distance = std::stod(value());
+      options.max_distance = std::stod(args.value());
     } else if (arg == "--queries") {
-      options.queries = std::stoul(value());
+      options.queries = std::stoul(args.value());
     } else if (arg == "--samples") {
-      options.samples = std::stoul(value());
+      options.samples = std::stoul(args.value());
     } else {
       std::cerr << "usage: umbra_field_benchmark [--data DIR] [--datasets 3dtk,tum,geb079] [--max-distance M]"
                    " [--queries N] [--samples N]\n";
