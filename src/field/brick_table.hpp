@@ -166,4 +166,49 @@ class BrickKeySet {
   std::size_t size_ = 0;
 };
 
+/// A set of bricks within a box of brick indices [lo, hi] (an update's
+/// candidates: the bricks within reach of its changes, a few million
+/// inserts per scan, most of them repeats): one bit per brick of the box
+/// when the box is small enough, else a BrickKeySet. The bitmap turns each
+/// repeat into one memory access near the last one.
+class BrickMarks {
+ public:
+  BrickMarks(const std::uint32_t lo[3], const std::uint32_t hi[3]) {
+    std::uint64_t volume = 1;
+    for (int a = 0; a < 3; ++a) {
+      lo_[a] = lo[a];
+      size_[a] = std::uint64_t(hi[a]) - lo[a] + 1;
+      volume *= size_[a];
+    }
+    if (volume <= kMostBits) bits_.assign(std::size_t((volume + 63) / 64), 0);
+    dense_ = volume <= kMostBits;
+  }
+  /// Adds the brick (inside the box); true if it was not there.
+  bool insert(std::uint32_t x, std::uint32_t y, std::uint32_t z, std::uint64_t key) {
+    if (!dense_) return sparse_.insert(key);
+    const std::uint64_t i = index(x, y, z);
+    std::uint64_t& word = bits_[std::size_t(i >> 6)];
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    if ((word & bit) != 0) return false;
+    word |= bit;
+    return true;
+  }
+  [[nodiscard]] bool contains(std::uint32_t x, std::uint32_t y, std::uint32_t z, std::uint64_t key) const {
+    if (!dense_) return sparse_.contains(key);
+    const std::uint64_t i = index(x, y, z);
+    return (bits_[std::size_t(i >> 6)] >> (i & 63) & 1u) != 0;
+  }
+
+ private:
+  static constexpr std::uint64_t kMostBits = std::uint64_t{1} << 27;  // 16 MB
+  [[nodiscard]] std::uint64_t index(std::uint32_t x, std::uint32_t y, std::uint32_t z) const {
+    return (std::uint64_t(z - lo_[2]) * size_[1] + (y - lo_[1])) * size_[0] + (x - lo_[0]);
+  }
+  std::uint32_t lo_[3] = {0, 0, 0};
+  std::uint64_t size_[3] = {0, 0, 0};
+  bool dense_ = false;
+  std::vector<std::uint64_t> bits_;
+  BrickKeySet sparse_;
+};
+
 }  // namespace umbra::detail

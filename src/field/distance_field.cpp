@@ -59,6 +59,7 @@ constexpr std::size_t kMaxKnownBricks = std::size_t{1} << 23;
 struct FieldBrick {
   BrickBits bits;
   BrickOffsets offsets;
+  detail::SiteBounds bounds;  ///< of `offsets` (an update's first test)
 };
 
 using BrickMap = detail::BrickTable<FieldBrick>;
@@ -107,7 +108,7 @@ struct DistanceField::State {
   void update();
   /// The kinds (bit 0 occupied, bit 1 unknown) in which some cell of brick
   /// `b` (its offsets before the update) had its nearest site among those
-  /// `changes` removed (removes[kind]: any change removed sites of the kind).
+  /// `changes` removed (only kinds with removes[kind] are looked at).
   [[nodiscard]] int nearest_site_removed(BrickIndex b, const BrickOffsets& offsets,
                                           const std::unordered_map<std::uint64_t, detail::BrickChange>& changes,
                                           const bool removes[2]) const;
@@ -275,6 +276,7 @@ DistanceField::State::Computed DistanceField::State::compute(
             out.drop.push_back(b.packed());
             return;
           }
+          brick->bounds = detail::site_bounds(layout, brick->offsets);
           out.store.emplace_back(b.packed(), std::move(brick));
         },
         chunks[task].second);
@@ -391,18 +393,28 @@ void DistanceField::State::update() {
   // field keeps (in the box; without one, stored already or within reach
   // of known space now: a brick not stored is trivial, and only a change
   // holding known space can make it otherwise).
-  detail::BrickKeySet target_set;
   std::vector<std::uint64_t> target_keys;
   std::vector<std::uint64_t> removed;
   const int reach = layout.brick_reach();
+  std::uint32_t lo[3] = {~0u, ~0u, ~0u}, hi[3] = {0, 0, 0};
+  for (const BrickIndex b : changed) {
+    const std::uint32_t v[3] = {b.x, b.y, b.z};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], v[a] < std::uint32_t(reach) ? 0u : v[a] - std::uint32_t(reach));
+      hi[a] = std::max(hi[a], std::min(v[a] + std::uint32_t(reach), layout.bricks_per_axis() - 1));
+    }
+  }
+  if (changed.empty()) lo[0] = lo[1] = lo[2] = 0;
+  detail::BrickMarks target_set(lo, hi);
   for (std::uint32_t c = 0; c < changed.size(); ++c) {
     const BrickIndex b = changed[c];
     const bool known = known_after(b.packed());
     for_each_neighbour(b, reach, [&](BrickIndex n) {
       const std::uint64_t key = n.packed();
-      if ((box_cells ? brick_meets_box(n) : (known || bricks.contains(key))) && target_set.insert(key)) {
-        target_keys.push_back(key);
-      }
+      if (target_set.contains(n.x, n.y, n.z, key)) return;
+      if (!(box_cells ? brick_meets_box(n) : (known || bricks.contains(key)))) return;
+      target_set.insert(n.x, n.y, n.z, key);
+      target_keys.push_back(key);
     });
   }
   if (!box_cells) {
@@ -411,7 +423,7 @@ void DistanceField::State::update() {
     for (const BrickIndex b : changed) {
       if (known_after(b.packed()) || !sites_of(b.packed()).known) continue;  // only bricks that became unknown
       for_each_neighbour(b, reach, [&](BrickIndex n) {
-        if (!target_set.contains(n.packed()) || gone.contains(n.packed())) return;
+        if (!target_set.contains(n.x, n.y, n.z, n.packed()) || gone.contains(n.packed())) return;
         bool near_known = false;
         for_each_neighbour(n, reach, [&](BrickIndex m) { near_known = near_known || known_after(m.packed()); });
         if (!near_known) {
@@ -424,55 +436,95 @@ void DistanceField::State::update() {
       std::erase_if(target_keys, [&](std::uint64_t key) { return gone.contains(key); });
     }
   }
-  // The changes that add sites; a target looks through those within reach
-  // (a scan of a list of a few thousand beats a list per target).
-  std::vector<std::uint32_t> adding;
-  for (std::uint32_t c = 0; c < changed.size(); ++c) {
-    const detail::BrickChange& change = changes.at(changed[c].packed());
-    if (change.adds(0) || change.adds(1)) adding.push_back(c);
-  }
-  // The sites each change adds, per kind.
+  // Per change, the sites it adds and the range of the cells it adds or
+  // removes, per kind; a target looks through the changes within reach (a
+  // scan of a list of a few thousand beats a list per target).
   std::vector<std::array<std::vector<detail::CellCoord>, 2>> added(changed.size());
-  bool removes[2] = {false, false};
+  std::vector<detail::ChangeExtent> extents(changed.size());
   for (std::size_t c = 0; c < changed.size(); ++c) {
     const detail::BrickChange& change = changes.at(changed[c].packed());
-    for (int kind = 0; kind < 2; ++kind) {
-      change.append_added(kind, changed[c], added[c][std::size_t(kind)]);
-      const auto& b = kind == 0 ? change.before.occupied : change.before.unknown;
-      const auto& a = kind == 0 ? change.after.occupied : change.after.unknown;
-      for (std::size_t w = 0; w < 8; ++w) removes[kind] = removes[kind] || (b[w] & ~a[w]) != 0;
-    }
+    extents[c] = detail::change_extent(change, changed[c]);
+    for (int kind = 0; kind < 2; ++kind) change.append_added(kind, changed[c], added[c][std::size_t(kind)]);
   }
   // A target whose cells all keep their nearest sites is lowered by the
   // added ones; one with a cell whose nearest site went is transformed
-  // again (site_changes.hpp).
+  // again (site_changes.hpp). The target's SiteBounds skip, without
+  // reading its cells, the changes too far to matter to it: most targets
+  // (every brick within reach of a change) meet none that does.
   const detail::BrickOffsets implicit_offsets = detail::trivial_offsets();
+  const detail::SiteBounds implicit_bounds = detail::site_bounds(layout, implicit_offsets);
+  // The least S between two whole bricks, by their offset (a target's
+  // first, cheapest test against a change).
+  const std::int64_t side = 2 * reach + 1;
+  std::vector<std::uint32_t> brick_least(std::size_t(side * side * side));
+  const BrickIndex centre{std::uint32_t(reach), std::uint32_t(reach), std::uint32_t(reach)};
+  for (std::int64_t i = 0; i < side * side * side; ++i) {
+    const std::int64_t at[3] = {i % side, i / side % side, i / (side * side)};
+    detail::CellRange whole;
+    for (int a = 0; a < 3; ++a) {
+      whole.lo[a] = at[a] * kBrickCells;
+      whole.hi[a] = whole.lo[a] + kBrickCells - 1;
+    }
+    brick_least[std::size_t(i)] = detail::least_squared(layout, centre, whole);
+  }
   const unsigned workers = pool ? pool->size() : 1;
   std::vector<Computed> lowered_parts(workers);
   std::vector<std::vector<std::pair<std::uint64_t, Partial>>> dirty_parts(workers);
+  std::vector<std::array<std::vector<detail::AddedSites>, 2>> near_parts(workers);
   const auto lower = [&](std::size_t task, unsigned worker) {
     const std::uint64_t key = target_keys[task];
     const BrickIndex b = BrickIndex::unpack(key);
     const FieldBrick* stored = bricks.find(key);
-    const detail::BrickOffsets& before = stored != nullptr ? stored->offsets : implicit_offsets;
-    int transform_kinds = nearest_site_removed(b, before, changes, removes);
-    const auto own = changes.find(key);
-    auto brick = std::make_unique<FieldBrick>();
-    brick->bits = own != changes.end() ? own->second.after : (stored != nullptr ? stored->bits : default_sites(b));
-    brick->offsets = before;
-    std::array<std::vector<detail::AddedSites>, 2> near;
-    for (const std::uint32_t c : adding) {
+    const detail::SiteBounds& bounds = stored != nullptr ? stored->bounds : implicit_bounds;
+    std::array<std::vector<detail::AddedSites>, 2>& near = near_parts[worker];
+    near[0].clear();
+    near[1].clear();
+    bool may_remove[2] = {false, false};
+    const std::uint32_t most_relevant =
+        std::max({bounds.farthest[0], bounds.farthest[1], bounds.farthest_site[0], bounds.farthest_site[1]});
+    for (std::uint32_t c = 0; c < changed.size(); ++c) {
       const BrickIndex a = changed[c];
       if (std::abs(std::int64_t(a.x) - std::int64_t(b.x)) > reach ||
           std::abs(std::int64_t(a.y) - std::int64_t(b.y)) > reach ||
           std::abs(std::int64_t(a.z) - std::int64_t(b.z)) > reach) {
         continue;
       }
-      for (int kind = 0; kind < 2; ++kind) {
-        if ((transform_kinds >> kind & 1) != 0) continue;  // the transform gives that kind
-        if (!added[c][std::size_t(kind)].empty()) near[std::size_t(kind)].push_back({changed[c], added[c][std::size_t(kind)]});
+      // The least S between the two bricks as a whole first (a table by
+      // the bricks' offset), the changed cells' range only where that passes.
+      const std::uint32_t between = brick_least[std::size_t(
+          ((std::int64_t(a.z) - b.z + reach) * side + (std::int64_t(a.y) - b.y + reach)) * side +
+          (std::int64_t(a.x) - b.x + reach))];
+      if (between > most_relevant) continue;
+      for (std::size_t kind = 0; kind < 2; ++kind) {
+        const detail::ChangeExtent& extent = extents[c];
+        // A cell's nearest site is at most farthest_site away: a removed
+        // site farther than that from the whole brick was no cell's.
+        if (!may_remove[kind] && !extent.removed[kind].empty() &&
+            detail::least_squared(layout, b, extent.removed[kind]) <= bounds.farthest_site[kind]) {
+          may_remove[kind] = true;
+        }
+        // An added site lowers (or ties) a cell only within the cap and no
+        // farther than the cell's site (lower_by_added_sites() checks the
+        // same per site).
+        if (!added[c][kind].empty()) {
+          const std::uint32_t least = detail::least_squared(layout, b, extent.added[kind]);
+          if (least != detail::SiteBounds::kFarthest && layout.within_cap(least) && least <= bounds.farthest[kind]) {
+            near[kind].push_back({a, added[c][kind]});
+          }
+        }
       }
     }
+    const detail::BrickOffsets& before = stored != nullptr ? stored->offsets : implicit_offsets;
+    const int transform_kinds =
+        may_remove[0] || may_remove[1] ? nearest_site_removed(b, before, changes, may_remove) : 0;
+    for (int kind = 0; kind < 2; ++kind) {
+      if ((transform_kinds >> kind & 1) != 0) near[std::size_t(kind)].clear();  // the transform gives that kind
+    }
+    const auto own = changes.find(key);
+    if (transform_kinds == 0 && near[0].empty() && near[1].empty() && own == changes.end()) return;  // untouched
+    auto brick = std::make_unique<FieldBrick>();
+    brick->bits = own != changes.end() ? own->second.after : (stored != nullptr ? stored->bits : default_sites(b));
+    brick->offsets = before;
     const detail::LoweringResult result = detail::lower_by_added_sites(layout, b, brick->offsets, near);
     const bool lowered = result.changed;
     if (transform_kinds != 0) {
@@ -485,6 +537,7 @@ void DistanceField::State::update() {
       if (stored != nullptr) out.drop.push_back(key);
       return;
     }
+    brick->bounds = detail::site_bounds(layout, brick->offsets);
     out.store.emplace_back(key, std::move(brick));
   };
   if (pool && target_keys.size() > 1) {

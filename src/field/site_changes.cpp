@@ -6,15 +6,6 @@
 
 namespace umbra::detail {
 
-bool BrickChange::adds(int kind) const {
-  const auto& b = kind == 0 ? before.occupied : before.unknown;
-  const auto& a = kind == 0 ? after.occupied : after.unknown;
-  for (std::size_t w = 0; w < 8; ++w) {
-    if ((a[w] & ~b[w]) != 0) return true;
-  }
-  return false;
-}
-
 void BrickChange::append_added(int kind, BrickIndex brick, std::vector<CellCoord>& out) const {
   const auto& b = kind == 0 ? before.occupied : before.unknown;
   const auto& a = kind == 0 ? after.occupied : after.unknown;
@@ -25,6 +16,53 @@ void BrickChange::append_added(int kind, BrickIndex brick, std::vector<CellCoord
                      brick.z * kBrickCells + std::uint32_t(i >> 6)});
     }
   }
+}
+
+ChangeExtent change_extent(const BrickChange& change, BrickIndex brick) {
+  ChangeExtent out;
+  const std::int64_t first[3] = {std::int64_t(brick.x) * kBrickCells, std::int64_t(brick.y) * kBrickCells,
+                                 std::int64_t(brick.z) * kBrickCells};
+  const auto widen = [&](CellRange& r, std::uint64_t word, int w) {
+    for (; word != 0; word &= word - 1) {
+      const int i = 64 * w + std::countr_zero(word);
+      const std::int64_t at[3] = {first[0] + (i & 7), first[1] + ((i >> 3) & 7), first[2] + (i >> 6)};
+      const bool was_empty = r.empty();
+      for (int a = 0; a < 3; ++a) {
+        r.lo[a] = was_empty ? at[a] : std::min(r.lo[a], at[a]);
+        r.hi[a] = was_empty ? at[a] : std::max(r.hi[a], at[a]);
+      }
+    }
+  };
+  for (int kind = 0; kind < 2; ++kind) {
+    const auto& b = kind == 0 ? change.before.occupied : change.before.unknown;
+    const auto& a = kind == 0 ? change.after.occupied : change.after.unknown;
+    for (int w = 0; w < 8; ++w) {
+      widen(out.added[std::size_t(kind)], a[std::size_t(w)] & ~b[std::size_t(w)], w);
+      widen(out.removed[std::size_t(kind)], b[std::size_t(w)] & ~a[std::size_t(w)], w);
+    }
+  }
+  return out;
+}
+
+SiteBounds site_bounds(const FieldLayout& layout, const BrickOffsets& offsets) {
+  SiteBounds out;
+  for (int kind = 0; kind < 2; ++kind) {
+    std::uint32_t farthest = 0;
+    std::uint32_t farthest_site = 0;
+    for (const CellSites& cell : offsets) {
+      const SiteOffset o = kind == 0 ? cell.occupied : cell.unknown;
+      if (o.none()) {
+        farthest = SiteBounds::kFarthest;
+        continue;
+      }
+      const std::uint32_t s = layout.squared(o);
+      farthest_site = std::max(farthest_site, s);
+      farthest = std::max(farthest, s);
+    }
+    out.farthest[std::size_t(kind)] = farthest;
+    out.farthest_site[std::size_t(kind)] = farthest_site;
+  }
+  return out;
 }
 
 BrickOffsets trivial_offsets() {
@@ -166,6 +204,12 @@ bool may_lower(const FieldLayout& layout, std::uint32_t least, const CurrentDist
 }
 
 }  // namespace
+
+std::uint32_t least_squared(const FieldLayout& layout, BrickIndex brick, const CellRange& range) {
+  const std::int64_t first[3] = {std::int64_t(brick.x) * kBrickCells, std::int64_t(brick.y) * kBrickCells,
+                                 std::int64_t(brick.z) * kBrickCells};
+  return least_squared(layout, first, range.lo, range.hi);
+}
 
 LoweringResult lower_by_added_sites(const FieldLayout& layout, BrickIndex brick, BrickOffsets& offsets,
                                    const std::array<std::vector<AddedSites>, 2>& added) {

@@ -40,10 +40,41 @@ struct BrickChange {
     const auto& a = kind == 0 ? after.occupied : after.unknown;
     return ((b[std::size_t(cell >> 6)] & ~a[std::size_t(cell >> 6)]) >> (cell & 63) & 1u) != 0;
   }
-  [[nodiscard]] bool adds(int kind) const;
   /// Appends the cells that became sites of `kind`.
   void append_added(int kind, BrickIndex brick, std::vector<CellCoord>& out) const;
 };
+
+/// The cells [lo, hi] per axis (inclusive) holding some of a brick's added
+/// or removed sites of one kind; empty() when it has none.
+struct CellRange {
+  std::int64_t lo[3] = {0, 0, 0};
+  std::int64_t hi[3] = {-1, -1, -1};
+  [[nodiscard]] bool empty() const { return hi[0] < lo[0]; }
+};
+/// Per kind, the range of the cells that became sites and of those that
+/// stopped being sites (a cheap bound on whom a change can reach).
+struct ChangeExtent {
+  std::array<CellRange, 2> added;
+  std::array<CellRange, 2> removed;
+};
+ChangeExtent change_extent(const BrickChange& change, BrickIndex brick);
+
+/// Per kind, the largest S of a cell's nearest site over a brick:
+/// `farthest` counts a cell with none as kFarthest (any site within the cap
+/// is nearer), `farthest_site` looks at the cells with a site only (0 if
+/// none). A change at least `farthest` away lowers nothing in the brick, one
+/// farther than `farthest_site` removes no cell's nearest site: an update
+/// skips such bricks without looking at their cells.
+struct SiteBounds {
+  static constexpr std::uint32_t kFarthest = 0xFFFFFFFFu;
+  std::array<std::uint32_t, 2> farthest{kFarthest, kFarthest};
+  std::array<std::uint32_t, 2> farthest_site{0, 0};
+};
+SiteBounds site_bounds(const FieldLayout& layout, const BrickOffsets& offsets);
+
+/// The least S from any cell of `brick` to any cell of `range`
+/// (SiteBounds::kFarthest when beyond the window on some axis).
+std::uint32_t least_squared(const FieldLayout& layout, BrickIndex brick, const CellRange& range);
 
 /// The offsets of a brick that is not stored (see distance_field.hpp):
 /// unknown at every cell, no occupied site within max_distance.

@@ -11,11 +11,13 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <random>
 #include <tuple>
 #include <vector>
 
 #include "field/brick_table.hpp"
+#include "field/field_layout.hpp"
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/field/distance_field.hpp"
 
@@ -499,6 +501,25 @@ TEST(DistanceField, UpdateRecomputesOnlyNearChanges) {
   EXPECT_GT(field.stats().bricks_recomputed, 0u);
   field.update();  // nothing new
   EXPECT_EQ(field.stats().bricks_recomputed, 0u);
+}
+
+TEST(DistanceField, BrickMarksActAsASet) {
+  // An update's candidate set: a bitmap over the box of its bricks when
+  // that is small, a hash set when not; both must act as a set.
+  for (const std::uint32_t extent : {20u, 1u << 20}) {
+    const std::uint32_t lo[3] = {5, 7, 9};
+    const std::uint32_t hi[3] = {5 + extent, 7 + 29, 9 + 19};
+    detail::BrickMarks marks(lo, hi);
+    std::set<std::uint64_t> reference;
+    std::mt19937 rng(extent);
+    for (int step = 0; step < 20000; ++step) {
+      const detail::BrickIndex b{lo[0] + std::uint32_t(rng() % (std::min(extent, 40u) + 1)), lo[1] + std::uint32_t(rng() % 30),
+                                 lo[2] + std::uint32_t(rng() % 20)};
+      const std::uint64_t key = b.packed();
+      ASSERT_EQ(marks.contains(b.x, b.y, b.z, key), reference.contains(key)) << "extent " << extent << " step " << step;
+      ASSERT_EQ(marks.insert(b.x, b.y, b.z, key), reference.insert(key).second) << "extent " << extent << " step " << step;
+    }
+  }
 }
 
 TEST(DistanceField, BrickTableActsAsAMap) {
