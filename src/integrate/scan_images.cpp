@@ -39,6 +39,45 @@ const double kSideHalfWidth = std::tan(std::numbers::pi / ScanImages::kSideFaces
 const double kSideHalfHeight = 1.0 / std::cos(std::numbers::pi / ScanImages::kSideFaces);
 constexpr double kCapHalfWidth = 1.0;
 
+/// The side face whose axis is nearest to the azimuth of direction (x, y):
+/// round(atan2(y, x) / 45 degrees) mod 8, from the octant's comparisons
+/// with tan(22.5 degrees) instead of an atan2 (1.5% of a 3DTK scan's
+/// insertion). Only a direction within rounding of a border between two
+/// faces may get the other one; both hold it (the images overlap).
+int nearest_side_face(double x, double y) {
+  static_assert(ScanImages::kSideFaces == 8);
+  const double tan_half = kSideHalfWidth;  // tan(22.5 degrees)
+  const double ax = std::abs(x);
+  const double ay = std::abs(y);
+  if (ay <= tan_half * ax) return x >= 0.0 ? 0 : 4;  // within 22.5 degrees of the x axis
+  if (ax <= tan_half * ay) return y >= 0.0 ? 2 : 6;  // of the y axis
+  if (x >= 0.0) return y >= 0.0 ? 1 : 7;
+  return y >= 0.0 ? 3 : 5;
+}
+
+// The coarse cells of estimate_scan_resolution (cells of a cube's face at
+// unit focal length).
+constexpr double kCoarse = 28.0;  // cells per unit: 1/28 rad = 2 degrees at a face's centre
+constexpr int kCoarseSide = 56;
+
+/// The solid angle of coarse cell (i, j) of a cube's face (the same on
+/// every face), from a table made once: a pow per filled cell and scan was
+/// more than the table.
+double coarse_cell_solid_angle(int i, int j) {
+  static const std::vector<double> table = [] {
+    std::vector<double> t(std::size_t(kCoarseSide) * kCoarseSide);
+    for (int b = 0; b < kCoarseSide; ++b) {
+      for (int a = 0; a < kCoarseSide; ++a) {
+        const double u = (a + 0.5) / kCoarse - 1.0;
+        const double v = (b + 0.5) / kCoarse - 1.0;
+        t[std::size_t(b) * kCoarseSide + std::size_t(a)] = 1.0 / (kCoarse * kCoarse) / std::pow(1.0 + u * u + v * v, 1.5);
+      }
+    }
+    return t;
+  }();
+  return table[std::size_t(j) * kCoarseSide + std::size_t(i)];
+}
+
 }  // namespace
 
 void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResolution resolution) {
@@ -54,8 +93,9 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
     const double half_height = axes.cap ? kCapHalfWidth : kSideHalfHeight;
     face.width = 2 * static_cast<int>(std::ceil(face.fx * half_width)) + 2 * kOverlap;
     face.height = 2 * static_cast<int>(std::ceil(face.fy * half_height)) + 2 * kOverlap;
-    face.depth.assign(std::size_t(face.width) * std::size_t(face.height), 0.0f);
-    face.depth_halves.assign(4 * face.depth.size(), 0.0f);
+    // The pixels are set when the first point falls in (below).
+    face.depth.clear();
+    face.depth_halves.clear();
     face.cx = 0.5 * face.width - 0.5;
     face.cy = 0.5 * face.height - 0.5;
     face.origin = o;
@@ -80,39 +120,84 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
     ray_pixels_[k].clear();
     ray_points_[k].clear();
   }
+  // A side face k holds a point only where the point's azimuth lies within
+  // atan(reach_x[k]) of the face's axis (c.x / c.z is the tangent of the
+  // azimuth from the axis, whatever the elevation): the point is tested
+  // against the side faces up to `side_reach` steps from the nearest one
+  // (its own, found without a division; one step at a LiDAR's resolution,
+  // more for very coarse images, whose overlap reaches far) and the caps,
+  // instead of all ten faces.
+  double widest = 0.0;
+  for (int k = 0; k < kSideFaces; ++k) widest = std::max(widest, reach_x[static_cast<std::size_t>(k)]);
+  const double step_degrees = 360.0 / kSideFaces;
+  // Degrees a point may lie from its nearest face's axis: half a step, and
+  // a little for nearest_side_face's rounding on a border.
+  const double nearest_within = 0.5 * step_degrees + 0.01;
+  const double reach_degrees = std::atan(widest) * (180.0 / std::numbers::pi);
+  int side_reach = 0;
+  while (side_reach < kSideFaces / 2 && (side_reach + 1) * step_degrees - nearest_within < reach_degrees) ++side_reach;
+  const auto draw = [&](std::size_t k, const Vec3d& d, std::size_t index) {
+    ProjectiveFrame& face = faces_[k];
+    const auto& r = face.rotation;  // as ProjectiveFrame::rotate computes it
+    Vec3d c;
+    c.z = r[2][0] * d.x + r[2][1] * d.y + r[2][2] * d.z;
+    if (!(c.z > 0.0)) return;
+    c.x = r[0][0] * d.x + r[0][1] * d.y + r[0][2] * d.z;
+    if (std::abs(c.x) > reach_x[k] * c.z) return;
+    c.y = r[1][0] * d.x + r[1][1] * d.y + r[1][2] * d.z;
+    if (std::abs(c.y) > reach_y[k] * c.z) return;
+    const double u = face.fx * (c.x / c.z) + face.cx + 0.5;
+    const double v = face.fy * (c.y / c.z) + face.cy + 0.5;
+    if (!(u >= 0.0 && u < face.width && v >= 0.0 && v < face.height)) return;
+    if (face.depth.empty()) {  // its first point
+      face.depth.assign(std::size_t(face.width) * std::size_t(face.height), 0.0f);
+      face.depth_halves.assign(4 * face.depth.size(), 0.0f);
+    }
+    const std::size_t at =
+        std::size_t(static_cast<int>(v)) * std::size_t(face.width) + std::size_t(static_cast<int>(u));
+    float& pixel = face.depth[at];
+    const auto depth = static_cast<float>(c.z);
+    if (pixel == 0.0f || depth < pixel) pixel = depth;
+    // Its half pixel: the rule computes it as (int)(u + u) from float u,
+    // which may differ from the double here only on a half-pixel border
+    // (then the point counts in the neighbouring half: harmless).
+    float& half = face.depth_halves[std::size_t(static_cast<int>(2.0 * v)) * std::size_t(2 * face.width) +
+                                    std::size_t(static_cast<int>(2.0 * u))];
+    if (half == 0.0f || depth < half) half = depth;
+    ray_pixels_[k].push_back(static_cast<std::uint32_t>(at));
+    ray_points_[k].push_back(static_cast<std::uint32_t>(index));
+  };
   for (std::size_t index = 0; index < points.size(); ++index) {
     const Vec3f& p = points[index];
     if (!p.is_finite()) continue;
     const Vec3d d = Vec3d(p) - o;
-    for (std::size_t k = 0; k < faces_.size(); ++k) {
-      ProjectiveFrame& face = faces_[k];
-      const auto& r = face.rotation;  // as ProjectiveFrame::rotate computes it
-      Vec3d c;
-      c.z = r[2][0] * d.x + r[2][1] * d.y + r[2][2] * d.z;
-      if (!(c.z > 0.0)) continue;
-      c.x = r[0][0] * d.x + r[0][1] * d.y + r[0][2] * d.z;
-      if (std::abs(c.x) > reach_x[k] * c.z) continue;
-      c.y = r[1][0] * d.x + r[1][1] * d.y + r[1][2] * d.z;
-      if (std::abs(c.y) > reach_y[k] * c.z) continue;
-      const double u = face.fx * (c.x / c.z) + face.cx + 0.5;
-      const double v = face.fy * (c.y / c.z) + face.cy + 0.5;
-      if (!(u >= 0.0 && u < face.width && v >= 0.0 && v < face.height)) continue;
-      const std::size_t at =
-          std::size_t(static_cast<int>(v)) * std::size_t(face.width) + std::size_t(static_cast<int>(u));
-      float& pixel = face.depth[at];
-      const auto depth = static_cast<float>(c.z);
-      if (pixel == 0.0f || depth < pixel) pixel = depth;
-      // Its half pixel: the rule computes it as (int)(u + u) from float u,
-      // which may differ from the double here only on a half-pixel border
-      // (then the point counts in the neighbouring half: harmless).
-      float& half = face.depth_halves[std::size_t(static_cast<int>(2.0 * v)) * std::size_t(2 * face.width) +
-                                      std::size_t(static_cast<int>(2.0 * u))];
-      if (half == 0.0f || depth < half) half = depth;
-      ray_pixels_[k].push_back(static_cast<std::uint32_t>(at));
-      ray_points_[k].push_back(static_cast<std::uint32_t>(index));
+    const int nearest = nearest_side_face(d.x, d.y);
+    if (side_reach >= kSideFaces / 2) {
+      for (std::size_t k = 0; k < static_cast<std::size_t>(kSideFaces); ++k) draw(k, d, index);
+    } else {
+      for (int step = -side_reach; step <= side_reach; ++step) {
+        draw(static_cast<std::size_t>((nearest + step + kSideFaces) % kSideFaces), d, index);
+      }
     }
+    draw(kSideFaces, d, index);
+    draw(kSideFaces + 1, d, index);
   }
+  // The images that hold a point, to the front, in face order. The others
+  // clear nothing (no voxel's window there holds a reading, nor does the
+  // edge a voxel outside reads), so they are left out: no pixels, pyramid
+  // or walk for the directions the scan did not reach (a 3DTK scan covers
+  // about 230 degrees of azimuth: three of its ten images are empty).
+  held_ = 0;
   for (std::size_t k = 0; k < faces_.size(); ++k) {
+    if (faces_[k].depth.empty()) continue;
+    if (k != held_) {
+      std::swap(faces_[held_], faces_[k]);
+      std::swap(ray_pixels_[held_], ray_pixels_[k]);
+      std::swap(ray_points_[held_], ray_points_[k]);
+    }
+    ++held_;
+  }
+  for (std::size_t k = 0; k < held_; ++k) {
     ProjectiveFrame& face = faces_[k];
     // The pyramid's maxima: each pixel's farthest half (by its nearest reading).
     std::vector<float>& farthest = face.farthest_half;
@@ -141,7 +226,7 @@ std::size_t ScanImages::memory_bytes() const {
   for (std::size_t k = 0; k < faces_.size(); ++k) {
     bytes += faces_[k].memory_bytes() + (ray_pixels_[k].capacity() + ray_points_[k].capacity()) * sizeof(std::uint32_t);
   }
-  return bytes;
+  return bytes + estimate_scratch_.memory_bytes();
 }
 
 namespace detail {
@@ -204,19 +289,21 @@ ScanGaps count_scan_gaps(std::span<const std::uint8_t> filled, int images, int w
 }  // namespace detail
 
 ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> points, ScanResolution given) {
+  ScanImages::EstimateScratch scratch;
+  return ScanImages::estimate_scan_resolution(origin, points, given, scratch);
+}
+
+ScanResolution ScanImages::estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> points, ScanResolution given,
+                                                    EstimateScratch& scratch) {
   const Vec3d o(origin);
   // The solid angle the points cover, from cells of about 2 degrees of a
   // cube's faces at unit focal length; and every point in the middle of a
   // side face, as (face, u, v) at unit focal length.
-  constexpr double kCoarse = 28.0;  // cells per unit: 1/28 rad = 2 degrees at a face's centre
-  constexpr int kCoarseSide = 56;
-  std::vector<std::uint8_t> coarse(std::size_t(6) * kCoarseSide * kCoarseSide, 0);
-  struct OnFace {
-    int face;
-    float u;
-    float v;
-  };
-  std::vector<OnFace> middle;
+  std::vector<std::uint8_t>& coarse = scratch.coarse;
+  coarse.assign(std::size_t(6) * kCoarseSide * kCoarseSide, 0);
+  using OnFace = EstimateScratch::OnFace;
+  std::vector<OnFace>& middle = scratch.middle;
+  middle.clear();
   middle.reserve(points.size());
   std::size_t count = 0;
   std::array<FaceAxes, ScanImages::kSideFaces> side_axes;  // once, not a sin and cos per point
@@ -239,10 +326,8 @@ ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> poi
     const int i = std::clamp(static_cast<int>((a + 1.0) * kCoarse), 0, kCoarseSide - 1);
     const int j = std::clamp(static_cast<int>((b + 1.0) * kCoarse), 0, kCoarseSide - 1);
     coarse[(std::size_t(cube_face) * kCoarseSide + std::size_t(j)) * kCoarseSide + std::size_t(i)] = 1;
-    // The side face its azimuth falls in.
-    const double azimuth = std::atan2(d.y, d.x);
-    const int side = static_cast<int>(std::lround(azimuth / (2.0 * std::numbers::pi / ScanImages::kSideFaces)) +
-                                      ScanImages::kSideFaces) % ScanImages::kSideFaces;
+    // The side face its azimuth falls in (nearest_side_face: no atan2 a point).
+    const int side = nearest_side_face(d.x, d.y);
     const FaceAxes& axes = side_axes[static_cast<std::size_t>(side)];
     const double z = d.dot(axes.normal);
     if (!(z > 0.0)) continue;
@@ -255,9 +340,7 @@ ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> poi
     for (int j = 0; j < kCoarseSide; ++j) {
       for (int i = 0; i < kCoarseSide; ++i) {
         if (!coarse[(std::size_t(k) * kCoarseSide + std::size_t(j)) * kCoarseSide + std::size_t(i)]) continue;
-        const double u = (i + 0.5) / kCoarse - 1.0;
-        const double v = (j + 0.5) / kCoarse - 1.0;
-        solid_angle += 1.0 / (kCoarse * kCoarse) / std::pow(1.0 + u * u + v * v, 1.5);
+        solid_angle += coarse_cell_solid_angle(i, j);
       }
     }
   }
@@ -267,8 +350,8 @@ ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> poi
   // empty pixels lie between filled ones along it.
   ScanResolution result{given.horizontal > 0.0 ? given.horizontal : 0.8 * mean_spacing,
                         given.vertical > 0.0 ? given.vertical : 0.8 * mean_spacing};
-  std::vector<std::uint8_t> filled;
-  std::vector<std::uint8_t> reached;
+  std::vector<std::uint8_t>& filled = scratch.filled;
+  std::vector<std::uint8_t>& reached = scratch.reached;
   constexpr int kReach = 4;  // a gap is at most this many pixels from a filled one on either side
   for (int round = 0; round < 16; ++round) {
     const int wide = 2 * static_cast<int>(std::ceil(kSideHalfWidth / result.horizontal));

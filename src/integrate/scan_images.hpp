@@ -59,11 +59,38 @@ class ScanImages {
   /// `points`, which must outlive the images' use.
   void build(Vec3f origin, std::span<const Vec3f> points, ScanResolution resolution);
 
-  [[nodiscard]] const std::array<ProjectiveFrame, kFaces>& faces() const { return faces_; }
+  /// The images that hold at least one point (in face order; the others
+  /// would clear nothing): none for a scan without points.
+  [[nodiscard]] std::span<const ProjectiveFrame> faces() const { return {faces_.data(), held_}; }
   [[nodiscard]] std::size_t memory_bytes() const;
 
+  /// estimate_scan_resolution's lists and images, kept between scans so
+  /// that each scan does not take (and fault in) fresh memory for them.
+  struct EstimateScratch {
+    struct OnFace {  ///< a point in the middle of a side face, at unit focal length
+      int face;
+      float u;
+      float v;
+    };
+    std::vector<std::uint8_t> coarse;
+    std::vector<OnFace> middle;
+    std::vector<std::uint8_t> filled;
+    std::vector<std::uint8_t> reached;
+    [[nodiscard]] std::size_t memory_bytes() const {
+      return coarse.capacity() + middle.capacity() * sizeof(OnFace) + filled.capacity() + reached.capacity();
+    }
+  };
+  /// estimate_scan_resolution with this object's kept scratch.
+  ScanResolution estimate_resolution(Vec3f origin, std::span<const Vec3f> points, ScanResolution given) {
+    return estimate_scan_resolution(origin, points, given, estimate_scratch_);
+  }
+  static ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> points, ScanResolution given,
+                                                 EstimateScratch& scratch);
+
  private:
-  std::array<ProjectiveFrame, kFaces> faces_;
+  EstimateScratch estimate_scratch_;
+  std::array<ProjectiveFrame, kFaces> faces_;  ///< the first held_ hold points
+  std::size_t held_ = 0;
   // Each image's rays (pixel, point) as the points are drawn in; kept
   // between scans so that their buffers are reused.
   std::array<std::vector<std::uint32_t>, kFaces> ray_pixels_;
