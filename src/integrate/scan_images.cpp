@@ -120,67 +120,41 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
     ray_pixels_[k].clear();
     ray_points_[k].clear();
   }
-  // A side face k holds a point only where the point's azimuth lies within
-  // atan(reach_x[k]) of the face's axis (c.x / c.z is the tangent of the
-  // azimuth from the axis, whatever the elevation): the point is tested
-  // against the side faces up to `side_reach` steps from the nearest one
-  // (its own, found without a division; one step at a LiDAR's resolution,
-  // more for very coarse images, whose overlap reaches far) and the caps,
-  // instead of all ten faces.
-  double widest = 0.0;
-  for (int k = 0; k < kSideFaces; ++k) widest = std::max(widest, reach_x[static_cast<std::size_t>(k)]);
-  const double step_degrees = 360.0 / kSideFaces;
-  // Degrees a point may lie from its nearest face's axis: half a step, and
-  // a little for nearest_side_face's rounding on a border.
-  const double nearest_within = 0.5 * step_degrees + 0.01;
-  const double reach_degrees = std::atan(widest) * (180.0 / std::numbers::pi);
-  int side_reach = 0;
-  while (side_reach < kSideFaces / 2 && (side_reach + 1) * step_degrees - nearest_within < reach_degrees) ++side_reach;
-  const auto draw = [&](std::size_t k, const Vec3d& d, std::size_t index) {
-    ProjectiveFrame& face = faces_[k];
-    const auto& r = face.rotation;  // as ProjectiveFrame::rotate computes it
-    Vec3d c;
-    c.z = r[2][0] * d.x + r[2][1] * d.y + r[2][2] * d.z;
-    if (!(c.z > 0.0)) return;
-    c.x = r[0][0] * d.x + r[0][1] * d.y + r[0][2] * d.z;
-    if (std::abs(c.x) > reach_x[k] * c.z) return;
-    c.y = r[1][0] * d.x + r[1][1] * d.y + r[1][2] * d.z;
-    if (std::abs(c.y) > reach_y[k] * c.z) return;
-    const double u = face.fx * (c.x / c.z) + face.cx + 0.5;
-    const double v = face.fy * (c.y / c.z) + face.cy + 0.5;
-    if (!(u >= 0.0 && u < face.width && v >= 0.0 && v < face.height)) return;
-    if (face.depth.empty()) {  // its first point
-      face.depth.assign(std::size_t(face.width) * std::size_t(face.height), 0.0f);
-      face.depth_halves.assign(4 * face.depth.size(), 0.0f);
-    }
-    const std::size_t at =
-        std::size_t(static_cast<int>(v)) * std::size_t(face.width) + std::size_t(static_cast<int>(u));
-    float& pixel = face.depth[at];
-    const auto depth = static_cast<float>(c.z);
-    if (pixel == 0.0f || depth < pixel) pixel = depth;
-    // Its half pixel: the rule computes it as (int)(u + u) from float u,
-    // which may differ from the double here only on a half-pixel border
-    // (then the point counts in the neighbouring half: harmless).
-    float& half = face.depth_halves[std::size_t(static_cast<int>(2.0 * v)) * std::size_t(2 * face.width) +
-                                    std::size_t(static_cast<int>(2.0 * u))];
-    if (half == 0.0f || depth < half) half = depth;
-    ray_pixels_[k].push_back(static_cast<std::uint32_t>(at));
-    ray_points_[k].push_back(static_cast<std::uint32_t>(index));
-  };
   for (std::size_t index = 0; index < points.size(); ++index) {
     const Vec3f& p = points[index];
     if (!p.is_finite()) continue;
     const Vec3d d = Vec3d(p) - o;
-    const int nearest = nearest_side_face(d.x, d.y);
-    if (side_reach >= kSideFaces / 2) {
-      for (std::size_t k = 0; k < static_cast<std::size_t>(kSideFaces); ++k) draw(k, d, index);
-    } else {
-      for (int step = -side_reach; step <= side_reach; ++step) {
-        draw(static_cast<std::size_t>((nearest + step + kSideFaces) % kSideFaces), d, index);
+    for (std::size_t k = 0; k < faces_.size(); ++k) {
+      ProjectiveFrame& face = faces_[k];
+      const auto& r = face.rotation;  // as ProjectiveFrame::rotate computes it
+      Vec3d c;
+      c.z = r[2][0] * d.x + r[2][1] * d.y + r[2][2] * d.z;
+      if (!(c.z > 0.0)) continue;
+      c.x = r[0][0] * d.x + r[0][1] * d.y + r[0][2] * d.z;
+      if (std::abs(c.x) > reach_x[k] * c.z) continue;
+      c.y = r[1][0] * d.x + r[1][1] * d.y + r[1][2] * d.z;
+      if (std::abs(c.y) > reach_y[k] * c.z) continue;
+      const double u = face.fx * (c.x / c.z) + face.cx + 0.5;
+      const double v = face.fy * (c.y / c.z) + face.cy + 0.5;
+      if (!(u >= 0.0 && u < face.width && v >= 0.0 && v < face.height)) continue;
+      if (face.depth.empty()) {  // its first point
+        face.depth.assign(std::size_t(face.width) * std::size_t(face.height), 0.0f);
+        face.depth_halves.assign(4 * face.depth.size(), 0.0f);
       }
+      const std::size_t at =
+          std::size_t(static_cast<int>(v)) * std::size_t(face.width) + std::size_t(static_cast<int>(u));
+      float& pixel = face.depth[at];
+      const auto depth = static_cast<float>(c.z);
+      if (pixel == 0.0f || depth < pixel) pixel = depth;
+      // Its half pixel: the rule computes it as (int)(u + u) from float u,
+      // which may differ from the double here only on a half-pixel border
+      // (then the point counts in the neighbouring half: harmless).
+      float& half = face.depth_halves[std::size_t(static_cast<int>(2.0 * v)) * std::size_t(2 * face.width) +
+                                      std::size_t(static_cast<int>(2.0 * u))];
+      if (half == 0.0f || depth < half) half = depth;
+      ray_pixels_[k].push_back(static_cast<std::uint32_t>(at));
+      ray_points_[k].push_back(static_cast<std::uint32_t>(index));
     }
-    draw(kSideFaces, d, index);
-    draw(kSideFaces + 1, d, index);
   }
   // The images that hold a point, to the front, in face order. The others
   // clear nothing (no voxel's window there holds a reading, nor does the
@@ -350,19 +324,30 @@ ScanResolution ScanImages::estimate_scan_resolution(Vec3f origin, std::span<cons
   // empty pixels lie between filled ones along it.
   ScanResolution result{given.horizontal > 0.0 ? given.horizontal : 0.8 * mean_spacing,
                         given.vertical > 0.0 ? given.vertical : 0.8 * mean_spacing};
+  // Only the side faces some middle point falls in are binned and counted:
+  // the others have no filled cell and so no gap (a 3DTK scan leaves three
+  // of the eight empty).
+  std::array<int, ScanImages::kSideFaces> slot;  // a face's image in `filled`
+  slot.fill(-1);
+  for (const OnFace& q : middle) slot[static_cast<std::size_t>(q.face)] = 0;
+  int used = 0;
+  for (int& s : slot) {
+    if (s == 0) s = used++;
+  }
   std::vector<std::uint8_t>& filled = scratch.filled;
   std::vector<std::uint8_t>& reached = scratch.reached;
   constexpr int kReach = 4;  // a gap is at most this many pixels from a filled one on either side
   for (int round = 0; round < 16; ++round) {
     const int wide = 2 * static_cast<int>(std::ceil(kSideHalfWidth / result.horizontal));
     const int high = 2 * static_cast<int>(std::ceil(kMiddle / result.vertical));
-    filled.assign(std::size_t(ScanImages::kSideFaces) * std::size_t(wide) * std::size_t(high), 0);
+    filled.assign(std::size_t(used) * std::size_t(wide) * std::size_t(high), 0);
     for (const OnFace& q : middle) {
       const int i = std::clamp(static_cast<int>((q.u / kSideHalfWidth + 1.0) * 0.5 * wide), 0, wide - 1);
       const int j = std::clamp(static_cast<int>((q.v / kMiddle + 1.0) * 0.5 * high), 0, high - 1);
-      filled[(std::size_t(q.face) * std::size_t(high) + std::size_t(j)) * std::size_t(wide) + std::size_t(i)] = 1;
+      const auto image = std::size_t(slot[static_cast<std::size_t>(q.face)]);
+      filled[(image * std::size_t(high) + std::size_t(j)) * std::size_t(wide) + std::size_t(i)] = 1;
     }
-    const detail::ScanGaps gaps = detail::count_scan_gaps(filled, ScanImages::kSideFaces, wide, high, kReach, reached);
+    const detail::ScanGaps gaps = detail::count_scan_gaps(filled, used, wide, high, kReach, reached);
     const std::size_t cells = gaps.filled;
     const std::size_t row_gaps = gaps.row_gaps;
     const std::size_t column_gaps = gaps.column_gaps;
