@@ -453,7 +453,7 @@ InsertStats Integrator::trace_scan_projective(const OccupancyTree& tree, const G
     }
   };
   const std::size_t side_jobs = colors.empty() ? 1 : 2;
-  const ScanResolution resolution = scan_images_.estimate_resolution(origin, points, options.scan_resolution);
+  const ScanResolution resolution = estimate_scan_resolution(origin, points, options.scan_resolution);
   if (resolution.horizontal > 0.0 && resolution.vertical > 0.0) {
     stats.scan_resolution = resolution;
     scan_images_.build(origin, points, resolution);

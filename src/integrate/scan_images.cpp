@@ -82,6 +82,13 @@ double coarse_cell_solid_angle(int i, int j) {
 
 void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResolution resolution) {
   const Vec3d o(origin);
+  for (std::size_t i = swap_count_; i-- > 0;) {  // each image's own buffers back
+    const auto [a, b] = swaps_[i];
+    std::swap(faces_[a], faces_[b]);
+    std::swap(ray_pixels_[a], ray_pixels_[b]);
+    std::swap(ray_points_[a], ray_points_[b]);
+  }
+  swap_count_ = 0;
   for (int k = 0; k < kFaces; ++k) {
     ProjectiveFrame& face = faces_[static_cast<std::size_t>(k)];
     const FaceAxes axes = face_axes(k);
@@ -168,6 +175,7 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
       std::swap(faces_[held_], faces_[k]);
       std::swap(ray_pixels_[held_], ray_pixels_[k]);
       std::swap(ray_points_[held_], ray_points_[k]);
+      swaps_[swap_count_++] = {static_cast<std::uint8_t>(held_), static_cast<std::uint8_t>(k)};
     }
     ++held_;
   }
@@ -200,7 +208,7 @@ std::size_t ScanImages::memory_bytes() const {
   for (std::size_t k = 0; k < faces_.size(); ++k) {
     bytes += faces_[k].memory_bytes() + (ray_pixels_[k].capacity() + ray_points_[k].capacity()) * sizeof(std::uint32_t);
   }
-  return bytes + estimate_scratch_.memory_bytes();
+  return bytes;
 }
 
 namespace detail {
@@ -263,21 +271,17 @@ ScanGaps count_scan_gaps(std::span<const std::uint8_t> filled, int images, int w
 }  // namespace detail
 
 ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> points, ScanResolution given) {
-  ScanImages::EstimateScratch scratch;
-  return ScanImages::estimate_scan_resolution(origin, points, given, scratch);
-}
-
-ScanResolution ScanImages::estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> points, ScanResolution given,
-                                                    EstimateScratch& scratch) {
   const Vec3d o(origin);
   // The solid angle the points cover, from cells of about 2 degrees of a
   // cube's faces at unit focal length; and every point in the middle of a
   // side face, as (face, u, v) at unit focal length.
-  std::vector<std::uint8_t>& coarse = scratch.coarse;
-  coarse.assign(std::size_t(6) * kCoarseSide * kCoarseSide, 0);
-  using OnFace = EstimateScratch::OnFace;
-  std::vector<OnFace>& middle = scratch.middle;
-  middle.clear();
+  std::vector<std::uint8_t> coarse(std::size_t(6) * kCoarseSide * kCoarseSide, 0);
+  struct OnFace {
+    int face;
+    float u;
+    float v;
+  };
+  std::vector<OnFace> middle;
   middle.reserve(points.size());
   std::size_t count = 0;
   std::array<FaceAxes, ScanImages::kSideFaces> side_axes;  // once, not a sin and cos per point
@@ -334,8 +338,8 @@ ScanResolution ScanImages::estimate_scan_resolution(Vec3f origin, std::span<cons
   for (int& s : slot) {
     if (s == 0) s = used++;
   }
-  std::vector<std::uint8_t>& filled = scratch.filled;
-  std::vector<std::uint8_t>& reached = scratch.reached;
+  std::vector<std::uint8_t> filled;
+  std::vector<std::uint8_t> reached;
   constexpr int kReach = 4;  // a gap is at most this many pixels from a filled one on either side
   for (int round = 0; round < 16; ++round) {
     const int wide = 2 * static_cast<int>(std::ceil(kSideHalfWidth / result.horizontal));

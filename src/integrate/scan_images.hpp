@@ -39,6 +39,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "umbra/core/vec3.hpp"
@@ -64,33 +65,14 @@ class ScanImages {
   [[nodiscard]] std::span<const ProjectiveFrame> faces() const { return {faces_.data(), held_}; }
   [[nodiscard]] std::size_t memory_bytes() const;
 
-  /// estimate_scan_resolution's lists and images, kept between scans so
-  /// that each scan does not take (and fault in) fresh memory for them.
-  struct EstimateScratch {
-    struct OnFace {  ///< a point in the middle of a side face, at unit focal length
-      int face;
-      float u;
-      float v;
-    };
-    std::vector<std::uint8_t> coarse;
-    std::vector<OnFace> middle;
-    std::vector<std::uint8_t> filled;
-    std::vector<std::uint8_t> reached;
-    [[nodiscard]] std::size_t memory_bytes() const {
-      return coarse.capacity() + middle.capacity() * sizeof(OnFace) + filled.capacity() + reached.capacity();
-    }
-  };
-  /// estimate_scan_resolution with this object's kept scratch.
-  ScanResolution estimate_resolution(Vec3f origin, std::span<const Vec3f> points, ScanResolution given) {
-    return estimate_scan_resolution(origin, points, given, estimate_scratch_);
-  }
-  static ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> points, ScanResolution given,
-                                                 EstimateScratch& scratch);
-
  private:
-  EstimateScratch estimate_scratch_;
   std::array<ProjectiveFrame, kFaces> faces_;  ///< the first held_ hold points
   std::size_t held_ = 0;
+  // The swaps that moved the held images to the front, undone before the
+  // next scan so that each image gets its own buffers back (a cap's are
+  // four times a side image's).
+  std::array<std::pair<std::uint8_t, std::uint8_t>, kFaces> swaps_{};
+  std::size_t swap_count_ = 0;
   // Each image's rays (pixel, point) as the points are drawn in; kept
   // between scans so that their buffers are reused.
   std::array<std::vector<std::uint32_t>, kFaces> ray_pixels_;

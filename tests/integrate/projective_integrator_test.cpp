@@ -615,7 +615,7 @@ TEST(ProjectiveIntegrator, ScanImagesHoldEveryPointOfEveryImage) {
     ScanImages images;
     images.build(origin, points, {step, 1.5 * step});
     // Points in every direction: every image holds some, so all ten are
-    // compared (build tests each point against its nearest side faces only).
+    // compared (build leaves out the images no point falls in).
     ASSERT_EQ(images.faces().size(), std::size_t{ScanImages::kFaces}) << "trial " << trial;
     std::size_t held = 0;
     for (const ProjectiveFrame& face : images.faces()) {
