@@ -41,9 +41,10 @@ constexpr double kCapHalfWidth = 1.0;
 
 /// The side face whose axis is nearest to the azimuth of direction (x, y):
 /// round(atan2(y, x) / 45 degrees) mod 8, from the octant's comparisons
-/// with tan(22.5 degrees) instead of an atan2 (1.5% of a 3DTK scan's
+/// with tan(22.5 degrees) instead of an atan2 (about 1% of a 3DTK scan's
 /// insertion). Only a direction within rounding of a border between two
-/// faces may get the other one; both hold it (the images overlap).
+/// faces may get the other one than atan2 would give (the estimate's
+/// count of that point then moves to the neighbouring face's edge).
 int nearest_side_face(double x, double y) {
   static_assert(ScanImages::kSideFaces == 8);
   const double tan_half = kSideHalfWidth;  // tan(22.5 degrees)

@@ -8,7 +8,8 @@
 // degrees, up and down), each reaching a few pixels past its share so that
 // the windows of voxels near a seam find readings on both sides. Every
 // point is drawn into every image that holds it; a pixel keeps the nearest
-// point's depth along the image's axis. The images are ProjectiveFrames:
+// point's depth along the image's axis; images no point falls in are
+// left out (they would clear nothing). The images are ProjectiveFrames:
 // the integrator clears a voxel when the rule (projective_frame.hpp) clears
 // it on some image. Eight side faces rather than four: a pinhole pixel's
 // angular width shrinks by cos^2 of its angle from the image's axis, to
