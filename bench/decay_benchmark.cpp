@@ -24,6 +24,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -39,6 +40,14 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+/// CPU time of the process (all threads), seconds: what a step costs even
+/// while other programs share the cores (wall time then stretches).
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 struct Options {
   std::string data_dir = "../shared/data";
@@ -110,15 +119,18 @@ void run(const std::string& name, const Options& options) {
   insert.max_range = data.max_range;
   insert.threads = 1;
   std::vector<double> umbra_insert, octomap_insert;
-  const auto decay_steps = [&](umbra::OccupancyMap& m) {
+  // Wall times of the steps; with `cpu`, also their CPU times.
+  const auto decay_steps = [&](umbra::OccupancyMap& m, std::vector<double>* cpu = nullptr) {
     std::vector<double> times;
     double clock = 0.0;
     m.advance_clock(clock);
     for (int i = 0; i < options.steps; ++i) {
       clock += options.dt;
+      const double cpu_start = cpu_seconds();
       const auto start = Clock::now();
       m.advance_clock(clock);
       times.push_back(seconds_since(start));
+      if (cpu != nullptr) cpu->push_back(cpu_seconds() - cpu_start);
     }
     return times;
   };
@@ -135,10 +147,12 @@ void run(const std::string& name, const Options& options) {
     octomap_insert.push_back(seconds_since(start));
     umbra::OccupancyMap prefix = map;
     prefix.set_decay({options.occupied, options.free, std::nullopt});
-    const std::vector<double> times = decay_steps(prefix);
-    char line[160];
-    std::snprintf(line, sizeof line, "    %zu scans: %zu nodes, step median %.2f ms (first %.2f)", umbra_insert.size(),
-                  map.node_counts().total(), umbra::bench::median(times) * 1e3, times.front() * 1e3);
+    std::vector<double> cpu;
+    const std::vector<double> times = decay_steps(prefix, &cpu);
+    char line[200];
+    std::snprintf(line, sizeof line, "    %zu scans: %zu nodes, step median %.2f ms wall, %.2f ms CPU (first %.2f CPU)",
+                  umbra_insert.size(), map.node_counts().total(), umbra::bench::median(times) * 1e3,
+                  umbra::bench::median(cpu) * 1e3, cpu.front() * 1e3);
     growth.emplace_back(line);
   }
   const umbra::NodeCounts counts = map.node_counts();
@@ -155,7 +169,8 @@ void run(const std::string& name, const Options& options) {
   umbra::OccupancyMap whole = map;
   whole.set_decay({options.occupied, options.free, std::nullopt});
   const std::size_t bytes_before = whole.memory_bytes();
-  const std::vector<double> umbra_times = decay_steps(whole);
+  std::vector<double> umbra_cpu;
+  const std::vector<double> umbra_times = decay_steps(whole, &umbra_cpu);
   std::vector<double> octomap_times;
   std::size_t octomap_zero = 0;
   for (int i = 0; i < options.steps; ++i) {
@@ -169,9 +184,10 @@ void run(const std::string& name, const Options& options) {
     octomap_times.push_back(seconds_since(start));
   }
   std::printf("  decay step, whole map (%d steps of %.2f s at %.2f / %.2f per s): umbra median %.2f ms (first %.2f, "
-              "last %.2f), OctoMap loop median %.2f ms (first %.2f, last %.2f)\n",
+              "last %.2f; CPU median %.2f), OctoMap loop median %.2f ms (first %.2f, last %.2f)\n",
               options.steps, options.dt, options.occupied, options.free, umbra::bench::median(umbra_times) * 1e3,
-              umbra_times.front() * 1e3, umbra_times.back() * 1e3, umbra::bench::median(octomap_times) * 1e3,
+              umbra_times.front() * 1e3, umbra_times.back() * 1e3, umbra::bench::median(umbra_cpu) * 1e3,
+              umbra::bench::median(octomap_times) * 1e3,
               octomap_times.front() * 1e3, octomap_times.back() * 1e3);
   const umbra::NodeCounts after = whole.node_counts();
   std::printf("  after: umbra %zu nodes, memory_bytes %.1f MB -> %.1f MB; OctoMap "
@@ -182,19 +198,22 @@ void run(const std::string& name, const Options& options) {
   // The same steps on several threads, as a stamped scan runs them.
   umbra::OccupancyMap threaded = map;
   threaded.set_decay({options.occupied, options.free, std::nullopt});
-  std::vector<double> threaded_times;
+  std::vector<double> threaded_times, threaded_cpu;
   umbra::InsertOptions stamped;
   stamped.threads = options.threads;
   for (int i = 0; i <= options.steps; ++i) {
     stamped.stamp = i * options.dt;
+    const double cpu_start = cpu_seconds();
     const auto start = Clock::now();
     threaded.insert_point_cloud(data.scans.front().origin, std::vector<umbra::Vec3f>{}, stamped);
-    if (i > 0) threaded_times.push_back(seconds_since(start));  // the first stamp only starts the clock
+    if (i == 0) continue;  // the first stamp only starts the clock
+    threaded_times.push_back(seconds_since(start));
+    threaded_cpu.push_back(cpu_seconds() - cpu_start);
   }
   std::printf("  decay step, whole map, %u threads (an empty stamped scan): umbra median %.2f ms (first %.2f, last "
-              "%.2f)%s\n",
+              "%.2f; CPU median %.2f, all threads)%s\n",
               options.threads, umbra::bench::median(threaded_times) * 1e3, threaded_times.front() * 1e3,
-              threaded_times.back() * 1e3, threaded.node_counts().total() == whole.node_counts().total() ? "" : " DIFFERENT MAP");
+              threaded_times.back() * 1e3, umbra::bench::median(threaded_cpu) * 1e3, threaded.node_counts().total() == whole.node_counts().total() ? "" : " DIFFERENT MAP");
 
   // A region around the first sensor position.
   umbra::OccupancyMap boxed = map;
