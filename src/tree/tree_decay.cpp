@@ -55,56 +55,82 @@ void OccupancyTree::decay(DecayStep step, const std::optional<KeyBox>& region, s
 
 void OccupancyTree::decay_in_parallel(DecayStep step, std::vector<DecayChange>* changes, int change_depth,
                                       ThreadPool& pool) {
-  // 1. Split from the root into subtrees that may change (tasks), about 16
-  //    per worker, not below depth 2 nor below change_depth (a task records
-  //    its own node at change_depth: nothing above the tasks has to). A node
-  //    a task walks is written by that task alone; the nodes above the tasks
-  //    are refreshed after. Replacing each task by its children in place
-  //    keeps the tasks, and so the changes, in Morton order, as serially.
+  // 1. Split from the root into tasks, about 16 per worker: a task is some
+  //    slots of one group (the group's indicator bits are bytes shared by
+  //    its slots, so one group is written by one task only). A group is
+  //    split when it lies above depth 2 and above change_depth: its slots
+  //    with children become nodes refreshed after the tasks, their child
+  //    groups tasks; its childless slots stay one task. So every node at
+  //    change_depth lies in a task, which records it.
   struct Task {
     int depth;
     std::uint32_t group;
-    unsigned slot;
-    std::uint64_t code;  // first finest voxel
+    std::uint64_t code;  // first finest voxel of the group
+    std::uint8_t slots;  // the slots this task decays
   };
-  std::vector<Task> tasks;
-  if (decay_may_change(depth_levels_, 0, 0, step)) tasks.push_back({depth_levels_, 0, 0, 0});
-  std::vector<SplitNode> parents;  // top down
+  const auto changing_slots = [&](int depth, std::uint32_t group) {
+    std::uint8_t slots = 0;
+    for (unsigned i = 0; i < 8; ++i) {
+      if (decay_may_change(depth, group, i, step)) slots |= static_cast<std::uint8_t>(1u << i);
+    }
+    return slots;
+  };
+  if (!decay_may_change(depth_levels_, 0, 0, step)) return;
+  std::vector<Task> tasks{{depth_levels_, 0, 0, 1}};  // the root, slot 0
+  std::vector<SplitNode> parents;                      // top down
   const std::size_t wanted = std::size_t{pool.size()} * 16;
   const int lowest = std::max(2, change_depth);
   for (bool deeper = true; deeper && tasks.size() < wanted;) {
     deeper = false;
     std::vector<Task> next;
     for (const Task& task : tasks) {
-      const std::uint32_t child = inner_[task.depth][task.group].child[task.slot];
-      if (task.depth <= lowest || child == kNoGroup) {
+      if (task.depth <= lowest) {
         next.push_back(task);
         continue;
       }
-      deeper = true;
-      parents.push_back({task.depth, task.group, task.slot});
-      const int child_depth = task.depth - 1;
+      std::uint8_t childless = 0;
+      std::vector<Task> below;
       for (unsigned i = 0; i < 8; ++i) {
-        if (!decay_may_change(child_depth, child, i, step)) continue;
-        next.push_back({child_depth, child, i, task.code | (std::uint64_t{i} << (3 * child_depth))});
+        if ((task.slots >> i & 1u) == 0) continue;
+        const std::uint32_t child = inner_[task.depth][task.group].child[i];
+        if (child == kNoGroup) {
+          childless |= static_cast<std::uint8_t>(1u << i);
+          continue;
+        }
+        deeper = true;
+        parents.push_back({task.depth, task.group, i});
+        const int child_depth = task.depth - 1;
+        const std::uint8_t slots = changing_slots(child_depth, child);
+        if (slots != 0) below.push_back({child_depth, child, task.code | (std::uint64_t{i} << (3 * task.depth)), slots});
       }
+      if (childless != 0) next.push_back({task.depth, task.group, task.code, childless});
+      next.insert(next.end(), below.begin(), below.end());
     }
     tasks.swap(next);
   }
-  // 2. The tasks, each with its own list of changes (joined in task order).
-  // Without a region nothing is expanded: no new groups; pruning releases
-  // groups into the worker's own list.
+  // 2. The tasks, each with its own list of changes. Without a region
+  // nothing is expanded: no new groups; pruning releases groups into the
+  // worker's own list.
   std::vector<std::vector<DecayChange>> task_changes(changes != nullptr ? tasks.size() : 0);
   const std::vector<std::size_t> new_groups(static_cast<std::size_t>(depth_levels_) + 1, 0);
   run_concurrently(
       pool, new_groups, tasks.size(),
-      [&](std::size_t i) {
-        const Task& task = tasks[i];
-        decay_below(task.depth, task.group, task.slot, task.code, step, std::nullopt,
-                    changes != nullptr ? &task_changes[i] : nullptr, change_depth);
+      [&](std::size_t t) {
+        const Task& task = tasks[t];
+        for (unsigned i = 0; i < 8; ++i) {
+          if ((task.slots >> i & 1u) == 0) continue;
+          decay_below(task.depth, task.group, i, task.code | (std::uint64_t{i} << (3 * task.depth)), step,
+                      std::nullopt, changes != nullptr ? &task_changes[t] : nullptr, change_depth);
+        }
       },
       parents);
+  if (changes == nullptr) return;
+  // The recorded nodes are disjoint, so the serial walk lists them in
+  // Morton order of their first voxels: the same order here.
+  const std::size_t first = changes->size();
   for (const std::vector<DecayChange>& list : task_changes) changes->insert(changes->end(), list.begin(), list.end());
+  std::sort(changes->begin() + static_cast<std::ptrdiff_t>(first), changes->end(),
+            [](const DecayChange& a, const DecayChange& b) { return a.code < b.code; });
 }
 
 bool OccupancyTree::decay_below(int depth, std::uint32_t group, unsigned slot, std::uint64_t code, DecayStep step,

@@ -230,9 +230,9 @@ TEST(Decay, StepsOnSeveralThreadsEqualOneThread) {
     SCOPED_TRACE("scene half width " + std::to_string(half));
     std::mt19937 rng(17);
     std::uniform_real_distribution<float> c(-half, half);
-    std::vector<std::vector<Vec3f>> scans(4);
+    std::vector<std::vector<Vec3f>> scans(3);
     for (auto& s : scans)
-      for (int i = 0; i < 300; ++i) s.push_back({c(rng), c(rng), c(rng) * 0.3f});
+      for (int i = 0; i < 250; ++i) s.push_back({c(rng), c(rng), c(rng) * 0.3f});
     OccupancyMap one(0.05, 10);
     OccupancyMap several(0.05, 10);
     for (OccupancyMap* map : {&one, &several}) map->set_decay({0.3, 0.15, std::nullopt});
@@ -240,7 +240,7 @@ TEST(Decay, StepsOnSeveralThreadsEqualOneThread) {
     field_options.max_distance = 0.3;
     DistanceField field(several, field_options);
     std::vector<Vec3d> probe;
-    for (int i = 0; i < 1000; ++i) probe.push_back({c(rng), c(rng), c(rng) * 0.3});
+    for (int i = 0; i < 500; ++i) probe.push_back({c(rng), c(rng), c(rng) * 0.3});
     const auto ask = [&](const DistanceField& f) {
       std::vector<DistanceSample> samples(probe.size());
       f.distance_and_gradient(probe, samples);
