@@ -8,9 +8,9 @@
 // it covers, so a step costs the stored nodes that can change, not the
 // voxels or the map's volume. On the way back each node is refreshed from
 // its children (value, indicators, color, pruning), as apply() does.
-// With a thread pool and no region, the nodes below a split are walked by
-// the workers, one subtree each, as apply() splits a scan (a step then
-// allocates nothing: only a region's boundary expands childless nodes).
+// With a thread pool and no region, the groups below a split are walked by
+// the workers, each group by one worker, as apply() splits a scan (a step
+// then allocates nothing: only a region's boundary expands childless nodes).
 #include <algorithm>
 #include <optional>
 #include <vector>
