@@ -374,8 +374,8 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   image_points_.build(grid, image, camera, pose, colors, pool, [&] {
     if (projective) frame_.set(image, camera, pose);
   });
-  // Its rays, for the voxels near the surface (surface_band.hpp: where bricks are not seen whole).
-  if (projective && !ProjectiveRule::sees_whole_bricks(grid.resolution())) {
+  // Its rays, for the voxels near the surface (surface_band.hpp), where there can be any.
+  if (projective && SurfaceBand::possible(grid.resolution(), frame_, options.max_range)) {
     frame_.set_rays(image_points_.points(), image_points_.pixels());
   } else {
     frame_.ray_ends = {};

@@ -31,10 +31,25 @@ double depth_slack(double far) { return 1e-5 * (1.0 + std::abs(far)); }
 
 }  // namespace
 
+bool SurfaceBand::possible(double resolution, const ProjectiveFrame& frame, double max_range) {
+  if (ProjectiveRule::sees_whole_bricks(resolution) || !frame.depth_halves.empty()) return false;
+  // A voxel in the band lies at least z_min deep, within range, and has a reading beyond z_min - h.
+  const double z_min = std::min(frame.fx, frame.fy) * resolution / (2.0 * kHalfWidthPixels);
+  const double half_diagonal = std::sqrt(3.0) / 2.0 * resolution;
+  if (max_range > 0.0 && z_min > max_range + half_diagonal) return false;
+  const int top = frame.pyramid.levels() - 1;
+  const float* top_max = frame.pyramid.level_max(top);
+  float farthest = 0.0f;
+  for (int i = 0; i < frame.pyramid.width(top) * frame.pyramid.height(top); ++i) farthest = std::max(farthest, top_max[i]);
+  return farthest > z_min - half_diagonal;
+}
+
 std::optional<SurfaceBand> SurfaceBand::make(const ProjectiveRule& rule) {
   const ProjectiveFrame& frame = *rule.frame;
   // Scans: not a depth image's rays (scan_images.hpp); fine resolutions: see the header.
-  if (rule.whole_bricks_seen || rule.tree != nullptr || !frame.depth_halves.empty()) return std::nullopt;
+  if (rule.whole_bricks_seen || rule.tree != nullptr || !possible(rule.grid->resolution(), frame, rule.max_range)) {
+    return std::nullopt;
+  }
   if (frame.pixel_rays.size() != std::size_t(frame.width) * std::size_t(frame.height) + 1) return std::nullopt;
   const double res = rule.grid->resolution();
   SurfaceBand band;
@@ -49,13 +64,6 @@ std::optional<SurfaceBand> SurfaceBand::make(const ProjectiveRule& rule) {
   // A voxel projects to about min(fx, fy) res / z pixels. Not nearer than
   // four half diagonals, so that the footprints stay bounded.
   band.z_min = std::max(std::min(frame.fx, frame.fy) * res / (2.0 * kHalfWidthPixels), 4.0 * band.half_diagonal);
-  // No voxel can be in the band: none eligible within range, or every reading nearer than z_min.
-  if (rule.max_range > 0.0 && band.z_min > rule.max_range + band.half_diagonal) return std::nullopt;
-  const int top = frame.pyramid.levels() - 1;
-  const float* top_max = frame.pyramid.level_max(top);
-  float farthest = 0.0f;
-  for (int i = 0; i < frame.pyramid.width(top) * frame.pyramid.height(top); ++i) farthest = std::max(farthest, top_max[i]);
-  if (!(farthest > band.z_min - band.half_depth)) return std::nullopt;
   // The largest |x| / z and |y| / z of a centre projecting into the image.
   const double lateral = std::max(std::max(frame.cx + 0.5, frame.width - frame.cx - 0.5) / frame.fx,
                                   std::max(frame.cy + 0.5, frame.height - frame.cy - 0.5) / frame.fy);

@@ -67,6 +67,7 @@
 namespace umbra {
 
 struct ProjectiveRule;
+struct ProjectiveFrame;
 
 struct SurfaceBand {
   double z_min = 0.0;          ///< eligible voxels lie at least this deep
@@ -82,7 +83,7 @@ struct SurfaceBand {
 
   /// Voxels up to about 2 x this many pixels wide are eligible (1: those
   /// that read their own pixel, window level 0).
-  static constexpr double kHalfWidthPixels = 2.0;
+  static constexpr double kHalfWidthPixels = 1.0;
   /// Per pixel, the least and the largest reading of the 3 x 3 pixels
   /// around it (+infinity and 0 where none has one), and their pyramid:
   /// its least reading is the least there is (the frame's pyramid gives 0
@@ -104,6 +105,9 @@ struct SurfaceBand {
   /// TUM frames there agree with the simple integrator to 99.9%).
   /// The frame must have its rays (ProjectiveFrame::set_rays).
   static std::optional<SurfaceBand> make(const ProjectiveRule& rule);
+  /// Whether make() may give a band for a depth image `frame` (its pyramid
+  /// built) at this resolution and max_range: else its rays are not needed.
+  static bool possible(double resolution, const ProjectiveFrame& frame, double max_range);
 };
 
 /// Bounds for the walk, over a node whose voxel centres lie at camera depths

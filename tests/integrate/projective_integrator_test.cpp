@@ -535,7 +535,13 @@ TEST(ProjectiveIntegrator, SameMapForAnyThreadCountWithCells) {
 
 TEST(ProjectiveIntegrator, AgreesWithSimpleOnTheSimulatedCamera) {
   const std::vector<sim::SimulatedDepthImage> frames = sim::demo_depth_images(1);
-  expect_faithful(agreement(frames, 8, 0.04, 6.5), "8 frames, 4 cm");
+  // 4 cm, 8 frames: recall 99.42% with the surface band (99.57% without,
+  // precision 99.33% without, 99.86% with). The band covers voxels up to
+  // two pixels wide (surface_band.hpp); up to four it gave 99.57% here but
+  // cost TUM at 2 cm 2.2 times its CPU time. On the whole sequence at 4 cm
+  // recall is 99.70% (docs/benchmarks.md). Held at 99.4% so that it does
+  // not get worse.
+  expect_faithful(agreement(frames, 8, 0.04, 6.5), "8 frames, 4 cm", 0.994);
   // This camera's pixels are wide (fx 204): a 2 cm voxel up to two pixels
   // wide reads its own pixel only, where one to four noisy rays cross it in
   // the simple integrator, and without the surface band (surface_band.hpp,
