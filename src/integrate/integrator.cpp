@@ -380,6 +380,13 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   image_points_.build(grid, image, camera, pose, colors, pool, [&] {
     if (projective) frame_.set(image, camera, pose);
   });
+  // Its rays, for the voxels near the surface (surface_band.hpp), where there can be any.
+  if (projective && SurfaceBand::possible(grid.resolution(), frame_, options.max_range)) {
+    frame_.set_rays(image_points_.points(), image_points_.pixels());
+  } else {
+    frame_.ray_ends = {};
+    std::vector<std::uint32_t>().swap(frame_.pixel_rays);  // no memory where unused
+  }
   const Vec3f origin = pose.translation();
   if (!projective) {
     InsertOptions point_options = options;
@@ -489,6 +496,7 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
       rule.occupied_log_odds = tree->thresholds().occupied;
     }
     rule.use_cells();  // depth images at fine resolutions (projective_frame.hpp)
+    rule.surface_band = SurfaceBand::make(rule);  // depth images at coarse resolutions (surface_band.hpp)
   }
   const int root_depth = grid.depth_levels();
   if (threads == 1) {

@@ -95,7 +95,7 @@ ProjectiveRule::ProjectiveRule(const Grid& grid_in, const ProjectiveFrame& frame
     offset_max[axis] = *std::max_element(offset_table[axis].begin(), offset_table[axis].end());
   }
   centre_dz = static_cast<float>(frame_in.rotate(Vec3d{1.5 * res, 1.5 * res, 1.5 * res}).z);
-  whole_bricks_seen = 4.0 * res <= kFinestSeenBorder;
+  whole_bricks_seen = sees_whole_bricks(res);
   edge_reach = half_voxel_pixels;
   width_inside = width - 0.5f;
   height_inside = height - 0.5f;
@@ -105,6 +105,8 @@ ProjectiveRule::ProjectiveRule(const Grid& grid_in, const ProjectiveFrame& frame
     if (range_depth == 0) max_range_squared = static_cast<float>(max_range * max_range);
   }
 }
+
+bool ProjectiveRule::sees_whole_bricks(double resolution) { return 4.0 * resolution <= kFinestSeenBorder; }
 
 void ProjectiveRule::use_cells(double widest) {
   cells.clear();
@@ -223,10 +225,8 @@ int ProjectiveRule::window_level(Vec3f origin) const {
   return std::min(static_cast<int>(std::bit_width(whole)), top_level);
 }
 
-namespace {
+namespace detail {
 
-/// Whether the segment from `o` to `end` (cut at max_range when set) passes
-/// through the cube [lo, hi) and ends outside it.
 bool segment_crosses(Vec3d o, Vec3d end, double max_range, Vec3d lo, Vec3d hi) {
   Vec3d d = end - o;
   const double length = d.norm();
@@ -254,7 +254,7 @@ bool segment_crosses(Vec3d o, Vec3d end, double max_range, Vec3d lo, Vec3d hi) {
   return enter < leave;
 }
 
-}  // namespace
+}  // namespace detail
 
 bool ProjectiveRule::ray_crosses(std::uint64_t code) const {
   const Key key = morton::decode(code);
@@ -287,7 +287,7 @@ bool ProjectiveRule::ray_crosses(std::uint64_t code) const {
     const std::size_t pixel = std::size_t(v) * std::size_t(frame->width) + std::size_t(u);
     for (std::uint32_t k = frame->pixel_rays[pixel]; k < frame->pixel_rays[pixel + 1]; ++k) {
       const std::uint32_t ray = frame->ray_order.empty() ? k : frame->ray_order[k];
-      if (segment_crosses(frame->origin, Vec3d(frame->ray_ends[ray]), max_range, lo, hi)) return true;
+      if (detail::segment_crosses(frame->origin, Vec3d(frame->ray_ends[ray]), max_range, lo, hi)) return true;
     }
     return false;
   };

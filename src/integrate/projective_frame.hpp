@@ -131,6 +131,7 @@
 #include "umbra/integrate/depth_image.hpp"
 #include "integrate/depth_pyramid.hpp"
 #include "integrate/ray_tracer.hpp"
+#include "integrate/surface_band.hpp"
 
 namespace umbra {
 
@@ -201,6 +202,8 @@ struct ProjectiveRule {
   float max_range_squared = 0.0f;  ///< range_depth 0: the per-voxel test's bound
   float half_voxel_pixels = 0.0f;  ///< min(fx, fy) * resolution / 2: w = this / z
   bool whole_bricks_seen = false;  ///< a brick clears only when all its voxels are seen (fine resolutions)
+  /// The default of whole_bricks_seen at this resolution.
+  static bool sees_whole_bricks(double resolution);
   float edge_reach = 0.0f;         ///< pixel-metres: a centre projecting this / z pixels outside the image reads its edge
   float width_inside = 0.0f;       ///< width - 1/2: the projection clamped into the image
   float height_inside = 0.0f;      ///< height - 1/2
@@ -215,6 +218,9 @@ struct ProjectiveRule {
   /// none (then no voxel is held as an obstacle).
   const OccupancyTree* tree = nullptr;
   float occupied_log_odds = 0.0f;  ///< above this, a voxel is an obstacle
+  /// Where set, voxels near the surface are decided by the rays
+  /// (surface_band.hpp); the walk and apply_surface_band read it.
+  std::optional<SurfaceBand> surface_band;
 
   ProjectiveRule(const Grid& grid, const ProjectiveFrame& frame, double max_range, double margin,
                  const std::optional<KeyBox>& box_keys);
@@ -296,6 +302,10 @@ struct ProjectiveRule::CellLevel {
 };
 
 namespace detail {
+/// Whether the segment from `o` to `end` (cut at max_range when > 0)
+/// passes through the cube [lo, hi) and ends outside it (OctoMap's ray from
+/// o to end visits that voxel before its end voxel, up to rounding).
+bool segment_crosses(Vec3d o, Vec3d end, double max_range, Vec3d lo, Vec3d hi);
 /// Whether this build and CPU can run projective_cleared_avx2.
 bool projective_avx2_available();
 /// ProjectiveRule::cleared with AVX2, for a brick whose first voxel is at

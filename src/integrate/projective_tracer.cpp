@@ -171,12 +171,18 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth,
   const DepthPyramid::Range wide = frame.pyramid.range(
       static_cast<int>(std::max(u0 - reach, 0.0)), static_cast<int>(std::max(v0 - reach, 0.0)),
       static_cast<int>(std::min(u1 + reach, width - 1.0)), static_cast<int>(std::min(v1 + reach, height - 1.0)));
-  if (wide.max == 0.0f) return Decision::none;  // no reading any voxel's window can hold
+  // Voxels near the surface decided by the rays (surface_band.hpp): a
+  // node where some may be cleared is not skipped, one where some may lie
+  // is not cleared whole.
+  const SurfaceBandBounds band = surface_band_bounds(rule_, near, z_max + pad, u_min - u_pad, u_max + u_pad,
+                                                     v_min - v_pad, v_max + v_pad);
+  const Decision skip = band.may_clear ? Decision::split : Decision::none;
+  if (wide.max == 0.0f) return skip;  // no reading any voxel's window can hold
   const double margin = rule_.margin;
   // d - margin is rounded to float in the rule: allow for it.
-  if (near >= wide.max * (1.0 + kRelativeError) - margin) return Decision::none;  // behind every reading
+  if (near >= wide.max * (1.0 + kRelativeError) - margin) return skip;  // behind every reading
   const bool in_image = u0 >= 0.0 && v0 >= 0.0 && u1 < width && v1 < height;
-  if (in_image && within_range && contained) {
+  if (in_image && within_range && contained && !band.may_hold) {
     // Every voxel's window holds its own pixel: a reading beyond the node
     // on each of the node's pixels clears every voxel.
     const DepthPyramid::Range own = frame.pyramid.range(static_cast<int>(u0), static_cast<int>(v0),
@@ -196,7 +202,7 @@ void ProjectiveTracer::trace_brick(std::uint64_t brick, Key first, bool in_range
   // (at 2 cm with a 5 m range the bricks are the range nodes: the test per
   // brick was 4% of a TUM frame).
   if (rule_.range_depth == 2 && !in_range && !rule_.within_range(first)) return;
-  std::uint64_t voxels = rule_.cleared_in_range(brick, first);
+  std::uint64_t voxels = apply_surface_band(rule_, first, rule_.cleared_in_range(brick, first));
   if (voxels != 0 && rule_.box_keys) voxels &= rule_.brick_voxels_in_box(brick);
   if (voxels != 0 && holds_obstacle(brick, 2)) {
     for (std::uint64_t rest = voxels; rest != 0; rest &= rest - 1) {
