@@ -370,10 +370,14 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   // A map of one depth level has no bricks (the projective rule's unit): it
   // takes the image's points as the discrete integrator does.
   const bool projective = options.integrator == IntegratorKind::projective && grid.depth_levels() >= 2;
-  // The points on every worker; the projective rule's image (its pyramid) meanwhile.
-  image_points_.build(grid, image, camera, pose, colors, pool, [&] {
-    if (projective) frame_.set(image, camera, pose);
-  });
+  // The points on every worker; the projective rule's image (its pyramid)
+  // meanwhile. The projective integrator reads only the points' voxels (and
+  // the points themselves for colors).
+  image_points_.build(
+      grid, image, camera, pose, colors, pool, [&] {
+        if (projective) frame_.set(image, camera, pose);
+      },
+      /*voxels_only=*/projective);
   const Vec3f origin = pose.translation();
   if (!projective) {
     InsertOptions point_options = options;
