@@ -12,14 +12,19 @@
 //     reach 0 stay: see octomap_step);
 //   - both maps' states compared after the steps, at the centres of each
 //     one's leaves (they must agree, or the timing compares different work).
+//   - the growth of a step with the map: the same steps on the map of the
+//     first k scans, k = 1 .. all (one thread);
+//   - the same steps on several threads (`--threads`, as a stamped scan
+//     runs them: an empty stamped scan, whose tracing costs microseconds).
 // Datasets: 3dtk (5 cm), tum (2 cm); median of the steps.
 //
 //   umbra_decay_benchmark [--data ../shared/data] [--datasets 3dtk,tum] [--steps 10]
-//                         [--dt 0.5] [--occupied 0.4] [--free 0.2] [--region 4]
+//                         [--dt 0.5] [--occupied 0.4] [--free 0.2] [--region 4] [--threads 2]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -36,6 +41,14 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
+/// CPU time of the process (all threads), seconds: what a step costs even
+/// while other programs share the cores (wall time then stretches).
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
 struct Options {
   std::string data_dir = "../shared/data";
   std::vector<std::string> datasets{"3dtk", "tum"};
@@ -44,7 +57,16 @@ struct Options {
   double occupied = 0.4;
   double free = 0.2;
   double region = 4.0;
+  unsigned threads = 2;
 };
+
+/// The amount a step from clock time `from` to `to` takes off at `rate`
+/// (docs/design.md: the amounts accumulated since the clock started at 0,
+/// rounded down to whole quanta of 2^-16, subtracted).
+float quantized_step(double rate, double from, double to) {
+  const double quantum = 1.0 / 65536.0;
+  return static_cast<float>((std::floor(rate * to / quantum) - std::floor(rate * from / quantum)) * quantum);
+}
 
 /// The documented rule (docs/design.md), for OctoMap's values.
 float decayed(float l, float occupied, float free) {
@@ -97,6 +119,22 @@ void run(const std::string& name, const Options& options) {
   insert.max_range = data.max_range;
   insert.threads = 1;
   std::vector<double> umbra_insert, octomap_insert;
+  // Wall times of the steps; with `cpu`, also their CPU times.
+  const auto decay_steps = [&](umbra::OccupancyMap& m, std::vector<double>* cpu = nullptr) {
+    std::vector<double> times;
+    double clock = 0.0;
+    m.advance_clock(clock);
+    for (int i = 0; i < options.steps; ++i) {
+      clock += options.dt;
+      const double cpu_start = cpu_seconds();
+      const auto start = Clock::now();
+      m.advance_clock(clock);
+      times.push_back(seconds_since(start));
+      if (cpu != nullptr) cpu->push_back(cpu_seconds() - cpu_start);
+    }
+    return times;
+  };
+  std::vector<std::string> growth;  // one line per prefix of the scans
   for (const umbra::Scan& scan : data.scans) {
     auto start = Clock::now();
     map.insert_point_cloud(scan.origin, scan.points, insert);
@@ -107,6 +145,15 @@ void run(const std::string& name, const Options& options) {
     tree.insertPointCloud(cloud, octomap::point3d(scan.origin.x, scan.origin.y, scan.origin.z), data.max_range, false,
                           true);
     octomap_insert.push_back(seconds_since(start));
+    umbra::OccupancyMap prefix = map;
+    prefix.set_decay({options.occupied, options.free, std::nullopt});
+    std::vector<double> cpu;
+    const std::vector<double> times = decay_steps(prefix, &cpu);
+    char line[200];
+    std::snprintf(line, sizeof line, "    %zu scans: %zu nodes, step median %.2f ms wall, %.2f ms CPU (first %.2f CPU)",
+                  umbra_insert.size(), map.node_counts().total(), umbra::bench::median(times) * 1e3,
+                  umbra::bench::median(cpu) * 1e3, cpu.front() * 1e3);
+    growth.emplace_back(line);
   }
   const umbra::NodeCounts counts = map.node_counts();
   std::printf("%s %.2f cm: %zu scans; umbra %zu nodes (%zu leaves, %zu inner leaves), %.1f MB; OctoMap %zu nodes, %.1f MB\n",
@@ -115,43 +162,58 @@ void run(const std::string& name, const Options& options) {
   std::printf("  insert per scan (median, 1 thread): umbra %.1f ms, OctoMap %.1f ms\n",
               umbra::bench::median(umbra_insert) * 1e3, umbra::bench::median(octomap_insert) * 1e3);
 
-  const float occupied_step = static_cast<float>(options.occupied * options.dt);
-  const float free_step = static_cast<float>(options.free * options.dt);
-  const auto decay_steps = [&](umbra::OccupancyMap& m) {
-    std::vector<double> times;
-    double clock = 0.0;
-    m.advance_clock(clock);
-    for (int i = 0; i < options.steps; ++i) {
-      clock += options.dt;
-      const auto start = Clock::now();
-      m.advance_clock(clock);
-      times.push_back(seconds_since(start));
-    }
-    return times;
-  };
+  std::printf("  decay step against the map's size (1 thread, %d steps each):\n", options.steps);
+  for (const std::string& line : growth) std::printf("%s\n", line.c_str());
 
   // Whole map.
   umbra::OccupancyMap whole = map;
   whole.set_decay({options.occupied, options.free, std::nullopt});
   const std::size_t bytes_before = whole.memory_bytes();
-  const std::vector<double> umbra_times = decay_steps(whole);
+  std::vector<double> umbra_cpu;
+  const std::vector<double> umbra_times = decay_steps(whole, &umbra_cpu);
   std::vector<double> octomap_times;
   std::size_t octomap_zero = 0;
   for (int i = 0; i < options.steps; ++i) {
+    // The amounts of umbra's step i (clock from i dt to (i + 1) dt).
+    const double from = i * options.dt;
+    const double to = (i + 1) * options.dt;
+    const float occupied_step = quantized_step(options.occupied, from, to);
+    const float free_step = quantized_step(options.free, from, to);
     const auto start = Clock::now();
     octomap_zero = octomap_step(tree, occupied_step, free_step);
     octomap_times.push_back(seconds_since(start));
   }
   std::printf("  decay step, whole map (%d steps of %.2f s at %.2f / %.2f per s): umbra median %.2f ms (first %.2f, "
-              "last %.2f), OctoMap loop median %.2f ms (first %.2f, last %.2f)\n",
+              "last %.2f; CPU median %.2f), OctoMap loop median %.2f ms (first %.2f, last %.2f)\n",
               options.steps, options.dt, options.occupied, options.free, umbra::bench::median(umbra_times) * 1e3,
-              umbra_times.front() * 1e3, umbra_times.back() * 1e3, umbra::bench::median(octomap_times) * 1e3,
+              umbra_times.front() * 1e3, umbra_times.back() * 1e3, umbra::bench::median(umbra_cpu) * 1e3,
+              umbra::bench::median(octomap_times) * 1e3,
               octomap_times.front() * 1e3, octomap_times.back() * 1e3);
   const umbra::NodeCounts after = whole.node_counts();
   std::printf("  after: umbra %zu nodes, memory_bytes %.1f MB -> %.1f MB; OctoMap "
               "%zu nodes (%zu leaves at 0); leaves whose states differ: %zu\n",
               after.total(), bytes_before / 1e6, whole.memory_bytes() / 1e6,
               tree.size(), octomap_zero, disagreements(whole, tree));
+
+  // The same steps on several threads, as a stamped scan runs them.
+  umbra::OccupancyMap threaded = map;
+  threaded.set_decay({options.occupied, options.free, std::nullopt});
+  std::vector<double> threaded_times, threaded_cpu;
+  umbra::InsertOptions stamped;
+  stamped.threads = options.threads;
+  for (int i = 0; i <= options.steps; ++i) {
+    stamped.stamp = i * options.dt;
+    const double cpu_start = cpu_seconds();
+    const auto start = Clock::now();
+    threaded.insert_point_cloud(data.scans.front().origin, std::vector<umbra::Vec3f>{}, stamped);
+    if (i == 0) continue;  // the first stamp only starts the clock
+    threaded_times.push_back(seconds_since(start));
+    threaded_cpu.push_back(cpu_seconds() - cpu_start);
+  }
+  std::printf("  decay step, whole map, %u threads (an empty stamped scan): umbra median %.2f ms (first %.2f, last "
+              "%.2f; CPU median %.2f, all threads)%s\n",
+              options.threads, umbra::bench::median(threaded_times) * 1e3, threaded_times.front() * 1e3,
+              threaded_times.back() * 1e3, umbra::bench::median(threaded_cpu) * 1e3, threaded.node_counts().total() == whole.node_counts().total() ? "" : " DIFFERENT MAP");
 
   // A region around the first sensor position.
   umbra::OccupancyMap boxed = map;
@@ -183,9 +245,11 @@ int main(int argc, char** argv) {
       options.free = std::stod(args.value());
     } else if (arg == "--region") {
       options.region = std::stod(args.value());
+    } else if (arg == "--threads") {
+      options.threads = static_cast<unsigned>(std::stoul(args.value()));
     } else {
       std::cerr << "usage: umbra_decay_benchmark [--data DIR] [--datasets 3dtk,tum] [--steps N] [--dt S] "
-                   "[--occupied R] [--free R] [--region M]\n";
+                   "[--occupied R] [--free R] [--region M] [--threads N]\n";
       return arg == "--help" ? 0 : 2;
     }
   }

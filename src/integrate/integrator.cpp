@@ -157,6 +157,12 @@ void Integrator::ensure_workers(unsigned threads) {
   while (tracers_.size() < threads) tracers_.push_back(std::make_unique<RayTracer>());
 }
 
+ThreadPool* Integrator::workers(unsigned threads) {
+  if (threads == 0) threads = ThreadPool::hardware_threads();
+  ensure_workers(threads);
+  return threads > 1 ? pool_.get() : nullptr;
+}
+
 std::size_t Integrator::memory_bytes() const {
   std::size_t bytes = tracers_.capacity() * sizeof(tracers_[0]);
   if (pool_) bytes += sizeof(ThreadPool) + pool_->size() * sizeof(std::thread);

@@ -101,6 +101,11 @@ class Integrator {
   /// Forgets the pending update (after a failed trace).
   void discard();
 
+  /// The thread pool for `threads` threads (0: all cores), as trace() uses
+  /// it (started when needed); null for one thread. For work beside a scan
+  /// on the same threads (a decay step before a stamped scan).
+  ThreadPool* workers(unsigned threads);
+
   /// Bytes held between scans: the tracers' scratch buffers and empty batches.
   [[nodiscard]] std::size_t memory_bytes() const;
 

@@ -39,10 +39,57 @@ const double kSideHalfWidth = std::tan(std::numbers::pi / ScanImages::kSideFaces
 const double kSideHalfHeight = 1.0 / std::cos(std::numbers::pi / ScanImages::kSideFaces);
 constexpr double kCapHalfWidth = 1.0;
 
+/// The side face whose axis is nearest to the azimuth of direction (x, y):
+/// round(atan2(y, x) / 45 degrees) mod 8, from the octant's comparisons
+/// with tan(22.5 degrees) instead of an atan2 (about 1% of a 3DTK scan's
+/// insertion). Only a direction within rounding of a border between two
+/// faces may get the other one than atan2 would give (the estimate's
+/// count of that point then moves to the neighbouring face's edge).
+int nearest_side_face(double x, double y) {
+  static_assert(ScanImages::kSideFaces == 8);
+  const double tan_half = kSideHalfWidth;  // tan(22.5 degrees)
+  const double ax = std::abs(x);
+  const double ay = std::abs(y);
+  if (ay <= tan_half * ax) return x >= 0.0 ? 0 : 4;  // within 22.5 degrees of the x axis
+  if (ax <= tan_half * ay) return y >= 0.0 ? 2 : 6;  // of the y axis
+  if (x >= 0.0) return y >= 0.0 ? 1 : 7;
+  return y >= 0.0 ? 3 : 5;
+}
+
+// The coarse cells of estimate_scan_resolution (cells of a cube's face at
+// unit focal length).
+constexpr double kCoarse = 28.0;  // cells per unit: 1/28 rad = 2 degrees at a face's centre
+constexpr int kCoarseSide = 56;
+
+/// The solid angle of coarse cell (i, j) of a cube's face (the same on
+/// every face), from a table made once: a pow per filled cell and scan was
+/// more than the table.
+double coarse_cell_solid_angle(int i, int j) {
+  static const std::vector<double> table = [] {
+    std::vector<double> t(std::size_t(kCoarseSide) * kCoarseSide);
+    for (int b = 0; b < kCoarseSide; ++b) {
+      for (int a = 0; a < kCoarseSide; ++a) {
+        const double u = (a + 0.5) / kCoarse - 1.0;
+        const double v = (b + 0.5) / kCoarse - 1.0;
+        t[std::size_t(b) * kCoarseSide + std::size_t(a)] = 1.0 / (kCoarse * kCoarse) / std::pow(1.0 + u * u + v * v, 1.5);
+      }
+    }
+    return t;
+  }();
+  return table[std::size_t(j) * kCoarseSide + std::size_t(i)];
+}
+
 }  // namespace
 
 void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResolution resolution) {
   const Vec3d o(origin);
+  for (std::size_t i = swap_count_; i-- > 0;) {  // each image's own buffers back
+    const auto [a, b] = swaps_[i];
+    std::swap(faces_[a], faces_[b]);
+    std::swap(ray_pixels_[a], ray_pixels_[b]);
+    std::swap(ray_points_[a], ray_points_[b]);
+  }
+  swap_count_ = 0;
   for (int k = 0; k < kFaces; ++k) {
     ProjectiveFrame& face = faces_[static_cast<std::size_t>(k)];
     const FaceAxes axes = face_axes(k);
@@ -54,8 +101,9 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
     const double half_height = axes.cap ? kCapHalfWidth : kSideHalfHeight;
     face.width = 2 * static_cast<int>(std::ceil(face.fx * half_width)) + 2 * kOverlap;
     face.height = 2 * static_cast<int>(std::ceil(face.fy * half_height)) + 2 * kOverlap;
-    face.depth.assign(std::size_t(face.width) * std::size_t(face.height), 0.0f);
-    face.depth_halves.assign(4 * face.depth.size(), 0.0f);
+    // The pixels are set when the first point falls in (below).
+    face.depth.clear();
+    face.depth_halves.clear();
     face.cx = 0.5 * face.width - 0.5;
     face.cy = 0.5 * face.height - 0.5;
     face.origin = o;
@@ -97,6 +145,10 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
       const double u = face.fx * (c.x / c.z) + face.cx + 0.5;
       const double v = face.fy * (c.y / c.z) + face.cy + 0.5;
       if (!(u >= 0.0 && u < face.width && v >= 0.0 && v < face.height)) continue;
+      if (face.depth.empty()) {  // its first point
+        face.depth.assign(std::size_t(face.width) * std::size_t(face.height), 0.0f);
+        face.depth_halves.assign(4 * face.depth.size(), 0.0f);
+      }
       const std::size_t at =
           std::size_t(static_cast<int>(v)) * std::size_t(face.width) + std::size_t(static_cast<int>(u));
       float& pixel = face.depth[at];
@@ -112,7 +164,23 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
       ray_points_[k].push_back(static_cast<std::uint32_t>(index));
     }
   }
+  // The images that hold a point, to the front, in face order. The others
+  // clear nothing (no voxel's window there holds a reading, nor does the
+  // edge a voxel outside reads), so they are left out: no pixels, pyramid
+  // or walk for the directions the scan did not reach (a 3DTK scan covers
+  // about 230 degrees of azimuth: three of its ten images are empty).
+  held_ = 0;
   for (std::size_t k = 0; k < faces_.size(); ++k) {
+    if (faces_[k].depth.empty()) continue;
+    if (k != held_) {
+      std::swap(faces_[held_], faces_[k]);
+      std::swap(ray_pixels_[held_], ray_pixels_[k]);
+      std::swap(ray_points_[held_], ray_points_[k]);
+      swaps_[swap_count_++] = {static_cast<std::uint8_t>(held_), static_cast<std::uint8_t>(k)};
+    }
+    ++held_;
+  }
+  for (std::size_t k = 0; k < held_; ++k) {
     ProjectiveFrame& face = faces_[k];
     // The pyramid's maxima: each pixel's farthest half (by its nearest reading).
     std::vector<float>& farthest = face.farthest_half;
@@ -208,8 +276,6 @@ ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> poi
   // The solid angle the points cover, from cells of about 2 degrees of a
   // cube's faces at unit focal length; and every point in the middle of a
   // side face, as (face, u, v) at unit focal length.
-  constexpr double kCoarse = 28.0;  // cells per unit: 1/28 rad = 2 degrees at a face's centre
-  constexpr int kCoarseSide = 56;
   std::vector<std::uint8_t> coarse(std::size_t(6) * kCoarseSide * kCoarseSide, 0);
   struct OnFace {
     int face;
@@ -239,10 +305,8 @@ ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> poi
     const int i = std::clamp(static_cast<int>((a + 1.0) * kCoarse), 0, kCoarseSide - 1);
     const int j = std::clamp(static_cast<int>((b + 1.0) * kCoarse), 0, kCoarseSide - 1);
     coarse[(std::size_t(cube_face) * kCoarseSide + std::size_t(j)) * kCoarseSide + std::size_t(i)] = 1;
-    // The side face its azimuth falls in.
-    const double azimuth = std::atan2(d.y, d.x);
-    const int side = static_cast<int>(std::lround(azimuth / (2.0 * std::numbers::pi / ScanImages::kSideFaces)) +
-                                      ScanImages::kSideFaces) % ScanImages::kSideFaces;
+    // The side face its azimuth falls in (nearest_side_face: no atan2 a point).
+    const int side = nearest_side_face(d.x, d.y);
     const FaceAxes& axes = side_axes[static_cast<std::size_t>(side)];
     const double z = d.dot(axes.normal);
     if (!(z > 0.0)) continue;
@@ -255,9 +319,7 @@ ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> poi
     for (int j = 0; j < kCoarseSide; ++j) {
       for (int i = 0; i < kCoarseSide; ++i) {
         if (!coarse[(std::size_t(k) * kCoarseSide + std::size_t(j)) * kCoarseSide + std::size_t(i)]) continue;
-        const double u = (i + 0.5) / kCoarse - 1.0;
-        const double v = (j + 0.5) / kCoarse - 1.0;
-        solid_angle += 1.0 / (kCoarse * kCoarse) / std::pow(1.0 + u * u + v * v, 1.5);
+        solid_angle += coarse_cell_solid_angle(i, j);
       }
     }
   }
@@ -267,19 +329,30 @@ ScanResolution estimate_scan_resolution(Vec3f origin, std::span<const Vec3f> poi
   // empty pixels lie between filled ones along it.
   ScanResolution result{given.horizontal > 0.0 ? given.horizontal : 0.8 * mean_spacing,
                         given.vertical > 0.0 ? given.vertical : 0.8 * mean_spacing};
+  // Only the side faces some middle point falls in are binned and counted:
+  // the others have no filled cell and so no gap (a 3DTK scan leaves three
+  // of the eight empty).
+  std::array<int, ScanImages::kSideFaces> slot;  // a face's image in `filled`
+  slot.fill(-1);
+  for (const OnFace& q : middle) slot[static_cast<std::size_t>(q.face)] = 0;
+  int used = 0;
+  for (int& s : slot) {
+    if (s == 0) s = used++;
+  }
   std::vector<std::uint8_t> filled;
   std::vector<std::uint8_t> reached;
   constexpr int kReach = 4;  // a gap is at most this many pixels from a filled one on either side
   for (int round = 0; round < 16; ++round) {
     const int wide = 2 * static_cast<int>(std::ceil(kSideHalfWidth / result.horizontal));
     const int high = 2 * static_cast<int>(std::ceil(kMiddle / result.vertical));
-    filled.assign(std::size_t(ScanImages::kSideFaces) * std::size_t(wide) * std::size_t(high), 0);
+    filled.assign(std::size_t(used) * std::size_t(wide) * std::size_t(high), 0);
     for (const OnFace& q : middle) {
       const int i = std::clamp(static_cast<int>((q.u / kSideHalfWidth + 1.0) * 0.5 * wide), 0, wide - 1);
       const int j = std::clamp(static_cast<int>((q.v / kMiddle + 1.0) * 0.5 * high), 0, high - 1);
-      filled[(std::size_t(q.face) * std::size_t(high) + std::size_t(j)) * std::size_t(wide) + std::size_t(i)] = 1;
+      const auto image = std::size_t(slot[static_cast<std::size_t>(q.face)]);
+      filled[(image * std::size_t(high) + std::size_t(j)) * std::size_t(wide) + std::size_t(i)] = 1;
     }
-    const detail::ScanGaps gaps = detail::count_scan_gaps(filled, ScanImages::kSideFaces, wide, high, kReach, reached);
+    const detail::ScanGaps gaps = detail::count_scan_gaps(filled, used, wide, high, kReach, reached);
     const std::size_t cells = gaps.filled;
     const std::size_t row_gaps = gaps.row_gaps;
     const std::size_t column_gaps = gaps.column_gaps;

@@ -8,7 +8,8 @@
 // degrees, up and down), each reaching a few pixels past its share so that
 // the windows of voxels near a seam find readings on both sides. Every
 // point is drawn into every image that holds it; a pixel keeps the nearest
-// point's depth along the image's axis. The images are ProjectiveFrames:
+// point's depth along the image's axis; images no point falls in are
+// left out (they would clear nothing). The images are ProjectiveFrames:
 // the integrator clears a voxel when the rule (projective_frame.hpp) clears
 // it on some image. Eight side faces rather than four: a pinhole pixel's
 // angular width shrinks by cos^2 of its angle from the image's axis, to
@@ -39,6 +40,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "umbra/core/vec3.hpp"
@@ -59,11 +61,19 @@ class ScanImages {
   /// `points`, which must outlive the images' use.
   void build(Vec3f origin, std::span<const Vec3f> points, ScanResolution resolution);
 
-  [[nodiscard]] const std::array<ProjectiveFrame, kFaces>& faces() const { return faces_; }
+  /// The images that hold at least one point (in face order; the others
+  /// would clear nothing): none for a scan without points.
+  [[nodiscard]] std::span<const ProjectiveFrame> faces() const { return {faces_.data(), held_}; }
   [[nodiscard]] std::size_t memory_bytes() const;
 
  private:
-  std::array<ProjectiveFrame, kFaces> faces_;
+  std::array<ProjectiveFrame, kFaces> faces_;  ///< the first held_ hold points
+  std::size_t held_ = 0;
+  // The swaps that moved the held images to the front, undone before the
+  // next scan so that each image gets its own buffers back (a cap's are
+  // four times a side image's).
+  std::array<std::pair<std::uint8_t, std::uint8_t>, kFaces> swaps_{};
+  std::size_t swap_count_ = 0;
   // Each image's rays (pixel, point) as the points are drawn in; kept
   // between scans so that their buffers are reused.
   std::array<std::vector<std::uint32_t>, kFaces> ray_pixels_;

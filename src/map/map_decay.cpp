@@ -3,6 +3,7 @@
 // (docs/design.md, "Decay toward unknown").
 #include "map/map_decay.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <mutex>
 #include <stdexcept>
@@ -28,29 +29,61 @@ void DecayRates::validate() const {
 
 namespace detail {
 
-void advance_clock_locked(MapState& state, double time) {
+namespace {
+
+/// Decay amounts are whole multiples of this many log-odds (2^-16): a float
+/// value below 256 in magnitude minus such a multiple is exact in single
+/// precision, so two steps take off exactly what one step over the same
+/// time does (the rule in docs/design.md, "Decay toward unknown"), and a
+/// pending amount could be applied later in one go with the same result.
+constexpr double kDecayQuantum = 1.0 / 65536.0;
+
+/// What one side (occupied or free) of a step from `previous` to `time`
+/// takes off: the difference of the amounts accumulated up to the two
+/// times, each rounded down to whole quanta. Exact in double (whole numbers
+/// of quanta, a power of two) and in float below 256 log-odds; a larger step
+/// takes every value to 0 anyway (capped to stay a float; NaN, from absurd
+/// rates or times that overflow, also counts as everything).
+float step_amount(double rate, double total, double since, double previous, double time) {
+  if (rate == 0.0) return 0.0f;
+  const double quanta = std::floor((total + rate * (time - since)) / kDecayQuantum) -
+                        std::floor((total + rate * (previous - since)) / kDecayQuantum);
+  return quanta >= 0.0 ? static_cast<float>(std::min(quanta * kDecayQuantum, 1e30)) : 1e30f;
+}
+
+}  // namespace
+
+void restart_decay_totals(MapState& state) {
+  if (!state.clock) return;  // they start with the clock
+  const double elapsed = *state.clock - state.decay_totals.since;
+  state.decay_totals = {*state.clock, state.decay_totals.occupied + state.decay.occupied_per_second * elapsed,
+                        state.decay_totals.free + state.decay.free_per_second * elapsed};
+}
+
+void advance_clock_locked(MapState& state, double time, ThreadPool* pool) {
   UMBRA_ASSERT(std::isfinite(time));
   if (state.clock && time <= *state.clock) return;  // a late scan: the clock never goes back
   // Readers read the clock too: it changes with the gate closed.
   ClosedGate closed(state.gate);
   if (!state.clock) {
     state.clock = time;  // the first time: nothing has aged yet
+    state.decay_totals = {time, 0.0, 0.0};
     return;
   }
-  const double elapsed = time - *state.clock;
+  const double previous = *state.clock;
   state.clock = time;
   if (!state.decay.enabled()) return;
-  // The step is rounded to float once, as the tree's values are; the rule
-  // (and the brute force in the tests) applies this same float to each value.
-  const OccupancyTree::DecayStep step{static_cast<float>(state.decay.occupied_per_second * elapsed),
-                                      static_cast<float>(state.decay.free_per_second * elapsed)};
+  const DecayTotals& totals = state.decay_totals;
+  const OccupancyTree::DecayStep step{
+      step_amount(state.decay.occupied_per_second, totals.occupied, totals.since, previous, time),
+      step_amount(state.decay.free_per_second, totals.free, totals.since, previous, time)};
   if (!state.journal->active()) {
-    state.tree.decay(step, state.decay_keys);
+    state.tree.decay(step, state.decay_keys, nullptr, 0, pool);
     return;
   }
   // A distance field listens: tell it the coarse nodes whose states changed.
   std::vector<OccupancyTree::DecayChange> changes;
-  state.tree.decay(step, state.decay_keys, &changes, ChangeJournal::kJournalDepth);
+  state.tree.decay(step, state.decay_keys, &changes, ChangeJournal::kJournalDepth, pool);
   for (const OccupancyTree::DecayChange& change : changes) state.journal->record(change.code, change.depth);
 }
 
@@ -67,6 +100,7 @@ void OccupancyMap::set_decay(const DecayRates& rates) {
   if (state.gate.held_by_this_thread()) state.gate.close();  // throws: this thread is reading the map
   std::lock_guard writer(state.writer);
   detail::ClosedGate closed(state.gate);
+  detail::restart_decay_totals(state);  // what the old rates accumulated up to now
   state.decay = rates;
   state.decay_keys = keys;
 }

@@ -24,6 +24,18 @@
 
 namespace umbra::detail {
 
+/// The decay the clock has accumulated since it started, in log-odds
+/// (docs/design.md, "Decay toward unknown"): at clock time t >= `since`,
+/// `occupied + rates.occupied_per_second * (t - since)` for positive values
+/// and likewise for negative ones. `since` moves (and the amounts with it)
+/// only when the rates change, so the amount up to a time does not depend
+/// on how the clock got there.
+struct DecayTotals {
+  double since = 0.0;
+  double occupied = 0.0;
+  double free = 0.0;
+};
+
 struct MapState {
   MapState(int depth_levels, const SensorModel& sensor_model, const Thresholds& occupancy_thresholds, bool color)
       : sensor(sensor_model),
@@ -42,10 +54,12 @@ struct MapState {
   /// a field outliving this state (the map was assigned) still holds it.
   std::shared_ptr<ChangeJournal> journal = std::make_shared<ChangeJournal>();
   // Decay toward unknown (map_decay.cpp): the rates, their region as keys,
-  // and the clock (nothing until the first time is given).
+  // the clock (nothing until the first time is given) and the decay it has
+  // accumulated (the amounts each step applies are differences of these).
   DecayRates decay;
   std::optional<OccupancyTree::KeyBox> decay_keys;
   std::optional<double> clock;
+  DecayTotals decay_totals;
   // A map that moves (map_window.cpp): the window's settings, and its box
   // as keys once it has been placed (nothing before the first move).
   std::optional<MovingWindow> window;

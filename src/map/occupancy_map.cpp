@@ -92,6 +92,7 @@ OccupancyMap::OccupancyMap(const OccupancyMap& other) : grid_(other.grid_), colo
     state_->decay = from.decay;
     state_->decay_keys = from.decay_keys;
     state_->clock = from.clock;
+    state_->decay_totals = from.decay_totals;
   });
 }
 
@@ -218,14 +219,15 @@ namespace {
 /// meanwhile) with the box the scan is clipped to, then the apply phase.
 template <typename Check, typename Trace>
 InsertStats insert_scan(detail::MapState& state, const Grid& grid, Vec3d sensor, const std::optional<double>& stamp,
-                        Check&& check, Trace&& trace) {
+                        unsigned threads, Check&& check, Trace&& trace) {
   if (state.gate.held_by_this_thread()) state.gate.close();  // throws: this thread is reading the map
   std::lock_guard writer(state.writer);
   const bool follow = state.window && state.window->follow_scans;
   if (stamp || follow) std::forward<Check>(check)();
   // The move first: if its spill throws, nothing has changed yet.
   if (follow) detail::move_window_locked(state, grid, grid.key(sensor));
-  if (stamp) detail::advance_clock_locked(state, *stamp);
+  // The decay step runs on the scan's threads.
+  if (stamp) detail::advance_clock_locked(state, *stamp, state.integrator.workers(threads));
   const detail::InsertionBox box = detail::insertion_box(state, grid);
   if (box.empty) return InsertStats{};  // the bounding box and the window do not meet
   InsertStats stats = std::forward<Trace>(trace)(box.box);
@@ -257,7 +259,7 @@ InsertStats OccupancyMap::insert_point_cloud(Vec3f origin, std::span<const Vec3f
     if (!origin.is_finite()) throw std::invalid_argument("sensor origin is not finite");
     static_cast<void>(grid_.key(Vec3d(origin)));  // throws std::out_of_range outside the map
   };
-  return insert_scan(state, grid_, Vec3d(origin), options.stamp, check, [&](const std::optional<Aabb>& box) {
+  return insert_scan(state, grid_, Vec3d(origin), options.stamp, options.threads, check, [&](const std::optional<Aabb>& box) {
     return state.integrator.trace(state.tree, grid_, origin, points, colors, options, box);
   });
 }
@@ -278,7 +280,7 @@ InsertStats OccupancyMap::insert_depth_image(const DepthImage& depth, const Pinh
     if (!pose.is_rigid()) throw std::invalid_argument("the camera pose must be a rotation and a translation");
     static_cast<void>(grid_.key(Vec3d(pose.translation())));  // throws std::out_of_range outside the map
   };
-  return insert_scan(state, grid_, Vec3d(pose.translation()), options.stamp, check, [&](const std::optional<Aabb>& box) {
+  return insert_scan(state, grid_, Vec3d(pose.translation()), options.stamp, options.threads, check, [&](const std::optional<Aabb>& box) {
     return state.integrator.trace_image(state.tree, grid_, depth, camera, pose, colors, options, box);
   });
 }

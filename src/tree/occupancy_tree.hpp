@@ -276,8 +276,10 @@ class OccupancyTree {
   /// values, indicators and pruning are refreshed on the way back. With
   /// `changes`, appends the nodes of depth >= `change_depth` (childless
   /// coarser ones at their own depth) in which some voxel changed state.
+  /// With a thread pool and no region, disjoint subtrees decay in parallel;
+  /// the result (and the list of changes) is the same, bit for bit.
   void decay(DecayStep step, const std::optional<KeyBox>& region, std::vector<DecayChange>* changes = nullptr,
-             int change_depth = 0);
+             int change_depth = 0, ThreadPool* pool = nullptr);
 
   // --- a map that moves (tree_window.cpp; docs/design.md, "A map that moves")
   /// Makes every finest voxel outside `keep` unknown as if never observed
@@ -408,6 +410,10 @@ class OccupancyTree {
   /// true when some voxel below changed state.
   bool decay_below(int depth, std::uint32_t group, unsigned slot, std::uint64_t code, DecayStep step,
                    const std::optional<KeyBox>& region, std::vector<DecayChange>* changes, int change_depth);
+  /// False when no value below node (depth, group, slot) can change in `step`
+  /// (all 0, or of a sign whose step is 0); without a region.
+  [[nodiscard]] bool decay_may_change(int depth, std::uint32_t group, unsigned slot, DecayStep step) const;
+  void decay_in_parallel(DecayStep step, std::vector<DecayChange>* changes, int change_depth, ThreadPool& pool);
   /// Drops a node's color (no-op without color).
   void forget_color(int depth, std::uint32_t group, unsigned slot);
   /// forget_outside() below node (depth, group, slot) whose first voxel is

@@ -614,6 +614,9 @@ TEST(ProjectiveIntegrator, ScanImagesHoldEveryPointOfEveryImage) {
     const double step = trial < 3 ? 0.004 + 0.01 * trial : 0.1 + 0.2 * (trial - 3);  // radians
     ScanImages images;
     images.build(origin, points, {step, 1.5 * step});
+    // Points in every direction: every image holds some, so all ten are
+    // compared (build leaves out the images no point falls in).
+    ASSERT_EQ(images.faces().size(), std::size_t{ScanImages::kFaces}) << "trial " << trial;
     std::size_t held = 0;
     for (const ProjectiveFrame& face : images.faces()) {
       std::vector<float> depth(face.depth.size(), 0.0f);
@@ -641,6 +644,57 @@ TEST(ProjectiveIntegrator, ScanImagesHoldEveryPointOfEveryImage) {
       }
     }
     EXPECT_GT(held, points.size()) << "trial " << trial;  // the images overlap
+  }
+}
+
+TEST(ProjectiveIntegrator, ScanImagesLeaveOutImagesWithoutPoints) {
+  // A scan of a narrow sector (a quarter of the azimuths, +-20 degrees of
+  // elevation) fills few of the ten images: only those are returned, and
+  // each point is still in one of them. Leaving the others out changes no
+  // miss, as an image without readings clears nothing: checked on an image
+  // of a full scan with its readings removed.
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Vec3f origin{0.02f, -0.03f, 0.01f};
+  std::vector<Vec3f> sector;
+  for (int i = 0; i < 4000; ++i) {
+    const double azimuth = (u(rng) - 0.5) * 1.5;  // +-43 degrees around +x
+    const double elevation = (u(rng) - 0.5) * 0.7;
+    const Vec3d d{std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
+                  std::sin(elevation)};
+    sector.push_back(Vec3f(Vec3d(origin) + d * (1.0 + 2.0 * u(rng))));
+  }
+  ScanImages images;
+  images.build(origin, sector, {0.01, 0.02});
+  ASSERT_GE(images.faces().size(), 1u);
+  EXPECT_LE(images.faces().size(), 3u);  // the side faces at -45, 0 and 45 degrees
+  std::vector<int> holders(sector.size(), 0);
+  for (const ProjectiveFrame& face : images.faces()) {
+    for (std::size_t k = 0; k < face.pixel_rays.back(); ++k) {
+      ++holders[face.ray_order.empty() ? k : face.ray_order[k]];
+    }
+  }
+  for (std::size_t i = 0; i < sector.size(); ++i) ASSERT_GE(holders[i], 1) << "point " << i;
+
+  // An image without readings: no misses, whatever the range.
+  constexpr int kDepthLevels = 6;
+  const Grid grid(0.05, kDepthLevels);
+  images.build(origin, random_room_scan(rng, origin), {0.02, 0.02});
+  ASSERT_FALSE(images.faces().empty());
+  ProjectiveFrame empty = images.faces()[0];
+  std::fill(empty.depth.begin(), empty.depth.end(), 0.0f);
+  std::fill(empty.depth_halves.begin(), empty.depth_halves.end(), 0.0f);
+  std::fill(empty.farthest_half.begin(), empty.farthest_half.end(), 0.0f);
+  empty.pyramid.build(empty.depth.data(), empty.farthest_half.data(), empty.width, empty.height);
+  for (const double range : {-1.0, 2.0}) {
+    const ProjectiveRule rule(grid, empty, range, 0.0, std::nullopt);
+    UpdateBatch batch(kDepthLevels);
+    ProjectiveTracer(rule).trace(0, kDepthLevels, batch);
+    EXPECT_EQ(leaves_of(tree_from(batch, kDepthLevels)), leaves_of(tree_from(UpdateBatch(kDepthLevels), kDepthLevels)))
+        << "range " << range;
+    for (std::uint64_t brick = 0; brick < (std::uint64_t{1} << (3 * kDepthLevels)); brick += 64) {
+      ASSERT_EQ(rule.cleared_plain(brick), 0u) << "brick " << brick;
+    }
   }
 }
 

@@ -33,6 +33,16 @@ float brute_decay(float l, float occupied, float free) {
   return l;
 }
 
+/// The amount a step from clock time `from` to `to` takes off at `rate`
+/// log-odds per second, for rates set before the clock started at `start`:
+/// the difference of the amounts accumulated since `start`, each rounded
+/// down to whole quanta of 2^-16 log-odds.
+float quantized_step(double rate, double start, double from, double to) {
+  const double quantum = 1.0 / 65536.0;
+  return static_cast<float>(
+      (std::floor(rate * (to - start) / quantum) - std::floor(rate * (from - start) / quantum)) * quantum);
+}
+
 struct Case {
   int depth_levels;
   bool auto_prune;
@@ -138,8 +148,8 @@ void run_case(const Case& c, unsigned seed) {
   for (int step = 0; step < 8; ++step) {
     const double next = step == 3 ? time - 0.5 : time + dt(rng);  // one late time: no decay
     if (next > time) {
-      const auto occupied = static_cast<float>(c.occupied_rate * (next - time));
-      const auto free = static_cast<float>(c.free_rate * (next - time));
+      const float occupied = quantized_step(c.occupied_rate, 100.0, time, next);
+      const float free = quantized_step(c.free_rate, 100.0, time, next);
       for (std::uint32_t z = 0; z < dense.size(); ++z)
         for (std::uint32_t y = 0; y < dense.size(); ++y)
           for (std::uint32_t x = 0; x < dense.size(); ++x) {
@@ -168,6 +178,90 @@ TEST(Decay, MatchesBruteForceAtEveryDepth) {
       run_case({depth, prune, Thresholds{0.6, 0.4}, 0.9, 0.3, depth != 4}, seed++);
       run_case({depth, prune, Thresholds{0.6, 0.4}, 0.7, 0.0, depth == 5}, seed++);
       run_case({depth, prune, Thresholds{0.7, 0.55}, 0.0, 0.8, depth == 4}, seed++);
+    }
+  }
+}
+
+/// The map's file bytes (save_map), the byte-for-byte form of a map.
+std::vector<std::uint8_t> bytes_of(const OccupancyMap& map, const std::string& name) {
+  const auto path = test::scratch_dir() / (name + ".umap");
+  save_map(map, path);
+  return test::read_bytes(path);
+}
+
+/// Steps compose exactly: many small steps take off what one step over the
+/// same time does, bit for bit (what a decay applied later in one go needs).
+/// With steps rounded to float one by one (float(a * dt) each) the sums of
+/// the small steps drift from the large one in the last bits.
+TEST(Decay, ManySmallStepsEqualOneLargeStep) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> c(-2.5f, 2.5f);
+  OccupancyMap seen(0.1, 8);
+  for (int s = 0; s < 4; ++s) {
+    std::vector<Vec3f> points;
+    for (int i = 0; i < 300; ++i) points.push_back({c(rng), c(rng), c(rng)});
+    seen.insert_point_cloud({c(rng) * 0.3f, c(rng) * 0.3f, 0.0f}, points);
+  }
+  OccupancyMap small = seen;
+  OccupancyMap large = seen;
+  const DecayRates rates{0.37, 0.113, std::nullopt};
+  small.set_decay(rates);
+  large.set_decay(rates);
+  const double start = 1311877812.987032;  // a TUM stamp: large times lose digits
+  small.advance_clock(start);
+  large.advance_clock(start);
+  std::uniform_real_distribution<double> dt(0.001, 0.09);
+  double time = start;
+  for (int step = 0; step < 40; ++step) small.advance_clock(time += dt(rng));
+  large.advance_clock(time);
+  ASSERT_NE(bytes_of(large, "large_step"), bytes_of(seen, "not_decayed"));  // something decayed
+  EXPECT_EQ(bytes_of(small, "small_steps"), bytes_of(large, "large_step"));
+}
+
+/// A stamped scan decays the map on the scan's threads: the map after each
+/// scan is the one of one thread, byte for byte, and a distance field
+/// listening to it still answers as one built anew (the parallel step
+/// reports the same changes).
+TEST(Decay, StepsOnSeveralThreadsEqualOneThread) {
+  // Two scenes: one 6 m wide (the step splits into subtrees high up) and
+  // one 0.6 m wide, whose few known nodes make the split go down to the
+  // depth of the change journal (3) and below.
+  for (const float half : {3.0f, 0.3f}) {
+    SCOPED_TRACE("scene half width " + std::to_string(half));
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> c(-half, half);
+    std::vector<std::vector<Vec3f>> scans(3);
+    for (auto& s : scans)
+      for (int i = 0; i < 250; ++i) s.push_back({c(rng), c(rng), c(rng) * 0.3f});
+    OccupancyMap one(0.05, 10);
+    OccupancyMap several(0.05, 10);
+    for (OccupancyMap* map : {&one, &several}) map->set_decay({0.3, 0.15, std::nullopt});
+    DistanceFieldOptions field_options;
+    field_options.max_distance = 0.3;
+    DistanceField field(several, field_options);
+    std::vector<Vec3d> probe;
+    for (int i = 0; i < 500; ++i) probe.push_back({c(rng), c(rng), c(rng) * 0.3});
+    const auto ask = [&](const DistanceField& f) {
+      std::vector<DistanceSample> samples(probe.size());
+      f.distance_and_gradient(probe, samples);
+      std::vector<double> flat;
+      for (const DistanceSample& s : samples) flat.insert(flat.end(), {s.occupied, s.unknown});
+      return flat;
+    };
+    // Each scan, then a stamped scan without points: a decay step alone,
+    // whose changes the journal learns from the step only.
+    for (std::size_t s = 0; s < 2 * scans.size(); ++s) {
+      InsertOptions options;
+      options.stamp = 0.9 * static_cast<double>(s);
+      const std::vector<Vec3f> points = s % 2 == 0 ? scans[s / 2] : std::vector<Vec3f>{};
+      options.threads = 1;
+      one.insert_point_cloud({0.01f, 0.0f, 0.0f}, points, options);
+      options.threads = 3;
+      several.insert_point_cloud({0.01f, 0.0f, 0.0f}, points, options);
+      ASSERT_EQ(bytes_of(several, "several"), bytes_of(one, "one")) << "after scan " << s;
+      ASSERT_EQ(test::check_invariants(several), "");
+      field.update();
+      ASSERT_EQ(ask(field), ask(DistanceField(several, field_options))) << "after scan " << s;
     }
   }
 }
@@ -230,13 +324,6 @@ TEST(Decay, DistanceFieldFollowsDecaySteps) {
     field.update();
     EXPECT_EQ(ask(field), ask(DistanceField(map, field_options))) << "at " << time;
   }
-}
-
-/// The map's file bytes (save_map), the byte-for-byte form of a map.
-std::vector<std::uint8_t> bytes_of(const OccupancyMap& map, const std::string& name) {
-  const auto path = test::scratch_dir() / (name + ".umap");
-  save_map(map, path);
-  return test::read_bytes(path);
 }
 
 TEST(Decay, WithoutStampsOrRatesTheMapIsTheSameByteForByte) {
