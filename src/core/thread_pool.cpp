@@ -39,7 +39,9 @@ JobCpuTimes job_cpu_times() {
 }
 
 unsigned ThreadPool::hardware_threads() {
-  const unsigned n = std::thread::hardware_concurrency();
+  // Read once: glibc reads it from sysfs on every call (an open, a read and
+  // a close), and every insertion asks (InsertOptions::validate).
+  static const unsigned n = std::thread::hardware_concurrency();
   return n == 0 ? 1 : n;
 }
 

@@ -36,8 +36,8 @@ std::size_t count_readings(const DepthImage& depth, int row_begin, int row_end) 
   return count;
 }
 
-void back_project_rows(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose, int row_begin,
-                       int row_end, Vec3f* points, std::uint32_t* pixels) {
+std::size_t back_project_rows(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose, int row_begin,
+                              int row_end, Vec3f* points, std::uint32_t* pixels) {
   const int width = depth.width();
   // A row's x factors, (u - cx) / fx, on the stack for the usual widths.
   std::array<double, 2048> small_factors;
@@ -48,9 +48,9 @@ void back_project_rows(const DepthImage& depth, const PinholeCamera& camera, con
     column_factor = large_factors.data();
   }
   for (int u = 0; u < width; ++u) column_factor[u] = (u - camera.cx) / camera.fx;
+  std::size_t out = 0;
   for_each_depth(depth, [&](auto&& depth_of) {
     std::size_t index = std::size_t(row_begin) * std::size_t(width);
-    std::size_t out = 0;
     for (int v = row_begin; v < row_end; ++v) {
       const double row_factor = (v - camera.cy) / camera.fy;
       for (int u = 0; u < width; ++u, ++index) {
@@ -62,10 +62,13 @@ void back_project_rows(const DepthImage& depth, const PinholeCamera& camera, con
       }
     }
   });
+  return out;
 }
 
 void ImagePoints::build(const Grid& grid, const DepthImage& depth, const PinholeCamera& camera, const Pose& pose,
-                        std::span<const Rgb> colors, ThreadPool* pool, FunctionRef<void()> alongside) {
+                        std::span<const Rgb> colors, ThreadPool* pool, FunctionRef<void()> alongside,
+                        bool voxels_only) {
+  voxels_only = voxels_only && colors.empty();
   const int height = depth.height();
   // Two bands per worker balance rows of unequal counts; at least 16 rows a
   // band. One band without a pool: for_each_voxel then reads its voxels
@@ -76,6 +79,23 @@ void ImagePoints::build(const Grid& grid, const DepthImage& depth, const Pinhole
     Band& band = bands_[static_cast<std::size_t>(b)];
     band.row_begin = static_cast<int>(std::int64_t{height} * b / band_count);
     band.row_end = static_cast<int>(std::int64_t{height} * (b + 1) / band_count);
+  }
+  points_kept_ = !voxels_only;
+  if (voxels_only) {
+    points_.clear();
+    pixels_.clear();
+    codes_.clear();
+    colors_.clear();
+    // Each band back-projects its rows a few at a time and keeps their voxels.
+    for_each_part(pool, bands_.size() + 1, [&](std::size_t task) {
+      if (task == 0) {
+        alongside();
+      } else {
+        find_voxels_streamed(grid, depth, camera, pose, bands_[task - 1]);
+      }
+    });
+    sum_band_counts();
+    return;
   }
   // 1. Each band's readings, then where its points begin.
   for_each_part(pool, bands_.size(),
@@ -115,6 +135,19 @@ void ImagePoints::build(const Grid& grid, const DepthImage& depth, const Pinhole
     find_voxels(grid, depth.width(), band);
   };
   for_each_part(pool, bands_.size() + 1, band_work);
+  sum_band_counts();
+}
+
+void ImagePoints::keep_points(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose) {
+  if (points_kept_) return;
+  const std::size_t total = count_readings(depth, 0, depth.height());
+  points_.resize(total);
+  pixels_.resize(total);
+  back_project_rows(depth, camera, pose, 0, depth.height(), points_.data(), pixels_.data());
+  points_kept_ = true;
+}
+
+void ImagePoints::sum_band_counts() {
   non_finite_ = 0;
   out_of_bounds_ = 0;
   for (const Band& band : bands_) {
@@ -174,12 +207,38 @@ void ImagePoints::for_each_voxel_in(std::uint64_t first, std::uint64_t end,
 }
 
 void ImagePoints::find_voxels(const Grid& grid, int width, Band& band) {
+  VoxelScan scan = start_scan(width, band);
+  add_candidates(grid, width, std::span<const Vec3f>(points_.data() + band.first, band.count),
+                 pixels_.data() + band.first, codes_.empty() ? nullptr : codes_.data() + band.first, band, scan);
+  finish_candidates(grid, band, scan);
+}
+
+void ImagePoints::find_voxels_streamed(const Grid& grid, const DepthImage& depth, const PinholeCamera& camera,
+                                       const Pose& pose, Band& band) {
+  const int width = depth.width();
+  // Rows at a time: about 10,000 pixels (their points stay in cache for the codes).
+  const int rows = std::max(1, 10240 / std::max(width, 1));
+  band.chunk_points.resize(std::size_t(rows) * std::size_t(width));
+  band.chunk_pixels.resize(band.chunk_points.size());
+  VoxelScan scan = start_scan(width, band);
+  for (int row = band.row_begin; row < band.row_end; row += rows) {
+    const std::size_t count = back_project_rows(depth, camera, pose, row, std::min(row + rows, band.row_end),
+                                                band.chunk_points.data(), band.chunk_pixels.data());
+    add_candidates(grid, width, std::span<const Vec3f>(band.chunk_points.data(), count), band.chunk_pixels.data(),
+                   nullptr, band, scan);
+  }
+  finish_candidates(grid, band, scan);
+}
+
+ImagePoints::VoxelScan ImagePoints::start_scan(int width, Band& band) {
   band.candidates.clear();
   band.above.assign(static_cast<std::size_t>(width), kNonFiniteCode);
-  band.non_finite = 0;
-  band.out_of_bounds = 0;
-  const std::span<const Vec3f> points(points_.data() + band.first, band.count);
-  const std::uint32_t* const pixels = pixels_.data() + band.first;
+  return VoxelScan{kNonFiniteCode, ~std::uint32_t{0},
+                   static_cast<std::uint32_t>(band.row_begin) * static_cast<std::uint32_t>(width)};
+}
+
+void ImagePoints::add_candidates(const Grid& grid, int width, std::span<const Vec3f> points,
+                                 const std::uint32_t* pixels, std::uint64_t* codes_out, Band& band, VoxelScan& scan) {
   std::array<std::uint64_t, 1024> block_codes;  // when the codes are not kept
   std::array<std::uint64_t, 1024> kept;         // a block's candidates, appended at its end
   // A voxel holds many neighbouring pixels: a code equal to its left or upper
@@ -189,16 +248,16 @@ void ImagePoints::find_voxels(const Grid& grid, int width, Band& band) {
   // Without branches: whether a pixel's code is kept is unpredictable
   // (voxel borders, pixels without readings), and the branches were most of
   // this loop's time (a TUM frame at 2 cm: 11 ns a pixel with them).
-  std::uint64_t left = kNonFiniteCode;
-  std::uint32_t left_pixel = ~std::uint32_t{0};
-  std::uint32_t row_start = static_cast<std::uint32_t>(band.row_begin) * static_cast<std::uint32_t>(width);
+  std::uint64_t left = scan.left;
+  std::uint32_t left_pixel = scan.left_pixel;
+  std::uint32_t row_start = scan.row_start;
   std::size_t non_finite = 0;
   std::size_t outside = 0;
   std::uint64_t* const above = band.above.data();
   constexpr std::size_t kBlock = block_codes.size();  // codes computed a block at a time stay in cache for the loop
   for (std::size_t block = 0; block < points.size(); block += kBlock) {
     const std::size_t size = std::min(kBlock, points.size() - block);
-    std::uint64_t* const codes = codes_.empty() ? block_codes.data() : codes_.data() + band.first + block;
+    std::uint64_t* const codes = codes_out == nullptr ? block_codes.data() : codes_out + block;
     voxel_codes(grid, points.subspan(block, size), codes);
     std::size_t n = 0;
     for (std::size_t j = 0; j < size; ++j) {
@@ -218,8 +277,16 @@ void ImagePoints::find_voxels(const Grid& grid, int width, Band& band) {
     }
     band.candidates.insert(band.candidates.end(), kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(n));
   }
-  band.non_finite = non_finite;
-  band.out_of_bounds = outside;
+  scan.left = left;
+  scan.left_pixel = left_pixel;
+  scan.row_start = row_start;
+  scan.non_finite += non_finite;
+  scan.outside += outside;
+}
+
+void ImagePoints::finish_candidates(const Grid& grid, Band& band, const VoxelScan& scan) {
+  band.non_finite = scan.non_finite;
+  band.out_of_bounds = scan.outside;
   radix_sort(band.candidates, 3 * grid.depth_levels(), [](std::uint64_t code) { return code; }, band.sort_scratch);
   band.candidates.erase(std::unique(band.candidates.begin(), band.candidates.end()), band.candidates.end());
 }
@@ -229,6 +296,7 @@ std::size_t ImagePoints::memory_bytes() const {
                       colors_.capacity() * sizeof(Rgb) + codes_.capacity() * sizeof(std::uint64_t) +
                       bands_.capacity() * sizeof(Band);
   for (const Band& band : bands_) {
+    bytes += band.chunk_points.capacity() * sizeof(Vec3f) + band.chunk_pixels.capacity() * sizeof(std::uint32_t);
     bytes += (band.candidates.capacity() + band.above.capacity() + band.sort_scratch.records.capacity()) *
                  sizeof(std::uint64_t) +
              band.sort_scratch.counts.capacity() * sizeof(std::uint32_t);

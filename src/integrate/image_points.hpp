@@ -41,9 +41,9 @@ std::size_t count_readings(const DepthImage& depth, int row_begin, int row_end);
 /// in pixel order, written from `points` on (and their pixel indices from
 /// `pixels` on, when not null): z = depth, x = (u - cx) z / fx,
 /// y = (v - cy) z / fy, in double, then pose.apply. `points` has room for
-/// count_readings() of those rows.
-void back_project_rows(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose, int row_begin,
-                       int row_end, Vec3f* points, std::uint32_t* pixels);
+/// count_readings() of those rows. Returns how many it wrote.
+std::size_t back_project_rows(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose, int row_begin,
+                              int row_end, Vec3f* points, std::uint32_t* pixels);
 
 class ImagePoints {
  public:
@@ -52,8 +52,19 @@ class ImagePoints {
   /// pixel) and the voxels they fall in; on `pool`'s workers when given.
   /// `alongside` runs on one worker meanwhile (work that needs the image but
   /// not its points).
+  /// With `voxels_only` (and no colors) only the voxels and the counts are
+  /// kept: points(), pixels() and codes() stay empty. The projective
+  /// integrator needs no more, and the image-wide arrays were a counting
+  /// pass over the image and 4.8 MB of fresh memory for a Kinect frame
+  /// (its page faults were 1,200 of a fresh map's first frame's 2,400).
   void build(const Grid& grid, const DepthImage& depth, const PinholeCamera& camera, const Pose& pose,
-             std::span<const Rgb> colors, ThreadPool* pool, FunctionRef<void()> alongside);
+             std::span<const Rgb> colors, ThreadPool* pool, FunctionRef<void()> alongside,
+             bool voxels_only = false);
+
+  /// After a voxels_only build: back-projects the whole image into points()
+  /// and pixels() after all (on the calling thread; nothing to do when they
+  /// were kept). For the surface band's rays, which only some frames need.
+  void keep_points(const DepthImage& depth, const PinholeCamera& camera, const Pose& pose);
 
   [[nodiscard]] std::span<const Vec3f> points() const { return points_; }
   [[nodiscard]] std::span<const std::uint32_t> pixels() const { return pixels_; }
@@ -83,13 +94,40 @@ class ImagePoints {
     RadixSortScratch<std::uint64_t> sort_scratch;
     std::size_t non_finite = 0;
     std::size_t out_of_bounds = 0;
+    // voxels_only: a few rows' points at a time (kept between images).
+    std::vector<Vec3f> chunk_points;
+    std::vector<std::uint32_t> chunk_pixels;
   };
+  /// Where find_voxels stands in its band's pixels (carried from one run of
+  /// points to the next).
+  struct VoxelScan {
+    std::uint64_t left;        // the previous point's code
+    std::uint32_t left_pixel;  // and pixel
+    std::uint32_t row_start;   // the first pixel of the row of the previous point
+    std::size_t non_finite = 0;
+    std::size_t outside = 0;
+  };
+  /// The band's candidates from its points (stored in points_ and pixels_).
   void find_voxels(const Grid& grid, int width, Band& band);
+  /// The same, back-projecting the band's rows a few at a time instead.
+  void find_voxels_streamed(const Grid& grid, const DepthImage& depth, const PinholeCamera& camera, const Pose& pose,
+                            Band& band);
+  /// find_voxels' work on a run of the band's points in pixel order; `codes`
+  /// receives their codes when not null.
+  static void add_candidates(const Grid& grid, int width, std::span<const Vec3f> points, const std::uint32_t* pixels,
+                             std::uint64_t* codes, Band& band, VoxelScan& scan);
+  /// Sorts the band's candidates and drops repeats; sets its counts from `scan`.
+  static void finish_candidates(const Grid& grid, Band& band, const VoxelScan& scan);
+  /// Empties the band's candidates for a scan of its pixels from the start.
+  static VoxelScan start_scan(int width, Band& band);
+  /// non_finite_ and out_of_bounds_ from the bands'.
+  void sum_band_counts();
 
   // Kept between images: their buffers are reused (a fresh buffer costs a
   // page fault per 4 KiB on every frame).
   std::vector<Vec3f> points_;
   std::vector<std::uint32_t> pixels_;
+  bool points_kept_ = false;  // points_ and pixels_ hold the last image's points
   std::vector<Rgb> colors_;
   std::vector<std::uint64_t> codes_;
   std::vector<Band> bands_;

@@ -376,12 +376,17 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   // A map of one depth level has no bricks (the projective rule's unit): it
   // takes the image's points as the discrete integrator does.
   const bool projective = options.integrator == IntegratorKind::projective && grid.depth_levels() >= 2;
-  // The points on every worker; the projective rule's image (its pyramid) meanwhile.
-  image_points_.build(grid, image, camera, pose, colors, pool, [&] {
-    if (projective) frame_.set(image, camera, pose);
-  });
+  // The points' voxels on every worker; the projective rule's image (its
+  // pyramid) meanwhile. The projective integrator reads only the voxels (and
+  // the points themselves for colors and for the surface band's rays).
+  image_points_.build(
+      grid, image, camera, pose, colors, pool, [&] {
+        if (projective) frame_.set(image, camera, pose);
+      },
+      /*voxels_only=*/projective);
   // Its rays, for the voxels near the surface (surface_band.hpp), where there can be any.
   if (projective && SurfaceBand::possible(grid.resolution(), frame_, options.max_range)) {
+    image_points_.keep_points(image, camera, pose);
     frame_.set_rays(image_points_.points(), image_points_.pixels());
   } else {
     frame_.ray_ends = {};

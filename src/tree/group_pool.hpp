@@ -80,6 +80,14 @@ class HugePageChunks {
   std::size_t used_ = kChunkBytes;  // bytes carved from the last chunk
 };
 
+/// Asks the kernel to back the whole pages inside [memory, memory + bytes)
+/// now, in one call (MADV_POPULATE_WRITE, Linux 5.14; elsewhere nothing
+/// happens). A full block is filled group by group as the map grows: on the
+/// test machine (a virtual machine) the first write to a page cost 16 us
+/// through a page fault and 10 us populated, and a fresh map's page faults
+/// were a tenth of inserting ten TUM frames at 2 cm.
+void populate(void* memory, std::size_t bytes);
+
 /// Deletes a block allocated with new[]; leaves one carved from a chunk.
 template <typename T>
 struct BlockDeleter {
@@ -298,6 +306,7 @@ class GroupPool {
     if (!carved) {
       Block<T> block(new T[capacity]);
       block_bytes_ += bytes;
+      if (capacity == kBlockGroups) detail::populate(block.get(), bytes);  // full blocks fill up (the last one per pool aside)
       return block;
     }
     T* records = static_cast<T*>(chunks_.carve(bytes));

@@ -1,3 +1,4 @@
+#include <cstdint>
 #include <cstdlib>
 #include <new>
 
@@ -5,6 +6,7 @@
 
 #if defined(__linux__)
 #include <sys/mman.h>
+#include <unistd.h>
 #endif
 
 namespace umbra::detail {
@@ -27,6 +29,21 @@ void* HugePageChunks::carve(std::size_t bytes) {
   void* block = static_cast<char*>(chunks_.back().get()) + used_;
   used_ += bytes;
   return block;
+}
+
+void populate(void* memory, std::size_t bytes) {
+#if defined(__linux__)
+#if !defined(MADV_POPULATE_WRITE)
+  constexpr int MADV_POPULATE_WRITE = 23;  // older headers; an older kernel refuses it (EINVAL)
+#endif
+  const auto page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));
+  const auto begin = (reinterpret_cast<std::uintptr_t>(memory) + page - 1) / page * page;
+  const auto end = (reinterpret_cast<std::uintptr_t>(memory) + bytes) / page * page;
+  if (end > begin) (void)madvise(reinterpret_cast<void*>(begin), end - begin, MADV_POPULATE_WRITE);
+#else
+  (void)memory;
+  (void)bytes;
+#endif
 }
 
 void HugePageChunks::Free::operator()(void* chunk) const { std::free(chunk); }
