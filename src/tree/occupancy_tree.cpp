@@ -75,6 +75,7 @@ void OccupancyTree::clear() {
 std::uint32_t OccupancyTree::new_leaf_group(float value) {
   const std::uint32_t index = concurrent_ ? leaves_.allocate(t_worker) : leaves_.allocate();
   leaves_[index].log_odds.fill(value);
+  leaves_[index].mark = new_mark(value);
   return index;
 }
 
@@ -83,6 +84,7 @@ std::uint32_t OccupancyTree::new_inner_group(int depth, float value) {
   InnerGroup& group = inner_[depth][index];
   group.log_odds.fill(value);
   group.child.fill(kNoGroup);
+  group.mark = new_mark(value);
   group.contains_free = thresholds_.is_free(value) ? 0xFF : 0;
   group.contains_unknown = thresholds_.is_unknown(value) ? 0xFF : 0;
   group.all_same = 0;
@@ -109,6 +111,7 @@ void OccupancyTree::release_group(int depth, std::uint32_t group) {
 void OccupancyTree::set_childless(InnerGroup& group, unsigned slot, float value) const {
   UMBRA_ASSERT(group.child[slot] == kNoGroup);
   group.log_odds[slot] = value;
+  lower_events(group.mark.event, value);
   assign_bit(group.contains_free, slot, thresholds_.is_free(value));
   assign_bit(group.contains_unknown, slot, thresholds_.is_unknown(value));
   assign_bit(group.all_same, slot, false);
@@ -117,6 +120,7 @@ void OccupancyTree::set_childless(InnerGroup& group, unsigned slot, float value)
 void OccupancyTree::expand(int depth, std::uint32_t group, unsigned slot) {
   InnerGroup& node = inner_[depth][group];
   UMBRA_ASSERT(depth >= 1 && node.child[slot] == kNoGroup);
+  catch_up(node);
   const float value = node.log_odds[slot];
   // `node` lives in the pool of `depth`; allocating one depth below never moves it.
   const std::uint32_t child = depth == 1 ? new_leaf_group(value) : new_inner_group(depth - 1, value);
@@ -146,14 +150,36 @@ OccupancyTree::ChildrenSummary OccupancyTree::summarize_children(int depth, std:
 void OccupancyTree::refresh(int depth, std::uint32_t group, unsigned slot, bool allow_prune) {
   const std::uint32_t child = inner_[depth][group].child[slot];
   UMBRA_ASSERT(child != kNoGroup);
+  if (depth == 1) {
+    catch_up(leaves_[child]);
+  } else {
+    catch_up(inner_[depth - 1][child]);
+  }
   refresh_from(depth, group, slot, summarize_children(depth, child), allow_prune);
 }
 
 void OccupancyTree::refresh_from(int depth, std::uint32_t group, unsigned slot, const ChildrenSummary& summary,
                                  bool allow_prune) {
+  // The summary is of the children up to date (the callers caught them up).
   InnerGroup& node = inner_[depth][group];
   const std::uint32_t child = node.child[slot];
   UMBRA_ASSERT(child != kNoGroup);
+  catch_up(node);
+  if (decay_tracked_) {
+    // The children's events (a leaf group's anew: its values were just
+    // written), then this group's bound lowered to them.
+    std::array<std::uint32_t, 2> below;
+    if (depth == 1) {
+      LeafGroup& leaves = leaves_[child];
+      UMBRA_ASSERT(leaves.mark.step == decay_now());
+      set_leaf_events(leaves);
+      below = leaves.mark.event;
+    } else {
+      UMBRA_ASSERT(inner_[depth - 1][child].mark.step == decay_now());
+      below = inner_[depth - 1][child].mark.event;
+    }
+    node.mark.event = {std::min(node.mark.event[0], below[0]), std::min(node.mark.event[1], below[1])};
+  }
   const float max = summary.max;
   const bool any_free = summary.any_free;
   const bool any_unknown = summary.any_unknown;
@@ -189,14 +215,14 @@ NodeSummary OccupancyTree::find(std::uint64_t code, int depth) const {
   for (int d = depth_levels_;; --d) {
     if (d == 0) {
       const unsigned slot = morton::slot(code, 0);
-      const float value = leaves_[group].log_odds[slot];
+      const float value = current(leaves_[group].log_odds[slot], leaves_[group].mark);
       return {value, thresholds_.is_free(value), thresholds_.is_unknown(value), false, 0,
               NodeRef{group, static_cast<std::uint8_t>(slot), 0}};
     }
     const InnerGroup& node = inner_[d][group];
     const unsigned slot = morton::slot(code, d);
     if (d == depth || node.child[slot] == kNoGroup) {
-      return {node.log_odds[slot], (node.contains_free & bit(slot)) != 0,
+      return {current(node.log_odds[slot], node.mark), (node.contains_free & bit(slot)) != 0,
               (node.contains_unknown & bit(slot)) != 0, node.child[slot] != kNoGroup, d,
               NodeRef{group, static_cast<std::uint8_t>(slot), static_cast<std::int8_t>(d)}};
     }
@@ -217,13 +243,14 @@ float OccupancyTree::Cursor::max_log_odds(std::uint64_t code, int depth) {
   for (;; --d) {
     if (d == 0) {
       valid_from_ = 0;
-      return tree_.leaves_[group].log_odds[morton::slot(code, 0)];
+      const LeafGroup& leaves = tree_.leaves_[group];
+      return tree_.current(leaves.log_odds[morton::slot(code, 0)], leaves.mark);
     }
     const InnerGroup& node = tree_.inner_[d][group];
     const unsigned slot = morton::slot(code, d);
     if (d == depth || node.child[slot] == kNoGroup) {
       valid_from_ = d;
-      return node.log_odds[slot];
+      return tree_.current(node.log_odds[slot], node.mark);
     }
     group = node.child[slot];
     path_[d - 1] = group;
@@ -250,10 +277,12 @@ std::uint32_t OccupancyTree::descend_splitting(std::uint64_t code, Path& path) {
   path[depth_levels_] = group;
   for (int d = depth_levels_; d >= 1; --d) {
     const unsigned slot = morton::slot(code, d);
+    catch_up(inner_[d][group]);
     if (inner_[d][group].child[slot] == kNoGroup) expand(d, group, slot);
     group = inner_[d][group].child[slot];
     path[d - 1] = group;
   }
+  catch_up(leaves_[group]);
   return group;
 }
 
@@ -540,6 +569,7 @@ void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& t
       continue;
     }
     if (inner_[1][group].child[slot] == kNoGroup) expand(1, group, slot);
+    catch_up(leaves_[inner_[1][group].child[slot]]);
     const detail::LaneSummary leaves = detail::update_lanes(leaves_[inner_[1][group].child[slot]].log_odds, hits,
                                                             misses, hit, miss, range_, thresholds_);
     refresh_from(1, group, slot, {leaves.max, leaves.free != 0, leaves.unknown != 0, leaves.same}, auto_prune_);
@@ -548,6 +578,7 @@ void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& t
 
 void OccupancyTree::apply_everywhere(int depth, std::uint32_t group, unsigned slot, float delta) {
   InnerGroup& node = inner_[depth][group];
+  catch_up(node);
   const std::uint32_t child = node.child[slot];
   if (child == kNoGroup) {
     set_childless(node, slot, range_.add(node.log_odds[slot], delta));
@@ -558,6 +589,7 @@ void OccupancyTree::apply_everywhere(int depth, std::uint32_t group, unsigned sl
   // again, kept unpruned by differences elsewhere).
   if (delta <= 0.0f && node.log_odds[slot] == range_.min) return;
   if (depth == 1) {
+    catch_up(leaves_[child]);
     for (float& v : leaves_[child].log_odds) v = range_.add(v, delta);
   } else {
     for (unsigned i = 0; i < 8; ++i) apply_everywhere(depth - 1, child, i, delta);
@@ -568,11 +600,13 @@ void OccupancyTree::apply_everywhere(int depth, std::uint32_t group, unsigned sl
 // --- indicators, pruning ------------------------------------------------------
 
 void OccupancyTree::set_thresholds(LogOddsThresholds thresholds) {
+  settle_decay();  // the owed decay is applied under the thresholds it was bounded for
   thresholds_ = thresholds;
   refresh_all();
 }
 
 void OccupancyTree::set_range(LogOddsRange range) {
+  settle_decay();
   range_ = range;
   clamp_below(depth_levels_, 0, 0);
 }
@@ -608,7 +642,12 @@ void OccupancyTree::prune_below(int depth, std::uint32_t group, unsigned slot) {
   refresh(depth, group, slot, true);
 }
 
-void OccupancyTree::refresh_all() { refresh_below(depth_levels_, 0, 0); }
+void OccupancyTree::refresh_all() {
+  settle_decay();
+  refresh_below(depth_levels_, 0, 0);
+  // The events anew: under new thresholds, or for values set by a builder.
+  if (decay_tracked_) recompute_events(depth_levels_, 0);
+}
 
 void OccupancyTree::refresh_below(int depth, std::uint32_t group, unsigned slot) {
   InnerGroup& node = inner_[depth][group];
@@ -667,7 +706,8 @@ NodeCounts OccupancyTree::count_nodes() const {
 
 std::size_t OccupancyTree::memory_bytes() const {
   // The pools count their attached colors.
-  std::size_t bytes = sizeof(*this) + leaves_.memory_bytes() + inner_.capacity() * sizeof(inner_[0]);
+  std::size_t bytes = sizeof(*this) + leaves_.memory_bytes() + inner_.capacity() * sizeof(inner_[0]) +
+                      decay_totals_.capacity() * sizeof(decay_totals_[0]);
   for (const auto& pool : inner_) bytes += pool.memory_bytes();
   return bytes;
 }
@@ -676,6 +716,11 @@ std::string OccupancyTree::check_invariants() const {
   std::vector<std::vector<bool>> seen(static_cast<std::size_t>(depth_levels_) + 1);
   std::string problem = check_node(depth_levels_, 0, 0, seen);
   if (!problem.empty()) return problem;
+  if (decay_tracked_) {
+    std::array<std::int64_t, 2> event{};
+    problem = check_marks(depth_levels_, 0, event);
+    if (!problem.empty()) return problem;
+  }
   for (int d = 0; d < depth_levels_; ++d) {
     const std::size_t used = static_cast<std::size_t>(std::count(seen[d].begin(), seen[d].end(), true));
     const std::size_t in_pool = d == 0 ? leaves_.size() : inner_[d].size();
@@ -696,7 +741,8 @@ std::string OccupancyTree::check_node(int depth, std::uint32_t group_index, unsi
     return "node depth " + std::to_string(depth) + " group " + std::to_string(group_index) + " slot " +
            std::to_string(slot) + ": ";
   };
-  const float value = group.log_odds[slot];
+  // Values as readers see them (owed decay applied).
+  const float value = current(group.log_odds[slot], group.mark);
   const std::uint32_t child = group.child[slot];
   const bool free_bit = (group.contains_free & bit(slot)) != 0;
   const bool unknown_bit = (group.contains_unknown & bit(slot)) != 0;
@@ -723,11 +769,23 @@ std::string OccupancyTree::check_node(int depth, std::uint32_t group_index, unsi
       if (!problem.empty()) return problem;
     }
   }
-  const ChildrenSummary summary = summarize_children(depth, child);
-  const float max = summary.max;
-  const bool any_free = summary.any_free;
-  const bool any_unknown = summary.any_unknown;
-  bool same = summary.same;
+  // The children's values as readers see them; their states are the stored
+  // values' (no event is due between steps).
+  std::array<float, 8> values{};
+  bool childless = true;
+  for (unsigned i = 0; i < 8; ++i) {
+    values[i] = log_odds(NodeRef{child, static_cast<std::uint8_t>(i), static_cast<std::int8_t>(depth - 1)});
+    childless &= depth == 1 || inner_[depth - 1][child].child[i] == kNoGroup;
+  }
+  const detail::LaneSummary lanes = detail::summarize_lanes(values, thresholds_);
+  const ChildrenSummary stored = summarize_children(depth, child);
+  if (depth == 1 && ((lanes.free != 0) != stored.any_free || (lanes.unknown != 0) != stored.any_unknown)) {
+    return where() + "the decay a leaf group owes changes a state";
+  }
+  const float max = lanes.max;
+  const bool any_free = stored.any_free;
+  const bool any_unknown = stored.any_unknown;
+  bool same = lanes.same && childless;
   if (has_color()) {
     const ColorGroup& child_colors = colors(depth - 1, child);
     same &= same_colors(child_colors);

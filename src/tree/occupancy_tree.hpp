@@ -5,10 +5,16 @@
 // (depth, group index, slot 0..7); the root is slot 0 of group 0 at the top
 // depth (the other seven slots of that group are unused).
 //
-//   LeafGroup, depth 0 (32 bytes)     InnerGroup, depth >= 1 (68 bytes)
-//   +-----------------------+         +-----------------------+-----------------------+---+---+---+
-//   | log_odds[8]: float    |         | log_odds[8]: float    | child[8]: uint32      | F | U | S |
-//   +-----------------------+         +-----------------------+-----------------------+---+---+---+
+//   LeafGroup, depth 0 (44 bytes)          InnerGroup, depth >= 1 (80 bytes)
+//   +-----------------------+------+       +-----------------------+-----------------------+------+---+---+---+
+//   | log_odds[8]: float    | mark |       | log_odds[8]: float    | child[8]: uint32      | mark | F | U | S |
+//   +-----------------------+------+       +-----------------------+-----------------------+------+---+---+---+
+//
+// `mark` (12 bytes) is where the group stands with decay applied lazily: the
+// stored values are decayed up to step `mark.step` of the tree's decay clock
+// and owe what the steps since then took off; `mark.event` bounds what the
+// group's subtree can owe before some value in it changes state (see
+// "Decay toward unknown" below and tree_decay.cpp).
 //
 // An inner node either has a group of eight children (child[i] is the index
 // of that group in the pool one depth below) or none (kNoGroup): then it is
@@ -41,6 +47,17 @@
 // never expands an inner leaf whose whole region gets the same update;
 // add_colors() likewise walks a scan's sorted color samples once. With a
 // thread pool both split the walk into disjoint subtrees, one worker each.
+//
+// Decay toward unknown is applied lazily (docs/design.md, "Decay toward
+// unknown", Cost): a step appends its amounts to decay_totals_ and walks only
+// into groups where some value changes state (reaches 0, crosses a
+// threshold); every other group keeps its stored values and owes the steps
+// since its mark. Readers compute the owed decay on the fly (current()), so
+// they see exactly the values of the eager rule; every writer first brings
+// the groups it reads or writes up to date (catch_up()), and lowers the
+// event bounds of what it changed (set_childless, refresh_from). Between
+// steps no group owes enough to change a state, so indicators, all_same,
+// colors and pruning are always those of the eagerly decayed tree.
 //
 // Thread safety: const member functions may run concurrently with each
 // other; nothing may run concurrently with a non-const one.
@@ -95,12 +112,24 @@ struct NodeSummary {
 
 class OccupancyTree {
  public:
+  /// A group's place in lazily applied decay (file comment).
+  struct DecayMark {
+    /// Index into decay_totals_: the group's stored values are decayed up to this step.
+    std::uint32_t step;
+    /// Per side (0: positive values, 1: negative ones), in quanta of 2^-16
+    /// log-odds owed since `step`: below this amount no value in the group
+    /// or below it changes state (kNoEvent: none ever does). A lower bound.
+    std::array<std::uint32_t, 2> event;
+  };
+  static constexpr std::uint32_t kNoEvent = 0xFFFFFFFFu;
   struct LeafGroup {
     std::array<float, 8> log_odds;
+    DecayMark mark;
   };
   struct InnerGroup {
     std::array<float, 8> log_odds;
     std::array<std::uint32_t, 8> child;
+    DecayMark mark;
     std::uint8_t contains_free;
     std::uint8_t contains_unknown;
     std::uint8_t all_same;
@@ -109,8 +138,8 @@ class OccupancyTree {
     std::array<Rgb, 8> rgb;
     std::array<std::uint8_t, 8> weight;  // 0: no color
   };
-  static_assert(sizeof(LeafGroup) == 32, "a leaf group is 8 floats");
-  static_assert(sizeof(InnerGroup) == 68, "an inner group is 8 floats, 8 indices, 3 bit masks");
+  static_assert(sizeof(LeafGroup) == 44, "a leaf group is 8 floats and a decay mark");
+  static_assert(sizeof(InnerGroup) == 80, "an inner group is 8 floats, 8 indices, a decay mark, 3 bit masks");
   static_assert(sizeof(ColorGroup) == 32, "a color group is 8 RGB triples and 8 weights");
 
   /// One color observation of a finest voxel.
@@ -141,8 +170,12 @@ class OccupancyTree {
             static_cast<std::int8_t>(node.depth - 1)};
   }
   [[nodiscard]] float log_odds(NodeRef node) const {
-    return node.depth == 0 ? leaves_[node.group].log_odds[node.slot]
-                           : inner_[node.depth][node.group].log_odds[node.slot];
+    if (node.depth == 0) {
+      const LeafGroup& group = leaves_[node.group];
+      return current(group.log_odds[node.slot], group.mark);
+    }
+    const InnerGroup& group = inner_[node.depth][node.group];
+    return current(group.log_odds[node.slot], group.mark);
   }
   /// The node's color; nothing when it has none or the tree has no color.
   [[nodiscard]] std::optional<Rgb> color(NodeRef node) const;
@@ -153,6 +186,8 @@ class OccupancyTree {
   [[nodiscard]] bool contains_free(NodeRef node) const;
   // Inline: a segment check asks it at every level of every descent, the
   // information gain of every child it walks (3% of a 20 cm query's cycles).
+  // The stored value's state is the current one's (no event is due between
+  // decay steps), so no decay is computed here.
   [[nodiscard]] bool contains_unknown(NodeRef node) const {
     if (node.depth == 0) return thresholds_.is_unknown(leaves_[node.group].log_odds[node.slot]);
     return (inner_[node.depth][node.group].contains_unknown >> node.slot & 1u) != 0;
@@ -278,8 +313,22 @@ class OccupancyTree {
   /// coarser ones at their own depth) in which some voxel changed state.
   /// With a thread pool and no region, disjoint subtrees decay in parallel;
   /// the result (and the list of changes) is the same, bit for bit.
+  ///
+  /// Without a region the step is lazy (file comment): it costs the groups
+  /// where some value changes state and their ancestors, not the map.
+  /// `pool` is unused (kept for the callers; the lazy walk is serial). With a
+  /// region, every group is first brought up to date and the step walks
+  /// every known node in the region (decay_eagerly()'s walk).
   void decay(DecayStep step, const std::optional<KeyBox>& region, std::vector<DecayChange>* changes = nullptr,
              int change_depth = 0, ThreadPool* pool = nullptr);
+  /// The same step, applied at once to every known node: the walk decay()
+  /// did before it was lazy, kept as the reference the tests compare the
+  /// lazy step with (and the region's walk).
+  void decay_eagerly(DecayStep step, const std::optional<KeyBox>& region = std::nullopt,
+                     std::vector<DecayChange>* changes = nullptr, int change_depth = 0);
+  /// Brings every group up to date with the decay it owes (O(nodes)); the
+  /// map reads the same before and after.
+  void settle_decay();
 
   // --- a map that moves (tree_window.cpp; docs/design.md, "A map that moves")
   /// Makes every finest voxel outside `keep` unknown as if never observed
@@ -406,14 +455,50 @@ class OccupancyTree {
   void add_colors_in_parallel(std::span<const ColorSample> samples, ThreadPool& pool);
   /// Running average of a voxel's color with one more sample.
   static void blend(Rgb& rgb, std::uint8_t& weight, Rgb sample);
-  /// decay() below node (depth, group, slot) whose first voxel is `code`;
-  /// true when some voxel below changed state.
+  /// decay_eagerly() below node (depth, group, slot) whose first voxel is
+  /// `code`; true when some voxel below changed state.
   bool decay_below(int depth, std::uint32_t group, unsigned slot, std::uint64_t code, DecayStep step,
                    const std::optional<KeyBox>& region, std::vector<DecayChange>* changes, int change_depth);
-  /// False when no value below node (depth, group, slot) can change in `step`
-  /// (all 0, or of a sign whose step is 0); without a region.
-  [[nodiscard]] bool decay_may_change(int depth, std::uint32_t group, unsigned slot, DecayStep step) const;
-  void decay_in_parallel(DecayStep step, std::vector<DecayChange>* changes, int change_depth, ThreadPool& pool);
+
+  // --- lazily applied decay (tree_decay.cpp) -------------------------------
+  [[nodiscard]] std::uint32_t decay_now() const { return static_cast<std::uint32_t>(decay_totals_.size() - 1); }
+  /// What a group marked at step `step` owes, in quanta per side.
+  [[nodiscard]] std::array<std::int64_t, 2> owed_quanta(std::uint32_t step) const {
+    const auto& from = decay_totals_[step];
+    const auto& to = decay_totals_.back();
+    return {to[0] - from[0], to[1] - from[1]};
+  }
+  [[nodiscard]] DecayStep owed_step(std::uint32_t step) const;
+  /// A stored value as the eager rule has it now.
+  [[nodiscard]] float current(float stored, const DecayMark& mark) const {
+    return mark.step == decay_now() ? stored : decayed(stored, owed_step(mark.step));
+  }
+  /// True when what the group owes may change a state below it.
+  [[nodiscard]] bool decay_due(const DecayMark& mark) const;
+  /// Applies what the group owes to its values (no state changes: none is
+  /// due outside a step's walk) and marks it up to date. O(8); nothing when
+  /// it is. Every writer calls it before it reads or writes a group.
+  template <typename Group>
+  void catch_up(Group& group) const {
+    if (group.mark.step != decay_now()) catch_up_values(group.log_odds, group.mark);
+  }
+  void catch_up_values(std::array<float, 8>& values, DecayMark& mark) const;
+  /// A new group's mark: up to date, with the events of its one value.
+  [[nodiscard]] DecayMark new_mark(float value) const;
+  /// Lowers `event` to the events of `value` (when decay is tracked).
+  void lower_events(std::array<std::uint32_t, 2>& event, float value) const;
+  /// The exact events of a leaf group's values (when decay is tracked).
+  void set_leaf_events(LeafGroup& leaves) const;
+  /// The lazy step's walk into group `group` of `depth` (due), whose first
+  /// voxel is `code`; true when some voxel below changed state.
+  bool decay_group(int depth, std::uint32_t group, std::uint64_t code, std::vector<DecayChange>* changes,
+                   int change_depth);
+  /// Recomputes every group's events exactly (decay up to date), bottom up.
+  std::array<std::uint32_t, 2> recompute_events(int depth, std::uint32_t group);
+  void settle_below(int depth, std::uint32_t group);
+  /// check_invariants() of the decay marks below group `group` of `depth`:
+  /// `event` gets the exact events of the subtree, owed decay applied.
+  std::string check_marks(int depth, std::uint32_t group, std::array<std::int64_t, 2>& event) const;
   /// Drops a node's color (no-op without color).
   void forget_color(int depth, std::uint32_t group, unsigned slot);
   /// forget_outside() below node (depth, group, slot) whose first voxel is
@@ -430,6 +515,11 @@ class OccupancyTree {
   bool auto_prune_ = true;
   bool with_color_;
   bool concurrent_ = false;  // inside run_concurrently: pools allocate per worker
+  // Lazily applied decay: entry k holds the quanta (positive side, negative
+  // side) the steps up to k took off in all; a group's mark.step indexes it.
+  std::vector<std::array<std::int64_t, 2>> decay_totals_{{0, 0}};
+  // Events are kept (lower_events, set_leaf_events) from the first lazy step on.
+  bool decay_tracked_ = false;
   // With color every group has its ColorGroup attached (colors()).
   GroupPool<LeafGroup, ColorGroup> leaves_;
   std::vector<GroupPool<InnerGroup, ColorGroup>> inner_;  // index = depth; [0] is unused

@@ -1,18 +1,37 @@
 // OccupancyTree::decay: every value moves toward 0 (unknown) by one step
-// (docs/design.md, "Decay toward unknown").
+// (docs/design.md, "Decay toward unknown"), applied lazily.
 //
-// One depth-first walk that skips what cannot change: a subtree whose values
-// are all 0, or all of a sign whose step is 0, as the node's maximum and its
-// contains_free bit tell (see skip_subtree), and subtrees outside the
-// region. A childless node (a pruned block) is one value however many voxels
-// it covers, so a step costs the stored nodes that can change, not the
-// voxels or the map's volume. On the way back each node is refreshed from
-// its children (value, indicators, color, pruning), as apply() does.
-// With a thread pool and no region, the groups below a split are walked by
-// the workers, each group by one worker, as apply() splits a scan (a step
-// then allocates nothing: only a region's boundary expands childless nodes).
+// A step appends its amounts (whole quanta of 2^-16 log-odds) to
+// decay_totals_ and walks only into groups where some value changes state:
+// each group's mark says up to which step its values are decayed and, per
+// side, how much more decay the group and everything below it can take
+// before some value reaches 0 or crosses a threshold (its events). Between
+// events only values move, all by the same amount and monotonically, so
+// inner values (maxima), indicators, all_same bits, colors and pruning stay
+// what the eager rule gives; readers add what a group owes on the fly
+// (current()), writers first apply it (catch_up()). Decay amounts of whole
+// quanta compose exactly in single precision (|l| < 256), so applying what
+// a group owes late, in one go, gives the bits the steps would have given.
+//
+// A due group is walked: its values are brought up to date (childless ones
+// changing state get their indicators, color, journal entry), the due child
+// groups below are walked and their parents refreshed (value, indicators,
+// color, pruning), and the group's events are recomputed. So a step costs
+// the groups where something changes state and their ancestors (and, once
+// the table of steps outgrows the tree, one walk of every group that settles
+// what they owe: amortised, a few per cent of a group per step).
+//
+// decay_eagerly() is the walk of every known node, kept as the tests'
+// reference and for steps limited to a region: one depth-first walk that
+// skips subtrees whose values are all 0, or all of a sign whose step is 0,
+// and subtrees outside the region; on the way back each node is refreshed
+// from its children, as apply() does.
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "tree/key_box_overlap.hpp"
@@ -30,107 +49,265 @@ void OccupancyTree::forget_color(int depth, std::uint32_t group, unsigned slot) 
   own.weight[slot] = 0;
 }
 
-bool OccupancyTree::decay_may_change(int depth, std::uint32_t group, unsigned slot, DecayStep step) const {
-  const InnerGroup& node = inner_[depth][group];
-  if (node.child[slot] == kNoGroup) return decayed(node.log_odds[slot], step) != node.log_odds[slot];
-  // Nothing below can change when every value is 0 or of a sign that does
-  // not decay. The maximum bounds the positive values; contains_free rules
-  // out negative ones only when every negative value is free (free
-  // threshold >= 0, i.e. p_free >= 0.5, the default).
-  const bool no_positive = node.log_odds[slot] <= 0.0f;
-  const bool no_negative = thresholds_.free >= 0.0f && (node.contains_free & (1u << slot)) == 0;
-  return !((no_positive || step.occupied == 0.0f) && (no_negative || step.free == 0.0f));
+namespace {
+
+constexpr double kQuantaPerLogOdds = 65536.0;  // map_decay.cpp's quantum, 2^-16 log-odds
+/// Owed amounts from this many quanta (256 log-odds) on take every value to 0.
+constexpr std::int64_t kAllQuanta = std::int64_t{1} << 24;
+
+float amount_of(std::int64_t quanta) {
+  return quanta >= kAllQuanta ? 1e30f : static_cast<float>(quanta) / 65536.0f;  // exact below 2^24
+}
+
+/// A step's amount in quanta; nothing when it is not a whole number of them.
+std::optional<std::int64_t> quanta_of(float amount) {
+  if (amount >= 256.0f) return kAllQuanta;
+  const double quanta = static_cast<double>(amount) * kQuantaPerLogOdds;
+  if (quanta != std::floor(quanta)) return std::nullopt;
+  return static_cast<std::int64_t>(quanta);
+}
+
+/// Quanta of decay below which a value `distance` log-odds from its next
+/// event keeps its state: one less than whole quanta, so that rounding can
+/// only make an event early (which costs a visit, never a wrong state).
+std::uint32_t event_quanta(double distance) {
+  const double quanta = std::floor(distance * kQuantaPerLogOdds) - 1.0;
+  if (quanta <= 0.0) return 0;
+  return quanta >= double{OccupancyTree::kNoEvent - 1} ? OccupancyTree::kNoEvent - 1
+                                                         : static_cast<std::uint32_t>(quanta);
+}
+
+std::uint32_t lowered(std::uint32_t event, std::int64_t owed) {
+  if (event == OccupancyTree::kNoEvent) return event;
+  return owed >= event ? 0 : static_cast<std::uint32_t>(event - owed);
+}
+
+}  // namespace
+
+OccupancyTree::DecayStep OccupancyTree::owed_step(std::uint32_t step) const {
+  const std::array<std::int64_t, 2> owed = owed_quanta(step);
+  return {amount_of(owed[0]), amount_of(owed[1])};
+}
+
+bool OccupancyTree::decay_due(const DecayMark& mark) const {
+  if (mark.step == decay_now()) return false;
+  const std::array<std::int64_t, 2> owed = owed_quanta(mark.step);
+  for (int side = 0; side < 2; ++side) {
+    if (mark.event[side] != kNoEvent && owed[side] > 0 && owed[side] >= mark.event[side]) return true;
+  }
+  return false;
+}
+
+void OccupancyTree::catch_up_values(std::array<float, 8>& values, DecayMark& mark) const {
+  const std::array<std::int64_t, 2> owed = owed_quanta(mark.step);
+  const DecayStep step{amount_of(owed[0]), amount_of(owed[1])};
+  for (float& v : values) v = decayed(v, step);
+  mark.event = {lowered(mark.event[0], owed[0]), lowered(mark.event[1], owed[1])};
+  mark.step = decay_now();
+}
+
+void OccupancyTree::lower_events(std::array<std::uint32_t, 2>& event, float value) const {
+  if (!decay_tracked_ || value == 0.0f) return;  // 0 never changes
+  // The events of a value: reaching 0 (unknown, color dropped, equal to its
+  // unknown siblings) and crossing a threshold on the way there.
+  const double l = value;
+  double distance = std::abs(l);
+  for (const double t : {double{thresholds_.occupied}, double{thresholds_.free}}) {
+    if (l > 0.0 && t >= 0.0 && t <= l) distance = std::min(distance, l - t);
+    if (l < 0.0 && t <= 0.0 && t >= l) distance = std::min(distance, t - l);
+  }
+  std::uint32_t& side = event[l > 0.0 ? 0 : 1];
+  side = std::min(side, event_quanta(distance));
+}
+
+OccupancyTree::DecayMark OccupancyTree::new_mark(float value) const {
+  DecayMark mark{decay_now(), {kNoEvent, kNoEvent}};
+  lower_events(mark.event, value);
+  return mark;
+}
+
+void OccupancyTree::set_leaf_events(LeafGroup& leaves) const {
+  leaves.mark.event = {kNoEvent, kNoEvent};
+  for (const float v : leaves.log_odds) lower_events(leaves.mark.event, v);
 }
 
 void OccupancyTree::decay(DecayStep step, const std::optional<KeyBox>& region, std::vector<DecayChange>* changes,
-                          int change_depth, ThreadPool* pool) {
+                          int change_depth, ThreadPool* /*pool*/) {
   UMBRA_ASSERT(step.occupied >= 0.0f && step.free >= 0.0f);
   if (step.occupied == 0.0f && step.free == 0.0f) return;
-  if (pool == nullptr || pool->size() < 2 || depth_levels_ < 3 || region) {
-    decay_below(depth_levels_, 0, 0, 0, step, region, changes, change_depth);
+  const std::optional<std::int64_t> occupied = quanta_of(step.occupied);
+  const std::optional<std::int64_t> free = quanta_of(step.free);
+  // A region's step cuts the tree by the region, not by events; amounts
+  // not in whole quanta would not compose exactly: both eagerly.
+  if (region || !occupied || !free) {
+    decay_eagerly(step, region, changes, change_depth);
     return;
   }
-  decay_in_parallel(step, changes, change_depth, *pool);
+  if (!decay_tracked_) {
+    // From now on every writer keeps the events; all groups are up to date.
+    decay_tracked_ = true;
+    recompute_events(depth_levels_, 0);
+  }
+  std::array<std::int64_t, 2> totals = decay_totals_.back();
+  totals[0] += *occupied;
+  totals[1] += *free;
+  decay_totals_.push_back(totals);
+  if (decay_due(inner_[depth_levels_][0].mark)) decay_group(depth_levels_, 0, 0, changes, change_depth);
+  // The table costs 16 bytes a step: settle once it outgrows a small part
+  // of the tree (a walk of every group, amortised over as many steps).
+  std::size_t groups = leaves_.size();
+  for (int d = 1; d <= depth_levels_; ++d) groups += inner_[d].size();
+  if (decay_totals_.size() > 64 + groups / 8) settle_decay();
 }
 
-void OccupancyTree::decay_in_parallel(DecayStep step, std::vector<DecayChange>* changes, int change_depth,
-                                      ThreadPool& pool) {
-  // 1. Split from the root into tasks, about 16 per worker: a task is some
-  //    slots of one group (the group's indicator bits are bytes shared by
-  //    its slots, so one group is written by one task only). A group is
-  //    split when it lies above depth 2 and above change_depth: its slots
-  //    with children become nodes refreshed after the tasks, their child
-  //    groups tasks; its childless slots stay one task. So every node at
-  //    change_depth lies in a task, which records it.
-  struct Task {
-    int depth;
-    std::uint32_t group;
-    std::uint64_t code;  // first finest voxel of the group
-    std::uint8_t slots;  // the slots this task decays
-  };
-  const auto changing_slots = [&](int depth, std::uint32_t group) {
-    std::uint8_t slots = 0;
+void OccupancyTree::decay_eagerly(DecayStep step, const std::optional<KeyBox>& region,
+                                  std::vector<DecayChange>* changes, int change_depth) {
+  UMBRA_ASSERT(step.occupied >= 0.0f && step.free >= 0.0f);
+  if (step.occupied == 0.0f && step.free == 0.0f) return;
+  settle_decay();
+  decay_below(depth_levels_, 0, 0, 0, step, region, changes, change_depth);
+}
+
+bool OccupancyTree::decay_group(int depth, std::uint32_t group, std::uint64_t code,
+                                std::vector<DecayChange>* changes, int change_depth) {
+  const std::uint32_t now = decay_now();
+  bool changed = false;
+  if (depth == 0) {
+    LeafGroup& leaves = leaves_[group];
+    const DecayStep owed = owed_step(leaves.mark.step);
     for (unsigned i = 0; i < 8; ++i) {
-      if (decay_may_change(depth, group, i, step)) slots |= static_cast<std::uint8_t>(1u << i);
-    }
-    return slots;
-  };
-  if (!decay_may_change(depth_levels_, 0, 0, step)) return;
-  std::vector<Task> tasks{{depth_levels_, 0, 0, 1}};  // the root, slot 0
-  std::vector<SplitNode> parents;                      // top down
-  const std::size_t wanted = std::size_t{pool.size()} * 16;
-  const int lowest = std::max(2, change_depth);
-  for (bool deeper = true; deeper && tasks.size() < wanted;) {
-    deeper = false;
-    std::vector<Task> next;
-    for (const Task& task : tasks) {
-      if (task.depth <= lowest) {
-        next.push_back(task);
-        continue;
+      const float value = leaves.log_odds[i];
+      const float next = decayed(value, owed);
+      if (next == value) continue;
+      leaves.log_odds[i] = next;
+      if (next == 0.0f) forget_color(0, group, i);
+      if (thresholds_.classify(value) != thresholds_.classify(next)) {
+        changed = true;
+        if (change_depth == 0 && changes != nullptr) changes->push_back({code | i, 0});
       }
-      std::uint8_t childless = 0;
-      std::vector<Task> below;
-      for (unsigned i = 0; i < 8; ++i) {
-        if ((task.slots >> i & 1u) == 0) continue;
-        const std::uint32_t child = inner_[task.depth][task.group].child[i];
-        if (child == kNoGroup) {
-          childless |= static_cast<std::uint8_t>(1u << i);
-          continue;
-        }
-        deeper = true;
-        parents.push_back({task.depth, task.group, i});
-        const int child_depth = task.depth - 1;
-        const std::uint8_t slots = changing_slots(child_depth, child);
-        if (slots != 0) below.push_back({child_depth, child, task.code | (std::uint64_t{i} << (3 * task.depth)), slots});
-      }
-      if (childless != 0) next.push_back({task.depth, task.group, task.code, childless});
-      next.insert(next.end(), below.begin(), below.end());
     }
-    tasks.swap(next);
+    leaves.mark.step = now;
+    set_leaf_events(leaves);
+    return changed;
   }
-  // 2. The tasks, each with its own list of changes. Without a region
-  // nothing is expanded: no new groups; pruning releases groups into the
-  // worker's own list.
-  std::vector<std::vector<DecayChange>> task_changes(changes != nullptr ? tasks.size() : 0);
-  const std::vector<std::size_t> new_groups(static_cast<std::size_t>(depth_levels_) + 1, 0);
-  run_concurrently(
-      pool, new_groups, tasks.size(),
-      [&](std::size_t t) {
-        const Task& task = tasks[t];
-        for (unsigned i = 0; i < 8; ++i) {
-          if ((task.slots >> i & 1u) == 0) continue;
-          decay_below(task.depth, task.group, i, task.code | (std::uint64_t{i} << (3 * task.depth)), step,
-                      std::nullopt, changes != nullptr ? &task_changes[t] : nullptr, change_depth);
-        }
-      },
-      parents);
-  if (changes == nullptr) return;
-  // The recorded nodes are disjoint, so the serial walk lists them in
-  // Morton order of their first voxels: the same order here.
-  const std::size_t first = changes->size();
-  for (const std::vector<DecayChange>& list : task_changes) changes->insert(changes->end(), list.begin(), list.end());
-  std::sort(changes->begin() + static_cast<std::ptrdiff_t>(first), changes->end(),
-            [](const DecayChange& a, const DecayChange& b) { return a.code < b.code; });
+  std::array<float, 8> before{};
+  {
+    InnerGroup& node = inner_[depth][group];
+    before = node.log_odds;
+    const DecayStep owed = owed_step(node.mark.step);
+    for (float& v : node.log_odds) v = decayed(v, owed);
+    node.mark = {now, {kNoEvent, kNoEvent}};  // recomputed slot by slot below
+  }
+  for (unsigned i = 0; i < 8; ++i) {
+    const std::uint64_t slot_code = code | (std::uint64_t{i} << (3 * depth));
+    InnerGroup& node = inner_[depth][group];  // no pool grows in this walk; fetched anew for clarity
+    const std::uint32_t child = node.child[i];
+    if (child == kNoGroup) {
+      const float next = node.log_odds[i];
+      set_childless(node, i, next);  // its indicators, and the group's events
+      if (next == before[i]) continue;
+      if (next == 0.0f) forget_color(depth, group, i);
+      if (thresholds_.classify(before[i]) != thresholds_.classify(next)) {
+        changed = true;
+        if (depth >= change_depth && changes != nullptr) changes->push_back({slot_code, depth});
+      }
+      continue;
+    }
+    const DecayMark& below = depth == 1 ? leaves_[child].mark : inner_[depth - 1][child].mark;
+    if (!decay_due(below)) {
+      // Nothing below changes state: the children keep what they owe, and
+      // this group's events are theirs, less what they owe.
+      const std::array<std::int64_t, 2> owed = owed_quanta(below.step);
+      for (int side = 0; side < 2; ++side) {
+        node.mark.event[side] = std::min(node.mark.event[side], lowered(below.event[side], owed[side]));
+      }
+      continue;
+    }
+    const bool changed_below = decay_group(depth - 1, child, slot_code, changes, change_depth);
+    refresh(depth, group, i, auto_prune_);  // value, indicators, color, pruning; lowers the events
+    changed |= changed_below;
+    if (changed_below && depth == change_depth && changes != nullptr) changes->push_back({slot_code, depth});
+  }
+  return changed;
+}
+
+std::array<std::uint32_t, 2> OccupancyTree::recompute_events(int depth, std::uint32_t group) {
+  if (depth == 0) {
+    LeafGroup& leaves = leaves_[group];
+    UMBRA_ASSERT(leaves.mark.step == decay_now());
+    set_leaf_events(leaves);
+    return leaves.mark.event;
+  }
+  std::array<std::uint32_t, 2> event{kNoEvent, kNoEvent};
+  for (unsigned i = 0; i < 8; ++i) {
+    const std::uint32_t child = inner_[depth][group].child[i];
+    if (child == kNoGroup) {
+      lower_events(event, inner_[depth][group].log_odds[i]);
+      continue;
+    }
+    const std::array<std::uint32_t, 2> below = recompute_events(depth - 1, child);
+    event = {std::min(event[0], below[0]), std::min(event[1], below[1])};
+  }
+  InnerGroup& node = inner_[depth][group];
+  UMBRA_ASSERT(node.mark.step == decay_now());
+  node.mark.event = event;
+  return event;
+}
+
+void OccupancyTree::settle_decay() {
+  if (decay_totals_.size() == 1) return;  // nothing owed anywhere
+  settle_below(depth_levels_, 0);
+  decay_totals_.assign(1, {0, 0});
+}
+
+void OccupancyTree::settle_below(int depth, std::uint32_t group) {
+  // Caught up against the table as it is; marked with step 0 of the table
+  // settle_decay() leaves.
+  if (depth == 0) {
+    catch_up(leaves_[group]);
+    leaves_[group].mark.step = 0;
+    return;
+  }
+  InnerGroup& node = inner_[depth][group];
+  catch_up(node);
+  node.mark.step = 0;
+  for (unsigned i = 0; i < 8; ++i) {
+    const std::uint32_t child = inner_[depth][group].child[i];
+    if (child != kNoGroup) settle_below(depth - 1, child);
+  }
+}
+
+std::string OccupancyTree::check_marks(int depth, std::uint32_t group, std::array<std::int64_t, 2>& event) const {
+  // The exact events of the values as readers see them, against the bound
+  // the group keeps less what it owes: a bound above them is an event a
+  // step could miss (a writer that did not lower it).
+  const DecayMark& mark = depth == 0 ? leaves_[group].mark : inner_[depth][group].mark;
+  const auto where = [&] { return "decay mark of group " + std::to_string(group) + " at depth " + std::to_string(depth) + ": "; };
+  if (mark.step > decay_now()) return where() + "step beyond the clock";
+  if (decay_due(mark)) return where() + "owes a state change between steps";
+  std::array<std::uint32_t, 2> exact{kNoEvent, kNoEvent};
+  for (unsigned i = 0; i < 8; ++i) {
+    const NodeRef node{group, static_cast<std::uint8_t>(i), static_cast<std::int8_t>(depth)};
+    if (!has_children(node)) {
+      lower_events(exact, log_odds(node));
+      continue;
+    }
+    std::array<std::int64_t, 2> below{};
+    std::string problem = check_marks(depth - 1, inner_[depth][group].child[i], below);
+    if (!problem.empty()) return problem;
+    for (int side = 0; side < 2; ++side) {
+      exact[side] = static_cast<std::uint32_t>(std::min<std::int64_t>(exact[side], below[side]));
+    }
+  }
+  const std::array<std::int64_t, 2> owed = owed_quanta(mark.step);
+  for (int side = 0; side < 2; ++side) {
+    if (lowered(mark.event[side], owed[side]) > exact[side]) {
+      return where() + "event bound " + std::to_string(mark.event[side]) + " (owing " + std::to_string(owed[side]) +
+             ") above the values' " + std::to_string(exact[side]) + " on side " + std::to_string(side);
+    }
+    event[side] = exact[side];
+  }
+  return {};
 }
 
 bool OccupancyTree::decay_below(int depth, std::uint32_t group, unsigned slot, std::uint64_t code, DecayStep step,

@@ -45,6 +45,7 @@ bool OccupancyTree::forget_outside_below(int depth, std::uint32_t group, unsigne
   if (where == Overlap::inside) return false;
   {
     InnerGroup& node = inner_[depth][group];
+    catch_up(node);
     const bool split = node.child[slot] != kNoGroup;
     const bool colored = has_color() && colors(depth, group).weight[slot] != 0;
     if (!split && node.log_odds[slot] == 0.0f && !colored) return false;  // unknown already
@@ -65,6 +66,7 @@ bool OccupancyTree::forget_outside_below(int depth, std::uint32_t group, unsigne
   bool changed = false;
   if (depth == 1) {
     LeafGroup& leaves = leaves_[child];
+    catch_up(leaves);
     for (unsigned i = 0; i < 8; ++i) {
       const std::uint64_t leaf_code = code | i;
       if (overlap(leaf_code, 0, keep) == Overlap::inside) continue;
