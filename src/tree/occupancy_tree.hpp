@@ -329,6 +329,8 @@ class OccupancyTree {
   /// Brings every group up to date with the decay it owes (O(nodes)); the
   /// map reads the same before and after.
   void settle_decay();
+  /// Groups the lazy steps walked so far (tests, benchmarks).
+  [[nodiscard]] std::uint64_t decay_groups_walked() const { return decay_groups_walked_; }
 
   // --- a map that moves (tree_window.cpp; docs/design.md, "A map that moves")
   /// Makes every finest voxel outside `keep` unknown as if never observed
@@ -520,6 +522,7 @@ class OccupancyTree {
   std::vector<std::array<std::int64_t, 2>> decay_totals_{{0, 0}};
   // Events are kept (lower_events, set_leaf_events) from the first lazy step on.
   bool decay_tracked_ = false;
+  std::uint64_t decay_groups_walked_ = 0;
   // With color every group has its ColorGroup attached (colors()).
   GroupPool<LeafGroup, ColorGroup> leaves_;
   std::vector<GroupPool<InnerGroup, ColorGroup>> inner_;  // index = depth; [0] is unused

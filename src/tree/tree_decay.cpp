@@ -171,6 +171,7 @@ void OccupancyTree::decay_eagerly(DecayStep step, const std::optional<KeyBox>& r
 bool OccupancyTree::decay_group(int depth, std::uint32_t group, std::uint64_t code,
                                 std::vector<DecayChange>* changes, int change_depth) {
   const std::uint32_t now = decay_now();
+  ++decay_groups_walked_;
   bool changed = false;
   if (depth == 0) {
     LeafGroup& leaves = leaves_[group];
