@@ -15,7 +15,11 @@
 //   - the growth of a step with the map: the same steps on the map of the
 //     first k scans, k = 1 .. all (one thread);
 //   - the same steps on several threads (`--threads`, as a stamped scan
-//     runs them: an empty stamped scan, whose tracing costs microseconds).
+//     runs them: an empty stamped scan, whose tracing costs microseconds);
+//   - a map that decays while it is built: every scan stamped `--dt` after
+//     the last (its step, then the scan), against the plain inserts;
+//   - the cost of reading: `state()` at a million random points of the
+//     scans' extent, on the map without decay and on the decayed map.
 // Datasets: 3dtk (5 cm), tum (2 cm); median of the steps.
 //
 //   umbra_decay_benchmark [--data ../shared/data] [--datasets 3dtk,tum] [--steps 10]
@@ -28,6 +32,8 @@
 #include <iostream>
 #include <string>
 #include <vector>
+
+#include <random>
 
 #include <octomap/OcTree.h>
 
@@ -118,7 +124,7 @@ void run(const std::string& name, const Options& options) {
   insert.integrator = umbra::IntegratorKind::discrete;
   insert.max_range = data.max_range;
   insert.threads = 1;
-  std::vector<double> umbra_insert, octomap_insert;
+  std::vector<double> umbra_insert, umbra_insert_cpu, octomap_insert;
   // Wall times of the steps; with `cpu`, also their CPU times.
   const auto decay_steps = [&](umbra::OccupancyMap& m, std::vector<double>* cpu = nullptr) {
     std::vector<double> times;
@@ -136,9 +142,11 @@ void run(const std::string& name, const Options& options) {
   };
   std::vector<std::string> growth;  // one line per prefix of the scans
   for (const umbra::Scan& scan : data.scans) {
+    const double insert_cpu = cpu_seconds();
     auto start = Clock::now();
     map.insert_point_cloud(scan.origin, scan.points, insert);
     umbra_insert.push_back(seconds_since(start));
+    umbra_insert_cpu.push_back(cpu_seconds() - insert_cpu);
     octomap::Pointcloud cloud;
     for (const umbra::Vec3f& p : scan.points) cloud.push_back(p.x, p.y, p.z);
     start = Clock::now();
@@ -150,17 +158,22 @@ void run(const std::string& name, const Options& options) {
     std::vector<double> cpu;
     const std::vector<double> times = decay_steps(prefix, &cpu);
     char line[200];
-    std::snprintf(line, sizeof line, "    %zu scans: %zu nodes, step median %.2f ms wall, %.2f ms CPU (first %.2f CPU)",
+    double total = 0.0;
+    for (const double c : cpu) total += c;
+    std::snprintf(line, sizeof line,
+                  "    %zu scans: %zu nodes, step median %.2f ms wall, %.2f ms CPU (first %.2f, max %.2f, all %zu steps %.2f CPU)",
                   umbra_insert.size(), map.node_counts().total(), umbra::bench::median(times) * 1e3,
-                  umbra::bench::median(cpu) * 1e3, cpu.front() * 1e3);
+                  umbra::bench::median(cpu) * 1e3, cpu.front() * 1e3, *std::max_element(cpu.begin(), cpu.end()) * 1e3,
+                  cpu.size(), total * 1e3);
     growth.emplace_back(line);
   }
   const umbra::NodeCounts counts = map.node_counts();
   std::printf("%s %.2f cm: %zu scans; umbra %zu nodes (%zu leaves, %zu inner leaves), %.1f MB; OctoMap %zu nodes, %.1f MB\n",
               name.c_str(), resolution * 100, data.scans.size(), counts.total(), counts.leaf, counts.inner_leaf,
               map.memory_bytes() / 1e6, tree.size(), tree.memoryUsage() / 1e6);
-  std::printf("  insert per scan (median, 1 thread): umbra %.1f ms, OctoMap %.1f ms\n",
-              umbra::bench::median(umbra_insert) * 1e3, umbra::bench::median(octomap_insert) * 1e3);
+  std::printf("  insert per scan (median, 1 thread): umbra %.1f ms (CPU %.1f), OctoMap %.1f ms\n",
+              umbra::bench::median(umbra_insert) * 1e3, umbra::bench::median(umbra_insert_cpu) * 1e3,
+              umbra::bench::median(octomap_insert) * 1e3);
 
   std::printf("  decay step against the map's size (1 thread, %d steps each):\n", options.steps);
   for (const std::string& line : growth) std::printf("%s\n", line.c_str());
@@ -183,10 +196,13 @@ void run(const std::string& name, const Options& options) {
     octomap_zero = octomap_step(tree, occupied_step, free_step);
     octomap_times.push_back(seconds_since(start));
   }
+  double umbra_cpu_total = 0.0;
+  for (const double c : umbra_cpu) umbra_cpu_total += c;
   std::printf("  decay step, whole map (%d steps of %.2f s at %.2f / %.2f per s): umbra median %.2f ms (first %.2f, "
-              "last %.2f; CPU median %.2f), OctoMap loop median %.2f ms (first %.2f, last %.2f)\n",
+              "last %.2f; CPU median %.2f, max %.2f, all steps %.2f), OctoMap loop median %.2f ms (first %.2f, last %.2f)\n",
               options.steps, options.dt, options.occupied, options.free, umbra::bench::median(umbra_times) * 1e3,
               umbra_times.front() * 1e3, umbra_times.back() * 1e3, umbra::bench::median(umbra_cpu) * 1e3,
+              *std::max_element(umbra_cpu.begin(), umbra_cpu.end()) * 1e3, umbra_cpu_total * 1e3,
               umbra::bench::median(octomap_times) * 1e3,
               octomap_times.front() * 1e3, octomap_times.back() * 1e3);
   const umbra::NodeCounts after = whole.node_counts();
@@ -220,9 +236,59 @@ void run(const std::string& name, const Options& options) {
   const umbra::Vec3d o(data.scans.front().origin);
   const umbra::Vec3d half{options.region / 2, options.region / 2, options.region / 2};
   boxed.set_decay({options.occupied, options.free, umbra::Aabb{o - half, o + half}});
-  const std::vector<double> boxed_times = decay_steps(boxed);
-  std::printf("  decay step, %.1f m box: umbra median %.2f ms (first %.2f, last %.2f)\n", options.region,
-              umbra::bench::median(boxed_times) * 1e3, boxed_times.front() * 1e3, boxed_times.back() * 1e3);
+  std::vector<double> boxed_cpu;
+  const std::vector<double> boxed_times = decay_steps(boxed, &boxed_cpu);
+  std::printf("  decay step, %.1f m box: umbra median %.2f ms (first %.2f, last %.2f; CPU median %.2f)\n",
+              options.region, umbra::bench::median(boxed_times) * 1e3, boxed_times.front() * 1e3,
+              boxed_times.back() * 1e3, umbra::bench::median(boxed_cpu) * 1e3);
+
+  // A map that decays while it is built: each scan stamped dt after the last.
+  umbra::OccupancyMap living(resolution);
+  living.set_decay({options.occupied, options.free, std::nullopt});
+  std::vector<double> living_insert, living_cpu;
+  umbra::InsertOptions living_options = insert;
+  for (std::size_t i = 0; i < data.scans.size(); ++i) {
+    living_options.stamp = static_cast<double>(i) * options.dt;
+    const double cpu_start = cpu_seconds();
+    const auto start = Clock::now();
+    living.insert_point_cloud(data.scans[i].origin, data.scans[i].points, living_options);
+    living_insert.push_back(seconds_since(start));
+    living_cpu.push_back(cpu_seconds() - cpu_start);
+  }
+  std::printf("  stamped scans (decay while building, %.2f s apart, 1 thread): median %.1f ms (CPU %.1f) per scan "
+              "and its step, against %.1f ms plain; %zu nodes, %.1f MB\n",
+              options.dt, umbra::bench::median(living_insert) * 1e3, umbra::bench::median(living_cpu) * 1e3,
+              umbra::bench::median(umbra_insert) * 1e3, living.node_counts().total(), living.memory_bytes() / 1e6);
+
+  // Reading: state() at random points of the scans' extent.
+  umbra::Vec3d lo{1e30, 1e30, 1e30};
+  umbra::Vec3d hi{-1e30, -1e30, -1e30};
+  for (const umbra::Scan& scan : data.scans) {
+    for (std::size_t i = 0; i < scan.points.size(); i += 97) {
+      const umbra::Vec3f& p = scan.points[i];
+      lo = {std::min(lo.x, double{p.x}), std::min(lo.y, double{p.y}), std::min(lo.z, double{p.z})};
+      hi = {std::max(hi.x, double{p.x}), std::max(hi.y, double{p.y}), std::max(hi.z, double{p.z})};
+    }
+  }
+  const auto query_ns = [&](const umbra::OccupancyMap& m) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> ux(lo.x, hi.x), uy(lo.y, hi.y), uz(lo.z, hi.z);
+    std::vector<umbra::Vec3d> points(1000000);
+    for (umbra::Vec3d& p : points) p = {ux(rng), uy(rng), uz(rng)};
+    std::vector<double> runs;
+    std::size_t occupied = 0;
+    for (int run = 0; run < 3; ++run) {
+      const double cpu_start = cpu_seconds();
+      for (const umbra::Vec3d& p : points) occupied += m.state(p) == umbra::OccupancyState::occupied;
+      runs.push_back((cpu_seconds() - cpu_start) * 1e9 / static_cast<double>(points.size()));
+    }
+    return std::pair{umbra::bench::median(runs), occupied / 3};
+  };
+  const auto [plain_ns, plain_occupied] = query_ns(map);
+  const auto [decayed_ns, decayed_occupied] = query_ns(whole);
+  std::printf("  state() at 1 M random points, CPU median of 3: %.1f ns on the map without decay (%zu occupied), "
+              "%.1f ns on the decayed map (%zu occupied)\n",
+              plain_ns, plain_occupied, decayed_ns, decayed_occupied);
 }
 
 }  // namespace

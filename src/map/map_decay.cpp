@@ -103,6 +103,9 @@ void OccupancyMap::set_decay(const DecayRates& rates) {
   detail::restart_decay_totals(state);  // what the old rates accumulated up to now
   state.decay = rates;
   state.decay_keys = keys;
+  // The groups' event bounds, once (a walk of the map), so that the steps
+  // cost only the nodes whose state they change (docs/design.md, Cost).
+  if (rates.enabled() && !keys) state.tree.track_decay();
 }
 
 DecayRates OccupancyMap::decay() const {

@@ -326,6 +326,11 @@ class OccupancyTree {
   /// lazy step with (and the region's walk).
   void decay_eagerly(DecayStep step, const std::optional<KeyBox>& region = std::nullopt,
                      std::vector<DecayChange>* changes = nullptr, int change_depth = 0);
+  /// Starts keeping every group's event bounds (one walk of the tree, the
+  /// first time; the first lazy step does it otherwise), so that the steps
+  /// after it cost only what changes state. The map calls it when decay is
+  /// switched on; writers then maintain the bounds as they go.
+  void track_decay();
   /// Brings every group up to date with the decay it owes (O(nodes)); the
   /// map reads the same before and after.
   void settle_decay();

@@ -71,10 +71,12 @@ std::optional<std::int64_t> quanta_of(float amount) {
 /// event keeps its state: one less than whole quanta, so that rounding can
 /// only make an event early (which costs a visit, never a wrong state).
 std::uint32_t event_quanta(double distance) {
-  const double quanta = std::floor(distance * kQuantaPerLogOdds) - 1.0;
-  if (quanta <= 0.0) return 0;
-  return quanta >= double{OccupancyTree::kNoEvent - 1} ? OccupancyTree::kNoEvent - 1
-                                                         : static_cast<std::uint32_t>(quanta);
+  // Distances are below the clamping bound, far below 2^16 log-odds; the
+  // truncation is floor (distance >= 0).
+  const auto quanta = static_cast<std::int64_t>(distance * kQuantaPerLogOdds) - 1;
+  if (quanta <= 0) return 0;
+  return quanta >= std::int64_t{OccupancyTree::kNoEvent - 1} ? OccupancyTree::kNoEvent - 1
+                                                               : static_cast<std::uint32_t>(quanta);
 }
 
 std::uint32_t lowered(std::uint32_t event, std::int64_t owed) {
@@ -109,15 +111,23 @@ void OccupancyTree::catch_up_values(std::array<float, 8>& values, DecayMark& mar
 void OccupancyTree::lower_events(std::array<std::uint32_t, 2>& event, float value) const {
   if (!decay_tracked_ || value == 0.0f) return;  // 0 never changes
   // The events of a value: reaching 0 (unknown, color dropped, equal to its
-  // unknown siblings) and crossing a threshold on the way there.
-  const double l = value;
-  double distance = std::abs(l);
-  for (const double t : {double{thresholds_.occupied}, double{thresholds_.free}}) {
-    if (l > 0.0 && t >= 0.0 && t <= l) distance = std::min(distance, l - t);
-    if (l < 0.0 && t <= 0.0 && t >= l) distance = std::min(distance, t - l);
+  // unknown siblings) and crossing a threshold on the way there: the
+  // nearest of 0 and the thresholds between the value and 0. The distance
+  // is taken in double, where the difference of two floats is exact: then
+  // the bound of a value less what it owes is the bound of its decayed
+  // value, exactly (check_marks relies on it).
+  const float o = thresholds_.occupied;
+  const float f = thresholds_.free;
+  float stop = 0.0f;
+  if (value > 0.0f) {
+    if (o <= value && o > stop) stop = o;
+    if (f <= value && f > stop) stop = f;
+  } else {
+    if (o >= value && o < stop) stop = o;
+    if (f >= value && f < stop) stop = f;
   }
-  std::uint32_t& side = event[l > 0.0 ? 0 : 1];
-  side = std::min(side, event_quanta(distance));
+  std::uint32_t& side = event[value > 0.0f ? 0 : 1];
+  side = std::min(side, event_quanta(std::abs(static_cast<double>(value) - static_cast<double>(stop))));
 }
 
 OccupancyTree::DecayMark OccupancyTree::new_mark(float value) const {
@@ -143,11 +153,7 @@ void OccupancyTree::decay(DecayStep step, const std::optional<KeyBox>& region, s
     decay_eagerly(step, region, changes, change_depth);
     return;
   }
-  if (!decay_tracked_) {
-    // From now on every writer keeps the events; all groups are up to date.
-    decay_tracked_ = true;
-    recompute_events(depth_levels_, 0);
-  }
+  track_decay();
   std::array<std::int64_t, 2> totals = decay_totals_.back();
   totals[0] += *occupied;
   totals[1] += *free;
@@ -158,6 +164,14 @@ void OccupancyTree::decay(DecayStep step, const std::optional<KeyBox>& region, s
   std::size_t groups = leaves_.size();
   for (int d = 1; d <= depth_levels_; ++d) groups += inner_[d].size();
   if (decay_totals_.size() > 64 + groups / 8) settle_decay();
+}
+
+void OccupancyTree::track_decay() {
+  if (decay_tracked_) return;
+  // From now on every writer keeps the events. Nothing is owed yet (the
+  // table has one entry until the first lazy step).
+  decay_tracked_ = true;
+  recompute_events(depth_levels_, 0);
 }
 
 void OccupancyTree::decay_eagerly(DecayStep step, const std::optional<KeyBox>& region,
