@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/assert.hpp"
+#include "tree/group_pool.hpp"  // detail::populate
 
 namespace umbra {
 
@@ -82,6 +83,20 @@ double coarse_cell_solid_angle(int i, int j) {
   return table[std::size_t(j) * kCoarseSide + std::size_t(i)];
 }
 
+/// `values` set to `count` zeros; where that needs new memory (the first
+/// scans of a process) its pages are backed in one call first
+/// (detail::populate): the images are the first memory a fresh process
+/// writes for a scan, 2,300 pages for a 3DTK scan at about 14 us a page
+/// through page faults on the test machine, 10 us populated.
+void assign_zeros(std::vector<float>& values, std::size_t count) {
+  if (values.capacity() < count) {
+    std::vector<float>().swap(values);
+    values.reserve(count);
+    detail::populate(values.data(), count * sizeof(float));
+  }
+  values.assign(count, 0.0f);
+}
+
 }  // namespace
 
 void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResolution resolution) {
@@ -149,8 +164,8 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
       const double v = face.fy * (c.y / c.z) + face.cy + 0.5;
       if (!(u >= 0.0 && u < face.width && v >= 0.0 && v < face.height)) continue;
       if (face.depth.empty()) {  // its first point
-        face.depth.assign(std::size_t(face.width) * std::size_t(face.height), 0.0f);
-        face.depth_halves.assign(4 * face.depth.size(), 0.0f);
+        assign_zeros(face.depth, std::size_t(face.width) * std::size_t(face.height));
+        assign_zeros(face.depth_halves, 4 * face.depth.size());
       }
       const std::size_t at =
           std::size_t(static_cast<int>(v)) * std::size_t(face.width) + std::size_t(static_cast<int>(u));
@@ -187,7 +202,7 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
     ProjectiveFrame& face = faces_[k];
     // The pyramid's maxima: each pixel's farthest half (by its nearest reading).
     std::vector<float>& farthest = face.farthest_half;
-    farthest.assign(face.depth.size(), 0.0f);
+    assign_zeros(farthest, face.depth.size());
     const std::size_t wide = 2 * std::size_t(face.width);
     for (std::size_t y = 0; y < std::size_t(face.height); ++y) {
       for (std::size_t x = 0; x < std::size_t(face.width); ++x) {
