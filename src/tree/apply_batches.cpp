@@ -196,7 +196,7 @@ void OccupancyTree::apply_batches_in_parallel(std::span<const UpdateBatch* const
         // children, as apply_everywhere would recurse, refreshing it after.
         std::uint8_t childless = 0;
         InnerGroup& node = inner_[task.depth][task.group];
-        catch_up(node);  // the shortcut below reads a value
+        catch_up(task.depth, task.group);  // the shortcut below reads a value
         for (unsigned slot = 0; slot < 8; ++slot) {
           if ((task.everywhere_slots & bit(slot)) == 0) continue;
           if (node.child[slot] == kNoGroup) {

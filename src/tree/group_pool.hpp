@@ -17,6 +17,13 @@
 // lockstep, which a parallel phase cannot keep). A pool without them holds
 // an empty block table for them and nothing else.
 //
+// Marks (optional, switched on later: a node group's decay mark): a second
+// kind of record per group, in blocks parallel to the groups' like the
+// attached ones, but allocated only once attach_marks() is called (a map
+// starts decaying), so a pool whose tree never decays pays nothing for them.
+// From then on every block of groups has its block of marks: grown, copied,
+// reserved for a parallel phase and freed with them.
+//
 // Large pools on huge pages. Once a pool holds kHugePageAfterBytes, its
 // new blocks are carved from 2 MiB chunks that the kernel is asked to back
 // with a huge page each (madvise; where transparent huge pages are off this
@@ -102,7 +109,7 @@ struct BlockDeleter {
 /// The Attached type of a pool whose groups carry nothing else.
 struct NoAttachment {};
 
-template <typename Group, typename Attached = NoAttachment>
+template <typename Group, typename Attached = NoAttachment, typename Mark = NoAttachment>
 class GroupPool {
  public:
   static constexpr std::uint32_t kBlockBits = 10;
@@ -113,7 +120,8 @@ class GroupPool {
   /// From this size on, new blocks come from huge-page chunks (file comment).
   static constexpr std::size_t kHugePageAfterBytes = std::size_t{16} << 20;
   // Carved blocks are never destroyed, only their chunk freed.
-  static_assert(std::is_trivially_destructible_v<Group> && std::is_trivially_destructible_v<Attached>);
+  static_assert(std::is_trivially_destructible_v<Group> && std::is_trivially_destructible_v<Attached> &&
+                std::is_trivially_destructible_v<Mark>);
 
   GroupPool() = default;
   /// with_attached: keep an Attached record per group (see the file comment).
@@ -125,12 +133,15 @@ class GroupPool {
     if (this == &other) return *this;
     UMBRA_ASSERT(other.slabs_.empty());
     with_attached_ = other.with_attached_;
+    with_marks_ = other.with_marks_;
     blocks_.clear();
     attached_blocks_.clear();
+    mark_blocks_.clear();
     chunks_.clear();
     block_bytes_ = 0;
     copy_blocks(other.blocks_, other, blocks_);
     copy_blocks(other.attached_blocks_, other, attached_blocks_);
+    copy_blocks(other.mark_blocks_, other, mark_blocks_);
     last_capacity_ = other.last_capacity_;
     high_water_ = other.high_water_;
     free_ = other.free_;
@@ -157,6 +168,32 @@ class GroupPool {
     return attached_blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
   }
   [[nodiscard]] bool has_attached() const { return with_attached_; }
+
+  /// The mark of group `index` (only once attach_marks() was called).
+  Mark& mark(std::uint32_t index) {
+    UMBRA_ASSERT(with_marks_ && (!slabs_.empty() || index < high_water_));
+    return mark_blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
+  }
+  const Mark& mark(std::uint32_t index) const {
+    UMBRA_ASSERT(with_marks_ && (!slabs_.empty() || index < high_water_));
+    return mark_blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
+  }
+  [[nodiscard]] bool has_marks() const { return with_marks_; }
+  /// From now on every group has a mark: `initial` for each one there is
+  /// (in use or free), unspecified for the groups allocated later (the
+  /// caller fills them, as it fills the groups). Nothing when it has them.
+  void attach_marks(const Mark& initial) {
+    UMBRA_ASSERT(slabs_.empty());
+    if (with_marks_) return;
+    std::vector<Block<Mark>> marks;
+    marks.reserve(blocks_.size());
+    for (std::size_t b = 0; b < blocks_.size(); ++b) {
+      marks.push_back(new_block<Mark>(block_capacity(b), false));
+      std::fill_n(marks.back().get(), block_capacity(b), initial);
+    }
+    mark_blocks_ = std::move(marks);
+    with_marks_ = true;
+  }
 
   /// Index of a group whose contents are unspecified; the caller fills it.
   std::uint32_t allocate() {
@@ -191,7 +228,10 @@ class GroupPool {
     const std::size_t table = blocks_.size() + max_new_groups / kBlockGroups + workers + 1;
     blocks_.reserve(table);
     if (with_attached_) attached_blocks_.reserve(table);
-    table_limit_ = with_attached_ ? std::min(blocks_.capacity(), attached_blocks_.capacity()) : blocks_.capacity();
+    if (with_marks_) mark_blocks_.reserve(table);
+    table_limit_ = blocks_.capacity();
+    if (with_attached_) table_limit_ = std::min(table_limit_, attached_blocks_.capacity());
+    if (with_marks_) table_limit_ = std::min(table_limit_, mark_blocks_.capacity());
     slabs_.resize(workers);
     tail_ = high_water_;
     for (std::size_t i = 0; i < free_.size(); ++i) slabs_[i % workers].released.push_back(free_[i]);
@@ -242,6 +282,7 @@ class GroupPool {
   void clear() {
     std::vector<Block<Group>>().swap(blocks_);
     std::vector<Block<Attached>>().swap(attached_blocks_);
+    std::vector<Block<Mark>>().swap(mark_blocks_);  // with_marks_ stays: new blocks get marks
     chunks_.clear();
     block_bytes_ = 0;
     std::vector<std::uint32_t>().swap(free_);
@@ -257,7 +298,8 @@ class GroupPool {
 
   [[nodiscard]] std::size_t memory_bytes() const {
     return block_bytes_ + chunks_.memory_bytes() + blocks_.capacity() * sizeof(blocks_[0]) +
-           attached_blocks_.capacity() * sizeof(attached_blocks_[0]) + free_.capacity() * sizeof(std::uint32_t);
+           attached_blocks_.capacity() * sizeof(attached_blocks_[0]) + mark_blocks_.capacity() * sizeof(mark_blocks_[0]) +
+           free_.capacity() * sizeof(std::uint32_t);
   }
 
  private:
@@ -314,27 +356,37 @@ class GroupPool {
     return Block<T>(records, detail::BlockDeleter<T>{false});
   }
 
-  // Both blocks are allocated before either table changes, so running out
-  // of memory leaves the groups and their attached records in step.
+  // All blocks are allocated and the tables reserved before any table
+  // changes, so running out of memory leaves the groups, their attached
+  // records and their marks in step.
   void add_block(std::uint32_t capacity) {
     const bool carved = capacity == kBlockGroups && block_bytes_ + chunks_.memory_bytes() >= kHugePageAfterBytes;
     Block<Group> groups = new_block<Group>(capacity, carved);
     Block<Attached> attached = with_attached_ ? new_block<Attached>(capacity, carved) : Block<Attached>();
+    Block<Mark> marks = with_marks_ ? new_block<Mark>(capacity, carved) : Block<Mark>();
+    reserve_one_more(blocks_);
+    if (with_attached_) reserve_one_more(attached_blocks_);
+    if (with_marks_) reserve_one_more(mark_blocks_);
+    blocks_.push_back(std::move(groups));
     if (with_attached_) attached_blocks_.push_back(std::move(attached));
-    try {
-      blocks_.push_back(std::move(groups));
-    } catch (...) {
-      if (with_attached_) attached_blocks_.pop_back();
-      throw;
-    }
+    if (with_marks_) mark_blocks_.push_back(std::move(marks));
     last_capacity_ = capacity;
+  }
+
+  /// Room for one more entry, doubling as push_back would (memory_bytes() counts the tables).
+  template <typename T>
+  static void reserve_one_more(std::vector<T>& table) {
+    if (table.size() == table.capacity()) table.reserve(table.empty() ? 1 : table.size() * 2);
   }
 
   // Only the first block grows (extend), and it comes from new[].
   void grow_last_block() {
     const std::uint32_t grown = last_capacity_ * 2;
     Block<Group> groups = grown_copy(blocks_.back(), last_capacity_, grown);
-    if (with_attached_) attached_blocks_.back() = grown_copy(attached_blocks_.back(), last_capacity_, grown);
+    Block<Attached> attached = with_attached_ ? grown_copy(attached_blocks_.back(), last_capacity_, grown) : Block<Attached>();
+    Block<Mark> marks = with_marks_ ? grown_copy(mark_blocks_.back(), last_capacity_, grown) : Block<Mark>();
+    if (with_attached_) attached_blocks_.back() = std::move(attached);
+    if (with_marks_) mark_blocks_.back() = std::move(marks);
     blocks_.back() = std::move(groups);
     last_capacity_ = grown;
   }
@@ -372,6 +424,8 @@ class GroupPool {
   bool with_attached_ = false;
   std::vector<Block<Group>> blocks_;
   std::vector<Block<Attached>> attached_blocks_;  // parallel to blocks_ (with_attached_), else empty
+  bool with_marks_ = false;
+  std::vector<Block<Mark>> mark_blocks_;  // parallel to blocks_ (with_marks_), else empty
   detail::HugePageChunks chunks_;  // holds the carved blocks (their deleters never touch it)
   std::size_t block_bytes_ = 0;    // bytes of the blocks from new[]
   std::uint32_t last_capacity_ = 0;  // groups in the last block

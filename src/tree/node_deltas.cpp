@@ -40,7 +40,7 @@ void OccupancyTree::add_to_nodes_in_group(int depth, std::uint32_t group, std::s
     while (end < regions.size() && morton::slot(regions[end].code, depth) == slot) ++end;
     if (depth == 0) {
       UMBRA_ASSERT(end == begin + 1);  // disjoint: one region per voxel
-      catch_up(leaves_[group]);
+      catch_up(0, group);
       float& value = leaves_[group].log_odds[slot];
       value = range_.add(value, regions[begin].delta);
     } else {

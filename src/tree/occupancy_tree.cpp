@@ -62,6 +62,7 @@ void OccupancyTree::clear() {
   leaves_.clear();
   inner_.clear();
   for (int d = 0; d <= depth_levels_; ++d) inner_.emplace_back(with_color_);
+  if (decay_tracked_) attach_marks();  // the new pools keep marks as the old ones did
   [[maybe_unused]] const std::uint32_t root_group = new_inner_group(depth_levels_, 0.0f);
   UMBRA_ASSERT(root_group == 0);
   if (has_color()) {
@@ -75,7 +76,7 @@ void OccupancyTree::clear() {
 std::uint32_t OccupancyTree::new_leaf_group(float value) {
   const std::uint32_t index = concurrent_ ? leaves_.allocate(t_worker) : leaves_.allocate();
   leaves_[index].log_odds.fill(value);
-  leaves_[index].mark = new_mark(value);
+  if (decay_tracked_) leaves_.mark(index) = new_mark(value);
   return index;
 }
 
@@ -84,7 +85,7 @@ std::uint32_t OccupancyTree::new_inner_group(int depth, float value) {
   InnerGroup& group = inner_[depth][index];
   group.log_odds.fill(value);
   group.child.fill(kNoGroup);
-  group.mark = new_mark(value);
+  if (decay_tracked_) inner_[depth].mark(index) = new_mark(value);
   group.contains_free = thresholds_.is_free(value) ? 0xFF : 0;
   group.contains_unknown = thresholds_.is_unknown(value) ? 0xFF : 0;
   group.all_same = 0;
@@ -108,10 +109,11 @@ void OccupancyTree::release_group(int depth, std::uint32_t group) {
   }
 }
 
-void OccupancyTree::set_childless(InnerGroup& group, unsigned slot, float value) const {
+void OccupancyTree::set_childless(int depth, std::uint32_t index, unsigned slot, float value) {
+  InnerGroup& group = inner_[depth][index];
   UMBRA_ASSERT(group.child[slot] == kNoGroup);
   group.log_odds[slot] = value;
-  lower_events(group.mark.event, value);
+  if (decay_tracked_) lower_events(mark(depth, index).event, value);
   assign_bit(group.contains_free, slot, thresholds_.is_free(value));
   assign_bit(group.contains_unknown, slot, thresholds_.is_unknown(value));
   assign_bit(group.all_same, slot, false);
@@ -120,7 +122,7 @@ void OccupancyTree::set_childless(InnerGroup& group, unsigned slot, float value)
 void OccupancyTree::expand(int depth, std::uint32_t group, unsigned slot) {
   InnerGroup& node = inner_[depth][group];
   UMBRA_ASSERT(depth >= 1 && node.child[slot] == kNoGroup);
-  catch_up(node);
+  catch_up(depth, group);
   const float value = node.log_odds[slot];
   // `node` lives in the pool of `depth`; allocating one depth below never moves it.
   const std::uint32_t child = depth == 1 ? new_leaf_group(value) : new_inner_group(depth - 1, value);
@@ -150,11 +152,7 @@ OccupancyTree::ChildrenSummary OccupancyTree::summarize_children(int depth, std:
 void OccupancyTree::refresh(int depth, std::uint32_t group, unsigned slot, bool allow_prune) {
   const std::uint32_t child = inner_[depth][group].child[slot];
   UMBRA_ASSERT(child != kNoGroup);
-  if (depth == 1) {
-    catch_up(leaves_[child]);
-  } else {
-    catch_up(inner_[depth - 1][child]);
-  }
+  catch_up(depth - 1, child);
   refresh_from(depth, group, slot, summarize_children(depth, child), allow_prune);
 }
 
@@ -164,21 +162,15 @@ void OccupancyTree::refresh_from(int depth, std::uint32_t group, unsigned slot, 
   InnerGroup& node = inner_[depth][group];
   const std::uint32_t child = node.child[slot];
   UMBRA_ASSERT(child != kNoGroup);
-  catch_up(node);
+  catch_up(depth, group);
   if (decay_tracked_) {
     // The children's events (a leaf group's anew: its values were just
     // written), then this group's bound lowered to them.
-    std::array<std::uint32_t, 2> below;
-    if (depth == 1) {
-      LeafGroup& leaves = leaves_[child];
-      UMBRA_ASSERT(leaves.mark.step == decay_now());
-      set_leaf_events(leaves);
-      below = leaves.mark.event;
-    } else {
-      UMBRA_ASSERT(inner_[depth - 1][child].mark.step == decay_now());
-      below = inner_[depth - 1][child].mark.event;
-    }
-    node.mark.event = {std::min(node.mark.event[0], below[0]), std::min(node.mark.event[1], below[1])};
+    UMBRA_ASSERT(mark(depth - 1, child).step == decay_now());
+    if (depth == 1) set_leaf_events(child);
+    const std::array<std::uint32_t, 2> below = mark(depth - 1, child).event;
+    DecayMark& own = mark(depth, group);
+    own.event = {std::min(own.event[0], below[0]), std::min(own.event[1], below[1])};
   }
   const float max = summary.max;
   const bool any_free = summary.any_free;
@@ -198,7 +190,7 @@ void OccupancyTree::refresh_from(int depth, std::uint32_t group, unsigned slot, 
   if (same && allow_prune) {
     release_group(depth - 1, child);
     node.child[slot] = kNoGroup;
-    set_childless(node, slot, max);
+    set_childless(depth, group, slot, max);
     return;
   }
   node.log_odds[slot] = max;
@@ -215,14 +207,14 @@ NodeSummary OccupancyTree::find(std::uint64_t code, int depth) const {
   for (int d = depth_levels_;; --d) {
     if (d == 0) {
       const unsigned slot = morton::slot(code, 0);
-      const float value = current(leaves_[group].log_odds[slot], leaves_[group].mark);
+      const float value = current(leaves_[group].log_odds[slot], 0, group);
       return {value, thresholds_.is_free(value), thresholds_.is_unknown(value), false, 0,
               NodeRef{group, static_cast<std::uint8_t>(slot), 0}};
     }
     const InnerGroup& node = inner_[d][group];
     const unsigned slot = morton::slot(code, d);
     if (d == depth || node.child[slot] == kNoGroup) {
-      return {current(node.log_odds[slot], node.mark), (node.contains_free & bit(slot)) != 0,
+      return {current(node.log_odds[slot], d, group), (node.contains_free & bit(slot)) != 0,
               (node.contains_unknown & bit(slot)) != 0, node.child[slot] != kNoGroup, d,
               NodeRef{group, static_cast<std::uint8_t>(slot), static_cast<std::int8_t>(d)}};
     }
@@ -244,13 +236,13 @@ float OccupancyTree::Cursor::max_log_odds(std::uint64_t code, int depth) {
     if (d == 0) {
       valid_from_ = 0;
       const LeafGroup& leaves = tree_.leaves_[group];
-      return tree_.current(leaves.log_odds[morton::slot(code, 0)], leaves.mark);
+      return tree_.current(leaves.log_odds[morton::slot(code, 0)], 0, group);
     }
     const InnerGroup& node = tree_.inner_[d][group];
     const unsigned slot = morton::slot(code, d);
     if (d == depth || node.child[slot] == kNoGroup) {
       valid_from_ = d;
-      return tree_.current(node.log_odds[slot], node.mark);
+      return tree_.current(node.log_odds[slot], d, group);
     }
     group = node.child[slot];
     path_[d - 1] = group;
@@ -277,12 +269,12 @@ std::uint32_t OccupancyTree::descend_splitting(std::uint64_t code, Path& path) {
   path[depth_levels_] = group;
   for (int d = depth_levels_; d >= 1; --d) {
     const unsigned slot = morton::slot(code, d);
-    catch_up(inner_[d][group]);
+    catch_up(d, group);
     if (inner_[d][group].child[slot] == kNoGroup) expand(d, group, slot);
     group = inner_[d][group].child[slot];
     path[d - 1] = group;
   }
-  catch_up(leaves_[group]);
+  catch_up(0, group);
   return group;
 }
 
@@ -562,7 +554,7 @@ void OccupancyTree::apply_group(int depth, std::uint32_t group, const UpdateBatc
 void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& todo, float hit, float miss) {
   // Only the leaves' pool allocates below: `node` stays where it is.
   InnerGroup& node = inner_[1][group];
-  catch_up(node);  // the childless path reads its values
+  catch_up(1, group);  // the childless path reads its values
   for (unsigned slot = 0; slot < 8; ++slot) {
     const std::uint8_t misses = todo.miss[slot];
     const std::uint8_t hits = todo.hit[slot];
@@ -583,14 +575,17 @@ void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& t
       values.fill(node.log_odds[slot]);
       const detail::LaneSummary leaves = detail::update_lanes(values, hits, misses, hit, miss, range_, thresholds_);
       if (leaves.same && auto_prune_) {
-        set_childless(node, slot, leaves.max);
+        set_childless(1, group, slot, leaves.max);
         continue;
       }
       child = new_leaf_group(0.0f);
       leaves_[child].log_odds = values;
-      set_leaf_events(leaves_[child]);  // decay's event bounds, as refresh_from keeps them
-      node.mark.event = {std::min(node.mark.event[0], leaves_[child].mark.event[0]),
-                         std::min(node.mark.event[1], leaves_[child].mark.event[1])};
+      if (decay_tracked_) {
+        set_leaf_events(child);  // decay's event bounds, as refresh_from keeps them
+        const DecayMark& below = mark(0, child);
+        DecayMark& own = mark(1, group);
+        own.event = {std::min(own.event[0], below.event[0]), std::min(own.event[1], below.event[1])};
+      }
       node.child[slot] = child;
       node.log_odds[slot] = leaves.max;
       assign_bit(node.contains_free, slot, leaves.free != 0);
@@ -602,7 +597,7 @@ void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& t
       expand(1, group, slot);
       child = node.child[slot];
     }
-    catch_up(leaves_[child]);
+    catch_up(0, child);
     const detail::LaneSummary leaves =
         detail::update_lanes(leaves_[child].log_odds, hits, misses, hit, miss, range_, thresholds_);
     refresh_from(1, group, slot, {leaves.max, leaves.free != 0, leaves.unknown != 0, leaves.same}, auto_prune_);
@@ -611,10 +606,10 @@ void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& t
 
 void OccupancyTree::apply_everywhere(int depth, std::uint32_t group, unsigned slot, float delta) {
   InnerGroup& node = inner_[depth][group];
-  catch_up(node);
+  catch_up(depth, group);
   const std::uint32_t child = node.child[slot];
   if (child == kNoGroup) {
-    set_childless(node, slot, range_.add(node.log_odds[slot], delta));
+    set_childless(depth, group, slot, range_.add(node.log_odds[slot], delta));
     return;
   }
   // A miss changes nothing below a node whose maximum is already the
@@ -622,7 +617,7 @@ void OccupancyTree::apply_everywhere(int depth, std::uint32_t group, unsigned sl
   // again, kept unpruned by differences elsewhere).
   if (delta <= 0.0f && node.log_odds[slot] == range_.min) return;
   if (depth == 1) {
-    catch_up(leaves_[child]);
+    catch_up(0, child);
     for (float& v : leaves_[child].log_odds) v = range_.add(v, delta);
   } else {
     for (unsigned i = 0; i < 8; ++i) apply_everywhere(depth - 1, child, i, delta);
@@ -648,7 +643,7 @@ void OccupancyTree::clamp_below(int depth, std::uint32_t group, unsigned slot) {
   InnerGroup& node = inner_[depth][group];
   const std::uint32_t child = node.child[slot];
   if (child == kNoGroup) {
-    set_childless(node, slot, range_.clamp(node.log_odds[slot]));
+    set_childless(depth, group, slot, range_.clamp(node.log_odds[slot]));
     return;
   }
   if (depth == 1) {
@@ -686,7 +681,7 @@ void OccupancyTree::refresh_below(int depth, std::uint32_t group, unsigned slot)
   InnerGroup& node = inner_[depth][group];
   const std::uint32_t child = node.child[slot];
   if (child == kNoGroup) {
-    set_childless(node, slot, node.log_odds[slot]);
+    set_childless(depth, group, slot, node.log_odds[slot]);
     return;
   }
   if (depth > 1) {
@@ -710,7 +705,7 @@ void OccupancyTree::set_childless_value(NodeRef node, float log_odds) {
     return;
   }
   if (has_children(node)) throw std::logic_error("set_childless_value: node has children");
-  set_childless(inner_[node.depth][node.group], node.slot, log_odds);
+  set_childless(node.depth, node.group, node.slot, log_odds);
 }
 
 void OccupancyTree::set_childless_color(NodeRef node, Rgb rgb, std::uint8_t weight) {
@@ -775,7 +770,7 @@ std::string OccupancyTree::check_node(int depth, std::uint32_t group_index, unsi
            std::to_string(slot) + ": ";
   };
   // Values as readers see them (owed decay applied).
-  const float value = current(group.log_odds[slot], group.mark);
+  const float value = current(group.log_odds[slot], depth, group_index);
   const std::uint32_t child = group.child[slot];
   const bool free_bit = (group.contains_free & bit(slot)) != 0;
   const bool unknown_bit = (group.contains_unknown & bit(slot)) != 0;

@@ -58,6 +58,9 @@
 // event bounds of what it changed (set_childless, refresh_from). Between
 // steps no group owes enough to change a state, so indicators, all_same,
 // colors and pruning are always those of the eagerly decayed tree.
+// The marks live beside the groups (GroupPool's marks), attached when the
+// map first decays lazily (track_decay): a map that never decays keeps its
+// groups' sizes and reads its values with one predictable branch.
 //
 // Thread safety: const member functions may run concurrently with each
 // other; nothing may run concurrently with a non-const one.
@@ -124,12 +127,10 @@ class OccupancyTree {
   static constexpr std::uint32_t kNoEvent = 0xFFFFFFFFu;
   struct LeafGroup {
     std::array<float, 8> log_odds;
-    DecayMark mark;
   };
   struct InnerGroup {
     std::array<float, 8> log_odds;
     std::array<std::uint32_t, 8> child;
-    DecayMark mark;
     std::uint8_t contains_free;
     std::uint8_t contains_unknown;
     std::uint8_t all_same;
@@ -138,8 +139,8 @@ class OccupancyTree {
     std::array<Rgb, 8> rgb;
     std::array<std::uint8_t, 8> weight;  // 0: no color
   };
-  static_assert(sizeof(LeafGroup) == 44, "a leaf group is 8 floats and a decay mark");
-  static_assert(sizeof(InnerGroup) == 80, "an inner group is 8 floats, 8 indices, a decay mark, 3 bit masks");
+  static_assert(sizeof(LeafGroup) == 32, "a leaf group is 8 floats (its decay mark lives beside it)");
+  static_assert(sizeof(InnerGroup) == 68, "an inner group is 8 floats, 8 indices, 3 bit masks");
   static_assert(sizeof(ColorGroup) == 32, "a color group is 8 RGB triples and 8 weights");
 
   /// One color observation of a finest voxel.
@@ -170,12 +171,9 @@ class OccupancyTree {
             static_cast<std::int8_t>(node.depth - 1)};
   }
   [[nodiscard]] float log_odds(NodeRef node) const {
-    if (node.depth == 0) {
-      const LeafGroup& group = leaves_[node.group];
-      return current(group.log_odds[node.slot], group.mark);
-    }
-    const InnerGroup& group = inner_[node.depth][node.group];
-    return current(group.log_odds[node.slot], group.mark);
+    const float stored =
+        node.depth == 0 ? leaves_[node.group].log_odds[node.slot] : inner_[node.depth][node.group].log_odds[node.slot];
+    return current(stored, node.depth, node.group);
   }
   /// The node's color; nothing when it has none or the tree has no color.
   [[nodiscard]] std::optional<Rgb> color(NodeRef node) const;
@@ -395,7 +393,7 @@ class OccupancyTree {
   }
   void release_group(int depth, std::uint32_t group);
   /// Value and indicator bits of a childless slot (its color is kept).
-  void set_childless(InnerGroup& group, unsigned slot, float value) const;
+  void set_childless(int depth, std::uint32_t group, unsigned slot, float value);
   /// Gives a childless node eight children with its value and color.
   void expand(int depth, std::uint32_t group, unsigned slot);
   /// What a node with children takes from them (the child group `child` one depth below).
@@ -476,26 +474,43 @@ class OccupancyTree {
     return {to[0] - from[0], to[1] - from[1]};
   }
   [[nodiscard]] DecayStep owed_step(std::uint32_t step) const;
+  /// The decay mark of group `group` at `depth` (only while decay_tracked_).
+  DecayMark& mark(int depth, std::uint32_t group) {
+    return depth == 0 ? leaves_.mark(group) : inner_[depth].mark(group);
+  }
+  [[nodiscard]] const DecayMark& mark(int depth, std::uint32_t group) const {
+    return depth == 0 ? leaves_.mark(group) : inner_[depth].mark(group);
+  }
   /// A stored value as the eager rule has it now.
   [[nodiscard]] float current(float stored, const DecayMark& mark) const {
     return mark.step == decay_now() ? stored : decayed(stored, owed_step(mark.step));
+  }
+  /// A stored value of group `group` at `depth` as the eager rule has it
+  /// now. Without tracked decay nothing is ever owed (and there are no
+  /// marks): one predictable branch.
+  [[nodiscard]] float current(float stored, int depth, std::uint32_t group) const {
+    return decay_tracked_ ? current(stored, mark(depth, group)) : stored;
   }
   /// True when what the group owes may change a state below it.
   [[nodiscard]] bool decay_due(const DecayMark& mark) const;
   /// Applies what the group owes to its values (no state changes: none is
   /// due outside a step's walk) and marks it up to date. O(8); nothing when
   /// it is. Every writer calls it before it reads or writes a group.
-  template <typename Group>
-  void catch_up(Group& group) const {
-    if (group.mark.step != decay_now()) catch_up_values(group.log_odds, group.mark);
+  void catch_up(int depth, std::uint32_t group) {
+    if (!decay_tracked_) return;
+    DecayMark& own = mark(depth, group);
+    if (own.step == decay_now()) return;
+    catch_up_values(depth == 0 ? leaves_[group].log_odds : inner_[depth][group].log_odds, own);
   }
   void catch_up_values(std::array<float, 8>& values, DecayMark& mark) const;
   /// A new group's mark: up to date, with the events of its one value.
   [[nodiscard]] DecayMark new_mark(float value) const;
+  /// Gives every group of every pool a mark (up to date, no events yet).
+  void attach_marks();
   /// Lowers `event` to the events of `value` (when decay is tracked).
   void lower_events(std::array<std::uint32_t, 2>& event, float value) const;
   /// The exact events of a leaf group's values (when decay is tracked).
-  void set_leaf_events(LeafGroup& leaves) const;
+  void set_leaf_events(std::uint32_t group);
   /// The lazy step's walk into group `group` of `depth` (due), whose first
   /// voxel is `code`; true when some voxel below changed state.
   bool decay_group(int depth, std::uint32_t group, std::uint64_t code, std::vector<DecayChange>* changes,
@@ -529,8 +544,9 @@ class OccupancyTree {
   bool decay_tracked_ = false;
   std::uint64_t decay_groups_walked_ = 0;
   // With color every group has its ColorGroup attached (colors()).
-  GroupPool<LeafGroup, ColorGroup> leaves_;
-  std::vector<GroupPool<InnerGroup, ColorGroup>> inner_;  // index = depth; [0] is unused
+  // With tracked decay every group has its DecayMark too (mark()).
+  GroupPool<LeafGroup, ColorGroup, DecayMark> leaves_;
+  std::vector<GroupPool<InnerGroup, ColorGroup, DecayMark>> inner_;  // index = depth; [0] is unused
 };
 
 }  // namespace umbra

@@ -136,9 +136,17 @@ OccupancyTree::DecayMark OccupancyTree::new_mark(float value) const {
   return mark;
 }
 
-void OccupancyTree::set_leaf_events(LeafGroup& leaves) const {
-  leaves.mark.event = {kNoEvent, kNoEvent};
-  for (const float v : leaves.log_odds) lower_events(leaves.mark.event, v);
+void OccupancyTree::set_leaf_events(std::uint32_t group) {
+  if (!decay_tracked_) return;
+  DecayMark& own = mark(0, group);
+  own.event = {kNoEvent, kNoEvent};
+  for (const float v : leaves_[group].log_odds) lower_events(own.event, v);
+}
+
+void OccupancyTree::attach_marks() {
+  const DecayMark up_to_date{decay_now(), {kNoEvent, kNoEvent}};
+  leaves_.attach_marks(up_to_date);
+  for (int d = 1; d <= depth_levels_; ++d) inner_[d].attach_marks(up_to_date);
 }
 
 void OccupancyTree::decay(DecayStep step, const std::optional<KeyBox>& region, std::vector<DecayChange>* changes,
@@ -158,7 +166,7 @@ void OccupancyTree::decay(DecayStep step, const std::optional<KeyBox>& region, s
   totals[0] += *occupied;
   totals[1] += *free;
   decay_totals_.push_back(totals);
-  if (decay_due(inner_[depth_levels_][0].mark)) decay_group(depth_levels_, 0, 0, changes, change_depth);
+  if (decay_due(mark(depth_levels_, 0))) decay_group(depth_levels_, 0, 0, changes, change_depth);
   // The table costs 16 bytes a step: settle once it outgrows a small part
   // of the tree (a walk of every group, amortised over as many steps).
   std::size_t groups = leaves_.size();
@@ -169,7 +177,9 @@ void OccupancyTree::decay(DecayStep step, const std::optional<KeyBox>& region, s
 void OccupancyTree::track_decay() {
   if (decay_tracked_) return;
   // From now on every writer keeps the events. Nothing is owed yet (the
-  // table has one entry until the first lazy step).
+  // table has one entry until the first lazy step). The marks are
+  // allocated only now: a map that never decays does not pay for them.
+  attach_marks();
   decay_tracked_ = true;
   recompute_events(depth_levels_, 0);
 }
@@ -189,7 +199,7 @@ bool OccupancyTree::decay_group(int depth, std::uint32_t group, std::uint64_t co
   bool changed = false;
   if (depth == 0) {
     LeafGroup& leaves = leaves_[group];
-    const DecayStep owed = owed_step(leaves.mark.step);
+    const DecayStep owed = owed_step(mark(0, group).step);
     for (unsigned i = 0; i < 8; ++i) {
       const float value = leaves.log_odds[i];
       const float next = decayed(value, owed);
@@ -201,17 +211,17 @@ bool OccupancyTree::decay_group(int depth, std::uint32_t group, std::uint64_t co
         if (change_depth == 0 && changes != nullptr) changes->push_back({code | i, 0});
       }
     }
-    leaves.mark.step = now;
-    set_leaf_events(leaves);
+    mark(0, group).step = now;
+    set_leaf_events(group);
     return changed;
   }
   std::array<float, 8> before{};
   {
     InnerGroup& node = inner_[depth][group];
     before = node.log_odds;
-    const DecayStep owed = owed_step(node.mark.step);
+    const DecayStep owed = owed_step(mark(depth, group).step);
     for (float& v : node.log_odds) v = decayed(v, owed);
-    node.mark = {now, {kNoEvent, kNoEvent}};  // recomputed slot by slot below
+    mark(depth, group) = {now, {kNoEvent, kNoEvent}};  // recomputed slot by slot below
   }
   for (unsigned i = 0; i < 8; ++i) {
     const std::uint64_t slot_code = code | (std::uint64_t{i} << (3 * depth));
@@ -219,7 +229,7 @@ bool OccupancyTree::decay_group(int depth, std::uint32_t group, std::uint64_t co
     const std::uint32_t child = node.child[i];
     if (child == kNoGroup) {
       const float next = node.log_odds[i];
-      set_childless(node, i, next);  // its indicators, and the group's events
+      set_childless(depth, group, i, next);  // its indicators, and the group's events
       if (next == before[i]) continue;
       if (next == 0.0f) forget_color(depth, group, i);
       if (thresholds_.classify(before[i]) != thresholds_.classify(next)) {
@@ -228,13 +238,14 @@ bool OccupancyTree::decay_group(int depth, std::uint32_t group, std::uint64_t co
       }
       continue;
     }
-    const DecayMark& below = depth == 1 ? leaves_[child].mark : inner_[depth - 1][child].mark;
+    const DecayMark& below = mark(depth - 1, child);
     if (!decay_due(below)) {
       // Nothing below changes state: the children keep what they owe, and
       // this group's events are theirs, less what they owe.
       const std::array<std::int64_t, 2> owed = owed_quanta(below.step);
+      DecayMark& own = mark(depth, group);
       for (int side = 0; side < 2; ++side) {
-        node.mark.event[side] = std::min(node.mark.event[side], lowered(below.event[side], owed[side]));
+        own.event[side] = std::min(own.event[side], lowered(below.event[side], owed[side]));
       }
       continue;
     }
@@ -248,10 +259,9 @@ bool OccupancyTree::decay_group(int depth, std::uint32_t group, std::uint64_t co
 
 std::array<std::uint32_t, 2> OccupancyTree::recompute_events(int depth, std::uint32_t group) {
   if (depth == 0) {
-    LeafGroup& leaves = leaves_[group];
-    UMBRA_ASSERT(leaves.mark.step == decay_now());
-    set_leaf_events(leaves);
-    return leaves.mark.event;
+    UMBRA_ASSERT(mark(0, group).step == decay_now());
+    set_leaf_events(group);
+    return mark(0, group).event;
   }
   std::array<std::uint32_t, 2> event{kNoEvent, kNoEvent};
   for (unsigned i = 0; i < 8; ++i) {
@@ -263,9 +273,8 @@ std::array<std::uint32_t, 2> OccupancyTree::recompute_events(int depth, std::uin
     const std::array<std::uint32_t, 2> below = recompute_events(depth - 1, child);
     event = {std::min(event[0], below[0]), std::min(event[1], below[1])};
   }
-  InnerGroup& node = inner_[depth][group];
-  UMBRA_ASSERT(node.mark.step == decay_now());
-  node.mark.event = event;
+  UMBRA_ASSERT(mark(depth, group).step == decay_now());
+  mark(depth, group).event = event;
   return event;
 }
 
@@ -279,13 +288,12 @@ void OccupancyTree::settle_below(int depth, std::uint32_t group) {
   // Caught up against the table as it is; marked with step 0 of the table
   // settle_decay() leaves.
   if (depth == 0) {
-    catch_up(leaves_[group]);
-    leaves_[group].mark.step = 0;
+    catch_up(0, group);
+    mark(0, group).step = 0;
     return;
   }
-  InnerGroup& node = inner_[depth][group];
-  catch_up(node);
-  node.mark.step = 0;
+  catch_up(depth, group);
+  mark(depth, group).step = 0;
   for (unsigned i = 0; i < 8; ++i) {
     const std::uint32_t child = inner_[depth][group].child[i];
     if (child != kNoGroup) settle_below(depth - 1, child);
@@ -296,7 +304,7 @@ std::string OccupancyTree::check_marks(int depth, std::uint32_t group, std::arra
   // The exact events of the values as readers see them, against the bound
   // the group keeps less what it owes: a bound above them is an event a
   // step could miss (a writer that did not lower it).
-  const DecayMark& mark = depth == 0 ? leaves_[group].mark : inner_[depth][group].mark;
+  const DecayMark& mark = this->mark(depth, group);
   const auto where = [&] { return "decay mark of group " + std::to_string(group) + " at depth " + std::to_string(depth) + ": "; };
   if (mark.step > decay_now()) return where() + "step beyond the clock";
   if (decay_due(mark)) return where() + "owes a state change between steps";
@@ -340,7 +348,7 @@ bool OccupancyTree::decay_below(int depth, std::uint32_t group, unsigned slot, s
       const float next = decayed(value, step);
       if (next == value) return false;  // unknown already, or its sign does not decay
       if (where == Overlap::inside) {
-        set_childless(node, slot, next);
+        set_childless(depth, group, slot, next);
         if (next == 0.0f) forget_color(depth, group, slot);
         const bool changed = thresholds_.classify(value) != thresholds_.classify(next);
         if (changed && depth >= change_depth) record(depth);

@@ -45,7 +45,7 @@ bool OccupancyTree::forget_outside_below(int depth, std::uint32_t group, unsigne
   if (where == Overlap::inside) return false;
   {
     InnerGroup& node = inner_[depth][group];
-    catch_up(node);
+    catch_up(depth, group);
     const bool split = node.child[slot] != kNoGroup;
     const bool colored = has_color() && colors(depth, group).weight[slot] != 0;
     if (!split && node.log_odds[slot] == 0.0f && !colored) return false;  // unknown already
@@ -55,7 +55,7 @@ bool OccupancyTree::forget_outside_below(int depth, std::uint32_t group, unsigne
         node.child[slot] = kNoGroup;
         release_subtree(depth - 1, child, freed);
       }
-      set_childless(inner_[depth][group], slot, 0.0f);
+      set_childless(depth, group, slot, 0.0f);
       forget_color(depth, group, slot);
       if (changes != nullptr && depth >= change_depth) changes->push_back({code, depth});
       return true;
@@ -65,8 +65,8 @@ bool OccupancyTree::forget_outside_below(int depth, std::uint32_t group, unsigne
   const std::uint32_t child = inner_[depth][group].child[slot];
   bool changed = false;
   if (depth == 1) {
+    catch_up(0, child);
     LeafGroup& leaves = leaves_[child];
-    catch_up(leaves);
     for (unsigned i = 0; i < 8; ++i) {
       const std::uint64_t leaf_code = code | i;
       if (overlap(leaf_code, 0, keep) == Overlap::inside) continue;
