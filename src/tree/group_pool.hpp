@@ -171,11 +171,11 @@ class GroupPool {
 
   /// The mark of group `index` (only once attach_marks() was called).
   Mark& mark(std::uint32_t index) {
-    UMBRA_ASSERT(with_marks_ && (!slabs_.empty() || index < high_water_));
+    UMBRA_ASSERT(with_marks_ && (!slabs_.empty() || (index < high_water_ && index >> kBlockBits < mark_blocks_.size())));
     return mark_blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
   }
   const Mark& mark(std::uint32_t index) const {
-    UMBRA_ASSERT(with_marks_ && (!slabs_.empty() || index < high_water_));
+    UMBRA_ASSERT(with_marks_ && (!slabs_.empty() || (index < high_water_ && index >> kBlockBits < mark_blocks_.size())));
     return mark_blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
   }
   [[nodiscard]] bool has_marks() const { return with_marks_; }

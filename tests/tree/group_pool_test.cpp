@@ -1,7 +1,8 @@
 // GroupPool: indices stay unique and addressable across sequential and
 // concurrent phases, memory_bytes() follows what is in use, a parallel
 // update of a small pool does not cost whole blocks per worker, and
-// attached records stay with their groups through growth, phases and copies.
+// attached records stay with their groups through growth, phases and copies,
+// and so do marks attached to a pool that already holds groups.
 #include <algorithm>
 #include <set>
 #include <stdexcept>
@@ -227,6 +228,63 @@ TEST(GroupPool, AttachedRecordsStayWithTheirGroups) {
   const TaggedPool copy = pool;
   expect_tags(copy);
   EXPECT_TRUE(copy.has_attached());
+}
+
+TEST(GroupPool, MarksAttachedLaterStayWithTheirGroups) {
+  // Attached while the first block is still small (so it must grow with the
+  // groups' block), then across a second block, a concurrent phase, a
+  // release and a copy; a pool without marks pays nothing for them.
+  using MarkedPool = GroupPool<Group, NoAttachment, std::uint64_t>;
+  MarkedPool pool;
+  Pool plain;
+  std::vector<std::uint32_t> live;
+  for (std::uint32_t i = 0; i < 5; ++i) {
+    const std::uint32_t index = pool.allocate();
+    pool[index] = {0, index};
+    live.push_back(index);
+    plain.allocate();
+  }
+  EXPECT_EQ(pool.memory_bytes(), plain.memory_bytes()) << "no marks before attach_marks()";
+  EXPECT_FALSE(pool.has_marks());
+  pool.attach_marks(7);
+  ASSERT_TRUE(pool.has_marks());
+  for (const std::uint32_t index : live) ASSERT_EQ(pool.mark(index), 7u) << "the initial mark of group " << index;
+  const auto tag = [&](std::uint32_t index) { pool.mark(index) = ~std::uint64_t{index}; };
+  for (const std::uint32_t index : live) tag(index);
+  for (std::uint32_t i = 0; i < 1500; ++i) {
+    const std::uint32_t index = pool.allocate();
+    pool[index] = {0, index};
+    tag(index);
+    live.push_back(index);
+  }
+  for (std::size_t i = 0; i < 300; ++i) pool.release(live[i]);
+  live.erase(live.begin(), live.begin() + 300);
+  pool.begin_concurrent(2, 3000);
+  std::vector<std::vector<std::uint32_t>> taken(2);
+  auto work = [&](unsigned worker) {
+    for (std::uint32_t i = 0; i < 1500; ++i) {
+      const std::uint32_t index = pool.allocate(worker);
+      pool[index] = {worker + 1, index};
+      pool.mark(index) = ~std::uint64_t{index};
+      taken[worker].push_back(index);
+    }
+  };
+  std::thread first(work, 0u);
+  std::thread second(work, 1u);
+  first.join();
+  second.join();
+  pool.end_concurrent();
+  for (const auto& t : taken) live.insert(live.end(), t.begin(), t.end());
+  const auto expect_tags = [&](const MarkedPool& p) {
+    for (const std::uint32_t index : live) {
+      ASSERT_EQ(p[index].index, index);
+      ASSERT_EQ(p.mark(index), ~std::uint64_t{index}) << "the mark of group " << index;
+    }
+  };
+  expect_tags(pool);
+  const MarkedPool copy = pool;
+  expect_tags(copy);
+  EXPECT_TRUE(copy.has_marks());
 }
 
 }  // namespace
