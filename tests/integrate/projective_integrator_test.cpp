@@ -90,7 +90,7 @@ void brute_force_node(const ProjectiveRule& rule, std::uint64_t node, int depth,
     return;
   }
   // The rule, with its voxels near the surface decided by the rays where it has a band (surface_band.hpp).
-  std::uint64_t cleared = apply_surface_band(rule, morton::decode(node), rule.cleared_plain(node));
+  std::uint64_t cleared = apply_surface_band_plain(rule, morton::decode(node), rule.cleared_plain(node));
   if (rule.box_keys) {
     for (unsigned i = 0; i < 64; ++i) {
       if (!rule.box_keys->contains(morton::decode(node + i))) cleared &= ~(std::uint64_t{1} << i);
