@@ -70,7 +70,7 @@ struct ProjectiveFrame;
 struct SurfaceBand {
   /// Voxels up to about 2 x this many pixels wide are in the band (1: those
   /// that read their own pixel, window level 0).
-  static constexpr double kHalfWidthPixels = 1.0;
+  static constexpr double kHalfWidthPixels = 2.0;
   /// How far in front of the least reading of its 3 x 3 pixels (in voxels) a voxel is in the band.
   static constexpr double kFrontVoxels = 0.5;
 
