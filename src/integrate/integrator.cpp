@@ -501,7 +501,8 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
       rule.occupied_log_odds = tree->thresholds().occupied;
     }
     rule.use_cells();  // depth images at fine resolutions (projective_frame.hpp)
-    rule.surface_band = SurfaceBand::make(rule);  // depth images at coarse resolutions (surface_band.hpp)
+    // Depth images at coarse resolutions (surface_band.hpp).
+    rule.surface_band = SurfaceBand::make(rule, &band_image_);
   }
   const int root_depth = grid.depth_levels();
   if (threads == 1) {

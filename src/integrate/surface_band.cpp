@@ -169,7 +169,7 @@ bool SurfaceBand::possible(double resolution, const ProjectiveFrame& frame, doub
   return farthest > z_min - half_diagonal;
 }
 
-std::optional<SurfaceBand> SurfaceBand::make(const ProjectiveRule& rule) {
+std::optional<SurfaceBand> SurfaceBand::make(const ProjectiveRule& rule, std::shared_ptr<Image>* scratch) {
   const ProjectiveFrame& frame = *rule.frame;
   // Scans: not a depth image's rays (scan_images.hpp); fine resolutions: see the header.
   if (rule.whole_bricks_seen || rule.tree != nullptr || !possible(rule.grid->resolution(), frame, rule.max_range)) {
@@ -196,10 +196,18 @@ std::optional<SurfaceBand> SurfaceBand::make(const ProjectiveRule& rule) {
   band.half_depth_f = static_cast<float>(band.half_depth);
   band.front_depth_f = static_cast<float>(band.front_depth);
 
-  auto image = std::make_shared<SurfaceBand::Image>();
+  std::shared_ptr<SurfaceBand::Image> image;
+  if (scratch != nullptr && *scratch && scratch->use_count() == 1) {
+    image = *scratch;
+  } else {
+    image = std::make_shared<SurfaceBand::Image>();
+    if (scratch != nullptr) *scratch = image;
+  }
   // The 3 x 3 minima and maxima: a row pass, then a column pass.
-  std::vector<float> row_min(frame.depth.size());
-  std::vector<float> row_max(frame.depth.size());
+  std::vector<float>& row_min = image->row_min;
+  std::vector<float>& row_max = image->row_max;
+  row_min.resize(frame.depth.size());
+  row_max.resize(frame.depth.size());
   for (std::size_t r = 0; r < height; ++r) {
     const float* in = frame.depth.data() + r * width;
     for (std::size_t c = 0; c < width; ++c) {
