@@ -2,8 +2,8 @@
 //
 // A cell's nearest site is an offset in cells within the field's cap
 // (field_layout.hpp). Where the offsets within the cap number fewer than
-// 2^16 (a window of up to about 25 cells: max_distance / cell edge up to
-// about 25), each is stored as a 16-bit code into a table of those offsets,
+// 2^16 (max_distance up to about 24 cell edges: 63,413 offsets at 24,
+// 71,831 at 25), each is stored as a 16-bit code into a table of those offsets,
 // 4 bytes a cell for both kinds (dynamicEDT3D keeps 25 bytes a voxel; three
 // int8 per kind, 6 bytes a cell, were 31% of that on a map whose box is
 // mostly known space). Wider windows keep the three int8 per kind. The
