@@ -67,6 +67,10 @@ struct FieldBrick {
   BrickBits bits;
   detail::SiteBounds bounds;  ///< of the cells' offsets (an update's first test)
 
+  FieldBrick() = default;
+  FieldBrick(const FieldBrick&) = delete;  // a copy would leave the cells behind
+  FieldBrick& operator=(const FieldBrick&) = delete;
+
   [[nodiscard]] const unsigned char* cells() const { return reinterpret_cast<const unsigned char*>(this + 1); }
   [[nodiscard]] unsigned char* cells() { return reinterpret_cast<unsigned char*>(this + 1); }
 
