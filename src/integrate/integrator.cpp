@@ -105,7 +105,7 @@ bool add_end_voxel_hit(const Grid& grid, Vec3f origin, std::uint64_t code, doubl
                        InsertStats& stats) {
   const Key key = morton::decode(code);
   const Vec3f centre = grid.center_f(key);
-  if (max_range > 0.0 && octomap_norm(centre - origin) > max_range) {
+  if (max_range > 0.0 && octomap_norm_exceeds(centre - origin, max_range)) {
     ++stats.truncated;
     return false;
   }

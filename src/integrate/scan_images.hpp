@@ -94,13 +94,16 @@ struct ScanGaps {
   std::size_t row_gaps = 0;
   std::size_t column_gaps = 0;
 };
-/// Over `images` images of `wide` x `high` cells, row by row (`filled`:
-/// nonzero where a point fell): the filled cells, and the empty cells with
-/// a filled cell at most `reach` cells away on both sides along their row
-/// (row_gaps) and along their column (column_gaps). `scratch` is reused.
+/// The 64-bit words of one row of `wide` cells.
+constexpr int scan_row_words(int wide) { return (wide + 63) / 64; }
+/// Over `images` images of `wide` x `high` cells held as bit rows (row j
+/// of image k is the scan_row_words(wide) words from (k * high + j) *
+/// scan_row_words(wide); cell i is bit i % 64 of word i / 64, set where a
+/// point fell, bits past `wide` clear): the filled cells, and the empty
+/// cells with a filled cell at most `reach` (1 to 63) cells away on both
+/// sides along their row (row_gaps) and along their column (column_gaps).
 /// estimate_scan_resolution's test of too fine an image.
-ScanGaps count_scan_gaps(std::span<const std::uint8_t> filled, int images, int wide, int high, int reach,
-                         std::vector<std::uint8_t>& scratch);
+ScanGaps count_scan_gaps(std::span<const std::uint64_t> filled, int images, int wide, int high, int reach);
 }  // namespace detail
 
 }  // namespace umbra

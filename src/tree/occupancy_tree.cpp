@@ -531,6 +531,8 @@ void OccupancyTree::apply_group(int depth, std::uint32_t group, const UpdateBatc
 }
 
 void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& todo, float hit, float miss) {
+  // Only the leaves' pool allocates below: `node` stays where it is.
+  InnerGroup& node = inner_[1][group];
   for (unsigned slot = 0; slot < 8; ++slot) {
     const std::uint8_t misses = todo.miss[slot];
     const std::uint8_t hits = todo.hit[slot];
@@ -539,9 +541,36 @@ void OccupancyTree::apply_brick(std::uint32_t group, const UpdateBatch::Brick& t
       apply_everywhere(1, group, slot, miss);  // an inner leaf stays one node
       continue;
     }
-    if (inner_[1][group].child[slot] == kNoGroup) expand(1, group, slot);
-    const detail::LaneSummary leaves = detail::update_lanes(leaves_[inner_[1][group].child[slot]].log_odds, hits,
-                                                            misses, hit, miss, range_, thresholds_);
+    std::uint32_t child = node.child[slot];
+    if (child == kNoGroup && !has_color()) {
+      // A childless node (most of a scan's new space): its voxels' new
+      // values from its one value, straight into a new group, or none when
+      // they come out equal and pruning is on. What expand(), update_lanes
+      // and refresh_from() gave, without filling a group first, the
+      // refresh's call and, for a node that stays one value, a group
+      // allocated and released (a fifth of applying a 3DTK scan).
+      std::array<float, 8> values;
+      values.fill(node.log_odds[slot]);
+      const detail::LaneSummary leaves = detail::update_lanes(values, hits, misses, hit, miss, range_, thresholds_);
+      if (leaves.same && auto_prune_) {
+        set_childless(node, slot, leaves.max);
+        continue;
+      }
+      child = new_leaf_group(0.0f);
+      leaves_[child].log_odds = values;
+      node.child[slot] = child;
+      node.log_odds[slot] = leaves.max;
+      assign_bit(node.contains_free, slot, leaves.free != 0);
+      assign_bit(node.contains_unknown, slot, leaves.unknown != 0);
+      assign_bit(node.all_same, slot, leaves.same);
+      continue;
+    }
+    if (child == kNoGroup) {
+      expand(1, group, slot);
+      child = node.child[slot];
+    }
+    const detail::LaneSummary leaves =
+        detail::update_lanes(leaves_[child].log_odds, hits, misses, hit, miss, range_, thresholds_);
     refresh_from(1, group, slot, {leaves.max, leaves.free != 0, leaves.unknown != 0, leaves.same}, auto_prune_);
   }
 }

@@ -724,13 +724,13 @@ TEST(ProjectiveIntegrator, ScanImagesLeaveOutImagesWithoutPoints) {
 
 TEST(ProjectiveIntegrator, ScanGapsAreTheEmptyCellsBetweenNearFilledOnes) {
   // count_scan_gaps against a search of `reach` cells each way from every
-  // empty cell, on random images of several fill rates.
+  // empty cell, on random images of several fill rates, some wider than
+  // one or two words of bits (rows of 64 and 128 cells included).
   std::mt19937 rng(29);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<std::uint8_t> scratch;
-  for (int trial = 0; trial < 40; ++trial) {
+  for (int trial = 0; trial < 60; ++trial) {
     const int images = 1 + trial % 3;
-    const int wide = 1 + static_cast<int>(30 * u(rng));
+    const int wide = trial == 40 ? 64 : trial == 41 ? 128 : 1 + static_cast<int>((trial < 20 ? 30 : 150) * u(rng));
     const int high = 1 + static_cast<int>(30 * u(rng));
     const int reach = 1 + trial % 5;
     const double fill = u(rng);
@@ -759,7 +759,14 @@ TEST(ProjectiveIntegrator, ScanGapsAreTheEmptyCellsBetweenNearFilledOnes) {
         }
       }
     }
-    const detail::ScanGaps gaps = detail::count_scan_gaps(filled, images, wide, high, reach, scratch);
+    const auto words = static_cast<std::size_t>(detail::scan_row_words(wide));
+    std::vector<std::uint64_t> bits(std::size_t(images) * std::size_t(high) * words, 0);
+    for (std::size_t row = 0; row < std::size_t(images) * std::size_t(high); ++row) {
+      for (std::size_t i = 0; i < std::size_t(wide); ++i) {
+        if (filled[row * std::size_t(wide) + i] != 0) bits[row * words + i / 64] |= std::uint64_t{1} << (i % 64);
+      }
+    }
+    const detail::ScanGaps gaps = detail::count_scan_gaps(bits, images, wide, high, reach);
     EXPECT_EQ(gaps.filled, expected.filled) << "trial " << trial;
     EXPECT_EQ(gaps.row_gaps, expected.row_gaps) << "trial " << trial;
     EXPECT_EQ(gaps.column_gaps, expected.column_gaps) << "trial " << trial;

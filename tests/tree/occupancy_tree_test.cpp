@@ -7,6 +7,7 @@
 
 #include "umbra/core/grid.hpp"
 #include "tree/occupancy_tree.hpp"
+#include "tree/update_batch.hpp"
 
 namespace umbra {
 namespace {
@@ -167,6 +168,58 @@ TEST(OccupancyTree, RandomUpdateSequencesKeepEveryInvariant) {
         if (step % 97 == 0) tree.set_thresholds(LogOddsThresholds::from(Thresholds{0.5 + (rng() % 4) * 0.1, 0.5 - (rng() % 4) * 0.1}));
         if (step % 251 == 0 && !auto_prune) tree.prune();
         ASSERT_EQ(tree.check_invariants(), "") << "depth levels " << depth_levels << " step " << step;
+      }
+    }
+  }
+}
+
+TEST(OccupancyTree, ApplyingABatchUpdatesEachMarkedVoxelOnce) {
+  // apply() against update() of every marked voxel (a hit wins over a
+  // miss), over rounds of random batches on a small region, so that nodes
+  // go childless at the clamping minimum and are then missed in part (their
+  // voxels stay one value) and childless unknown or occupied nodes get
+  // partial marks (a new leaf group), with pruning on and off.
+  for (const int depth_levels : {3, 4}) {
+    for (const bool auto_prune : {true, false}) {
+      OccupancyTree tree(depth_levels, kRange, kThresholds);
+      OccupancyTree expected(depth_levels, kRange, kThresholds);
+      tree.set_auto_prune(auto_prune);
+      expected.set_auto_prune(auto_prune);
+      std::mt19937 rng(static_cast<std::uint32_t>(depth_levels * 10 + auto_prune));
+      const std::uint64_t voxels = std::uint64_t{1} << (3 * depth_levels);
+      for (int round = 0; round < 40; ++round) {
+        UpdateBatch batch(depth_levels);
+        std::vector<std::uint8_t> marks(voxels, 0);  // 1: miss, 2: hit
+        // Mostly misses in the first 128 voxels (two bricks), a few hits.
+        const int count = static_cast<int>(rng() % 200);
+        for (int i = 0; i < count; ++i) {
+          const std::uint64_t c = rng() % 4 == 0 ? rng() % voxels : rng() % 128;
+          if (rng() % 10 == 0) {
+            batch.add_hit(c);
+            marks[c] = 2;
+          } else {
+            batch.add_miss(c);
+            marks[c] = std::max<std::uint8_t>(marks[c], 1);
+          }
+        }
+        if (rng() % 3 == 0) {  // a whole depth-1 node
+          const std::uint64_t first = (rng() % voxels) & ~std::uint64_t{7};
+          batch.add_miss_node(first, 1);
+          for (std::uint64_t c = first; c < first + 8; ++c) marks[c] = std::max<std::uint8_t>(marks[c], 1);
+        }
+        tree.apply(batch, kSensor.hit_log_odds(), kSensor.miss_log_odds());
+        for (std::uint64_t c = 0; c < voxels; ++c) {
+          if (marks[c] != 0) expected.update(c, marks[c] == 2 ? kSensor.hit_log_odds() : kSensor.miss_log_odds());
+        }
+        ASSERT_EQ(tree.check_invariants(), "") << "round " << round;
+        for (std::uint64_t c = 0; c < voxels; ++c) {
+          ASSERT_EQ(tree.find(c, 0).log_odds, expected.find(c, 0).log_odds)
+              << "depth levels " << depth_levels << " prune " << auto_prune << " round " << round << " voxel " << c;
+        }
+        if (auto_prune) {
+          ASSERT_EQ(tree.count_nodes().inner, expected.count_nodes().inner) << "round " << round;
+          ASSERT_EQ(tree.count_nodes().inner_leaf, expected.count_nodes().inner_leaf) << "round " << round;
+        }
       }
     }
   }
