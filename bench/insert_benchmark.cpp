@@ -40,7 +40,14 @@
 // path, serial + the busiest worker of each job, with its bound CPU time /
 // critical path (which also counts uneven jobs). Both within one run: the
 // one-thread run is another process under another load. CPU times are
-// steadier than wall-clock ratios on a machine shared with other work.
+// steadier than wall-clock ratios on a machine shared with other work. But
+// on a loaded machine the busiest worker is busiest partly because the
+// other was preempted (the pool hands the running worker more tasks), so
+// the table also gives the scheduled path: serial + each job's tasks
+// scheduled on the pool's workers from their CPU times as if nothing else
+// ran (JobCpuTimes::scheduled_seconds), and the one-thread run's CPU time
+// over it (the speed-up an idle machine would show, cache and memory
+// contention between the workers included, wake-ups not).
 #include <malloc.h>
 #include <sys/types.h>
 #include <sys/wait.h>
@@ -102,6 +109,7 @@ struct Measurement {
   double scan_cpu_seconds[kMaxScans] = {};  // CPU time of the process (all threads)
   double scan_job_seconds[kMaxScans] = {};      // --serial-share: CPU time in the pools' jobs
   double scan_busiest_seconds[kMaxScans] = {};  // --serial-share: per job the busiest worker's, summed
+  double scan_scheduled_seconds[kMaxScans] = {};  // --serial-share: per job its tasks scheduled, summed
   std::uint64_t map_bytes = 0;        // memoryUsage() / memory_bytes()
   std::uint64_t peak_rss_growth = 0;  // bytes, peak RSS minus RSS before inserting
   bool ok = false;
@@ -193,6 +201,7 @@ Measurement measure_in_this_process(const Dataset& data, const Method& method, d
       const umbra::JobCpuTimes jobs_end = umbra::job_cpu_times();
       m.scan_job_seconds[i] = jobs_end.all_seconds - jobs_start.all_seconds;
       m.scan_busiest_seconds[i] = jobs_end.busiest_seconds - jobs_start.busiest_seconds;
+      m.scan_scheduled_seconds[i] = jobs_end.scheduled_seconds - jobs_start.scheduled_seconds;
     }
     m.map_bytes = map.memory_bytes();
   }
@@ -258,6 +267,7 @@ struct Result {
   double cpu_ms_per_scan = 0.0;
   double serial_ms_per_scan = 0.0;    // --serial-share: CPU time outside the pools' jobs
   double critical_ms_per_scan = 0.0;  // --serial-share: serial + the busiest worker of each job
+  double scheduled_ms_per_scan = 0.0;  // --serial-share: serial + each job's tasks scheduled
   Measurement last;
 };
 
@@ -318,18 +328,21 @@ int main(int argc, char** argv) {
         << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::ostringstream share_table;
   share_table << "| dataset | res (m) | threads | method | CPU ms/scan | serial CPU ms/scan | serial share s | "
-                 "Amdahl bound, 2 threads | critical path ms/scan | CPU / critical path |\n"
-              << "|---|---|---|---|---|---|---|---|---|---|\n";
+                 "Amdahl bound, 2 threads | critical path ms/scan | CPU / critical path | scheduled path ms/scan | "
+                 "one-thread CPU / scheduled path |\n"
+              << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Dataset& data : loaded) {
     for (const std::string& res_text : split_list(sweep.resolutions)) {
       const double resolution = std::stod(res_text);
       std::map<std::string, Result> octomap_results;
+      std::map<std::string, double> one_thread_cpu;  // --serial-share: method -> CPU ms/scan on one thread
       for (const std::string& threads_text : split_list(sweep.threads)) {
         const unsigned threads = static_cast<unsigned>(std::stoul(threads_text));
         std::map<std::string, std::vector<std::vector<double>>> times;  // method -> scan -> repeats
         std::map<std::string, std::vector<std::vector<double>>> cpu_times;
         std::map<std::string, std::vector<std::vector<double>>> serial_times;
         std::map<std::string, std::vector<std::vector<double>>> critical_times;
+        std::map<std::string, std::vector<std::vector<double>>> scheduled_times;
         std::map<std::string, Measurement> last;
         for (int r = 0; r < sweep.repeat; ++r) {
           for (const Method& method : methods) {
@@ -343,6 +356,8 @@ int main(int argc, char** argv) {
             serial_per_scan.resize(static_cast<std::size_t>(m.scans));
             auto& critical_per_scan = critical_times[method.name];
             critical_per_scan.resize(static_cast<std::size_t>(m.scans));
+            auto& scheduled_per_scan = scheduled_times[method.name];
+            scheduled_per_scan.resize(static_cast<std::size_t>(m.scans));
             double total = 0;
             for (int s = 0; s < m.scans; ++s) {
               per_scan[static_cast<std::size_t>(s)].push_back(m.scan_seconds[s]);
@@ -350,6 +365,7 @@ int main(int argc, char** argv) {
               const double serial = m.scan_cpu_seconds[s] - m.scan_job_seconds[s];
               serial_per_scan[static_cast<std::size_t>(s)].push_back(serial);
               critical_per_scan[static_cast<std::size_t>(s)].push_back(serial + m.scan_busiest_seconds[s]);
+              scheduled_per_scan[static_cast<std::size_t>(s)].push_back(serial + m.scan_scheduled_seconds[s]);
               total += m.scan_seconds[s];
             }
             last[method.name] = m;
@@ -368,9 +384,12 @@ int main(int argc, char** argv) {
           for (const auto& repeats : serial_times[name]) serial_sum += median(repeats);
           double critical_sum = 0;
           for (const auto& repeats : critical_times[name]) critical_sum += median(repeats);
+          double scheduled_sum = 0;
+          for (const auto& repeats : scheduled_times[name]) scheduled_sum += median(repeats);
           const auto scans = static_cast<double>(per_scan.size());
           results[name] = {1e3 * sum / scans, 1e3 * cpu_sum / scans, 1e3 * serial_sum / scans,
-                           1e3 * critical_sum / scans, last[name]};
+                           1e3 * critical_sum / scans, 1e3 * scheduled_sum / scans, last[name]};
+          if (threads == 1) one_thread_cpu[name] = 1e3 * cpu_sum / scans;
         }
         for (const Method& method : methods) {
           if (method.octomap) octomap_results[method.name] = results[method.name];
@@ -407,10 +426,15 @@ int main(int argc, char** argv) {
           std::snprintf(amdahl, sizeof amdahl, "%.2fx", 1.0 / (s + (1.0 - s) / 2.0));
           char critical_bound[32];
           std::snprintf(critical_bound, sizeof critical_bound, "%.2fx", mine.cpu_ms_per_scan / mine.critical_ms_per_scan);
-          std::snprintf(row, sizeof row, "| %s | %.3g | %s | %s | %.1f | %.1f | %s | %s | %.1f | %s |\n",
+          char scheduled_bound[32] = "-";  // without a one-thread run of this sweep
+          if (one_thread_cpu.count(method.name)) {
+            std::snprintf(scheduled_bound, sizeof scheduled_bound, "%.2fx",
+                          one_thread_cpu[method.name] / mine.scheduled_ms_per_scan);
+          }
+          std::snprintf(row, sizeof row, "| %s | %.3g | %s | %s | %.1f | %.1f | %s | %s | %.1f | %s | %.1f | %s |\n",
                         data.name.c_str(), resolution, threads_text.c_str(), method.name.c_str(),
                         mine.cpu_ms_per_scan, mine.serial_ms_per_scan, share, amdahl, mine.critical_ms_per_scan,
-                        critical_bound);
+                        critical_bound, mine.scheduled_ms_per_scan, scheduled_bound);
           share_table << row;
           std::fputs(row, stderr);
         }

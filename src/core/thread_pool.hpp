@@ -2,8 +2,8 @@
 //
 // run(tasks, work) calls work(task, worker) for task = 0 .. tasks-1, spread
 // over the workers (the calling thread is worker 0 and takes part), and
-// returns when all are done. Tasks are handed out one at a time from an
-// atomic counter, so uneven tasks balance themselves. An exception thrown by
+// returns when all are done. Tasks are handed out one at a time, in order,
+// from an atomic counter, so uneven tasks balance themselves. An exception thrown by
 // a task is rethrown from run() (the first one; remaining tasks are skipped).
 // One job at a time: run() is not reentrant and not for concurrent callers.
 //
@@ -14,6 +14,7 @@
 // does not exist.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstddef>
 #include <exception>
@@ -58,9 +59,15 @@ class ThreadPool {
   std::condition_variable wake_;
   std::condition_variable done_;
   const std::function<void(std::size_t, unsigned)>* job_ = nullptr;
+  /// Job CPU accounting (job_cpu_times.hpp): a worker's CPU time in the current job, a cache line each.
+  struct alignas(64) WorkerSeconds {
+    double seconds = 0.0;
+  };
+  WorkerSeconds* job_seconds_ = nullptr;  // one per worker while accounting, else null
   std::size_t tasks_ = 0;
-  std::size_t next_task_ = 0;  // guarded by mutex_
-  unsigned busy_ = 0;          // workers still in the current job
+  std::atomic<std::size_t> next_task_{0};  // the next task to hand out (past tasks_: none left)
+  std::atomic<bool> failed_{false};        // a task threw: hand out no more
+  unsigned busy_ = 0;  // workers still in the current job
   std::size_t generation_ = 0;
   bool stopping_ = false;
   std::exception_ptr failure_;

@@ -80,7 +80,11 @@ class BrickTable {
     }
   }
   [[nodiscard]] std::size_t size() const { return size_; }
-  [[nodiscard]] std::size_t memory_bytes() const { return slots_.capacity() * sizeof(Slot) + size_ * sizeof(T); }
+  /// The table and its values, each `value_bytes` (more than sizeof(T)
+  /// where a value's allocation holds more than the T).
+  [[nodiscard]] std::size_t memory_bytes(std::size_t value_bytes = sizeof(T)) const {
+    return slots_.capacity() * sizeof(Slot) + size_ * value_bytes;
+  }
   void clear() { *this = BrickTable(); }
   void swap(BrickTable& other) noexcept {
     slots_.swap(other.slots_);

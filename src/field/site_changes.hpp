@@ -84,6 +84,7 @@ BrickOffsets trivial_offsets();
 struct AddedSites {
   BrickIndex brick;
   std::span<const CellCoord> sites;
+  std::uint32_t least = 0;  ///< S from the lowered brick to the range of `sites` (the order they are tried in)
 };
 
 struct LoweringResult {

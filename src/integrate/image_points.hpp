@@ -94,9 +94,10 @@ class ImagePoints {
     RadixSortScratch<std::uint64_t> sort_scratch;
     std::size_t non_finite = 0;
     std::size_t out_of_bounds = 0;
-    // voxels_only: a few rows' points at a time (kept between images).
-    std::vector<Vec3f> chunk_points;
-    std::vector<std::uint32_t> chunk_pixels;
+    // voxels_only: one row's x factors, points and codes at a time (kept between images).
+    std::vector<double> row_factors;
+    std::vector<Vec3f> row_points;
+    std::vector<std::uint64_t> row_codes;
   };
   /// Where find_voxels stands in its band's pixels (carried from one run of
   /// points to the next).
@@ -109,7 +110,7 @@ class ImagePoints {
   };
   /// The band's candidates from its points (stored in points_ and pixels_).
   void find_voxels(const Grid& grid, int width, Band& band);
-  /// The same, back-projecting the band's rows a few at a time instead.
+  /// The same, back-projecting the band's rows one at a time instead (no points kept).
   void find_voxels_streamed(const Grid& grid, const DepthImage& depth, const PinholeCamera& camera, const Pose& pose,
                             Band& band);
   /// find_voxels' work on a run of the band's points in pixel order; `codes`

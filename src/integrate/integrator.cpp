@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "core/radix_sort.hpp"
@@ -104,7 +105,7 @@ bool add_end_voxel_hit(const Grid& grid, Vec3f origin, std::uint64_t code, doubl
                        InsertStats& stats) {
   const Key key = morton::decode(code);
   const Vec3f centre = grid.center_f(key);
-  if (max_range > 0.0 && octomap_norm(centre - origin) > max_range) {
+  if (max_range > 0.0 && octomap_norm_exceeds(centre - origin, max_range)) {
     ++stats.truncated;
     return false;
   }
@@ -501,7 +502,8 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
       rule.occupied_log_odds = tree->thresholds().occupied;
     }
     rule.use_cells();  // depth images at fine resolutions (projective_frame.hpp)
-    rule.surface_band = SurfaceBand::make(rule);  // depth images at coarse resolutions (surface_band.hpp)
+    // Depth images at coarse resolutions (surface_band.hpp).
+    rule.surface_band = SurfaceBand::make(rule, &band_image_);
   }
   const int root_depth = grid.depth_levels();
   if (threads == 1) {
@@ -525,14 +527,41 @@ void Integrator::trace_projective_misses(const OccupancyTree* tree, const Grid& 
   // Not below the nodes cells may decide (projective_frame.hpp): those are traced whole.
   int lowest = 2;
   for (const ProjectiveRule& rule : rules) lowest = std::max(lowest, 2 + static_cast<int>(rule.cells.size()));
+  // Each depth's tasks from the last's: a node split there is collected one
+  // level down (collect's own recursion, so the tasks are those of one
+  // collect from the root to that depth, in the same order). Collecting
+  // from the root again for every depth was a serial 0.27 ms of a TUM
+  // frame's 14 ms on two threads at 2 cm.
+  std::vector<Task> coarser;
   for (int depth = std::max(root_depth - 1, lowest); depth >= lowest; --depth) {
     tasks.clear();
-    for (std::size_t i = 0; i < rules.size(); ++i) {
-      nodes.clear();
-      ProjectiveTracer(rules[i]).collect(0, root_depth, depth, nodes);
-      for (const ProjectiveTracer::Task& node : nodes) tasks.push_back({i, node});
+    if (depth == std::max(root_depth - 1, lowest)) {
+      for (std::size_t i = 0; i < rules.size(); ++i) {
+        nodes.clear();
+        ProjectiveTracer(rules[i]).collect(0, root_depth, depth, nodes);
+        for (const ProjectiveTracer::Task& node : nodes) tasks.push_back({i, node});
+      }
+    } else {
+      std::optional<ProjectiveTracer> tracer;  // the last task's image's
+      std::size_t tracer_image = 0;
+      for (const Task& task : coarser) {
+        if (task.node.depth <= depth || task.node.decision == ProjectiveTracer::Decision::all) {
+          tasks.push_back(task);
+          continue;
+        }
+        if (!tracer || tracer_image != task.image) {
+          tracer.emplace(rules[task.image]);
+          tracer_image = task.image;
+        }
+        nodes.clear();
+        for (std::uint64_t slot = 0; slot < 8; ++slot) {
+          tracer->collect(task.node.code | slot << (3 * depth), depth, depth, nodes);
+        }
+        for (const ProjectiveTracer::Task& node : nodes) tasks.push_back({task.image, node});
+      }
     }
-    if (tasks.size() >= std::size_t{threads} * kTasksPerThread) break;
+    if (tasks.size() >= std::size_t{threads} * kTasksPerThread || depth == lowest) break;
+    coarser.swap(tasks);
   }
   // Hits routed to the tasks need the tasks disjoint and in code order: one image's are (collect).
   const bool route_hits = hits_in != nullptr && rules.size() == 1;

@@ -150,6 +150,8 @@ class Integrator {
   // The projective integrator's image and the points of the last depth
   // image, kept between scans (their buffers are reused).
   ProjectiveFrame frame_;
+  // The surface band's image of the last depth image, reused by the next (SurfaceBand::make).
+  std::shared_ptr<SurfaceBand::Image> band_image_;
   ScanImages scan_images_;
   ImagePoints image_points_;
 };

@@ -5,16 +5,14 @@
 #include <cmath>
 
 #include "core/assert.hpp"
+#include "integrate/centre_box.hpp"
 #include "umbra/core/morton.hpp"
 
 namespace umbra {
 
 namespace {
 
-// How far the rule's float camera-frame coordinates may stray from the exact
-// ones, relative to their size: the brick origin is rounded once (2^-24),
-// the offset once, their sum once; 2e-6 is several times that.
-constexpr double kRelativeError = 2e-6;
+constexpr double kRelativeError = kProjectiveRelativeError;
 
 }  // namespace
 
@@ -65,23 +63,10 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth,
   if (all_in_range != nullptr) *all_in_range = within_range;
 
   // The eight corners of that box in the camera frame.
-  const Vec3d c0 = frame.to_camera(lo);
-  const Vec3d ex = frame.rotate(Vec3d{span, 0.0, 0.0});
-  const Vec3d ey = frame.rotate(Vec3d{0.0, span, 0.0});
-  const Vec3d ez = frame.rotate(Vec3d{0.0, 0.0, span});
-  std::array<Vec3d, 8> corners;
-  for (unsigned i = 0; i < 8; ++i) {
-    corners[i] = c0;
-    if (i & 1u) corners[i] = corners[i] + ex;
-    if (i & 2u) corners[i] = corners[i] + ey;
-    if (i & 4u) corners[i] = corners[i] + ez;
-  }
-  double z_min = corners[0].z;
-  double z_max = corners[0].z;
-  for (const Vec3d& c : corners) {
-    z_min = std::min(z_min, c.z);
-    z_max = std::max(z_max, c.z);
-  }
+  const CentreBox box(frame, lo, span);
+  const std::array<Vec3d, 8>& corners = box.corners;
+  const double z_min = box.z_min;
+  const double z_max = box.z_max;
   if (z_max + pad <= 0.0) return Decision::none;  // behind the camera: not seen
   const double fx = frame.fx;
   const double fy = frame.fy;
@@ -130,25 +115,14 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth,
   if (z_min - pad <= 0.0) return outside_planes() ? Decision::none : Decision::split;
 
   // In front of the camera: the pixels the voxel centres can project onto.
-  double u_min = 1e300;
-  double u_max = -1e300;
-  double v_min = 1e300;
-  double v_max = -1e300;
-  double lateral = 0.0;  // largest |x| or |y|
-  for (const Vec3d& c : corners) {
-    const double u = fx * (c.x / c.z) + u_offset;
-    const double v = fy * (c.y / c.z) + v_offset;
-    u_min = std::min(u_min, u);
-    u_max = std::max(u_max, u);
-    v_min = std::min(v_min, v);
-    v_max = std::max(v_max, v);
-    lateral = std::max({lateral, std::abs(c.x), std::abs(c.y)});
-  }
   const double near = z_min - pad;
-  // A coordinate off by `pad` moves the projection by about f pad (1 + lateral / z) / z pixels.
-  const double spread = pad * (1.0 + lateral / near) / near;
-  const double u_pad = 1e-3 + fx * spread + 1e-6 * std::max(std::abs(u_min), std::abs(u_max));
-  const double v_pad = 1e-3 + fy * spread + 1e-6 * std::max(std::abs(v_min), std::abs(v_max));
+  const CentreBox::Pixels pixels = box.pixels(frame, pad);
+  const double u_min = pixels.u_min;
+  const double u_max = pixels.u_max;
+  const double v_min = pixels.v_min;
+  const double v_max = pixels.v_max;
+  const double u_pad = pixels.u_pad;
+  const double v_pad = pixels.v_pad;
   if ((u_pad > 1.0 || v_pad > 1.0) && outside_planes()) return Decision::none;
   const double u0 = std::floor(u_min - u_pad);
   const double u1 = std::floor(u_max + u_pad);
@@ -176,7 +150,7 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth,
   // is not cleared whole.
   const SurfaceBandBounds band = surface_band_bounds(rule_, near, z_max + pad, u_min - u_pad, u_max + u_pad,
                                                      v_min - v_pad, v_max + v_pad);
-  const Decision skip = band.may_clear ? Decision::split : Decision::none;
+  const Decision skip = band.may_hold ? Decision::split : Decision::none;
   if (wide.max == 0.0f) return skip;  // no reading any voxel's window can hold
   const double margin = rule_.margin;
   // d - margin is rounded to float in the rule: allow for it.

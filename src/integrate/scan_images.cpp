@@ -146,11 +146,33 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
     ray_pixels_[k].clear();
     ray_points_[k].clear();
   }
+  // A side face sees a point at tan(azimuth off its axis) = |x| / z, so one
+  // whose reach stays below tan(60 degrees) never holds a point 67.5
+  // degrees or more off its axis: only the point's nearest side face (by
+  // its azimuth, nearest_side_face, which may be the neighbour within
+  // rounding of a border) and that face's two neighbours can hold it, with
+  // the two caps. Trying the other five was half of the binning's
+  // instructions. Each image's pixels and rays do not depend on the order
+  // in which a point visits the images.
+  bool near_sides_only = true;
+  for (int k = 0; k < kSideFaces; ++k) near_sides_only = near_sides_only && reach_x[std::size_t(k)] < std::sqrt(3.0);
   for (std::size_t index = 0; index < points.size(); ++index) {
     const Vec3f& p = points[index];
     if (!p.is_finite()) continue;
     const Vec3d d = Vec3d(p) - o;
-    for (std::size_t k = 0; k < faces_.size(); ++k) {
+    std::array<std::uint8_t, kFaces> candidates;
+    std::size_t count = 0;
+    if (near_sides_only) {
+      const auto nearest = static_cast<unsigned>(nearest_side_face(d.x, d.y));
+      candidates = {static_cast<std::uint8_t>((nearest + kSideFaces - 1) % kSideFaces), static_cast<std::uint8_t>(nearest),
+                    static_cast<std::uint8_t>((nearest + 1) % kSideFaces), kSideFaces, kSideFaces + 1};
+      count = 5;
+    } else {
+      for (std::uint8_t k = 0; k < kFaces; ++k) candidates[k] = k;
+      count = kFaces;
+    }
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::size_t k = candidates[i];
       ProjectiveFrame& face = faces_[k];
       const auto& r = face.rotation;  // as ProjectiveFrame::rotate computes it
       Vec3d c;

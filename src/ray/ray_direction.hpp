@@ -20,6 +20,18 @@ inline double octomap_norm(Vec3f v) {
   return std::sqrt(static_cast<double>(squared));
 }
 
+/// octomap_norm(v) > bound (bound >= 0), the square root taken only near
+/// the bound: sqrt is correctly rounded and monotonic, so a squared sum well
+/// below (above) bound^2 decides it (the square root's latency was a third
+/// of the projective integrator's hits on the TUM frames at 2 cm).
+inline bool octomap_norm_exceeds(Vec3f v, double bound) {
+  const double squared = static_cast<double>(v.x * v.x + v.y * v.y + v.z * v.z);
+  const double limit = bound * bound;
+  if (squared < limit * (1.0 - 1e-9)) return false;
+  if (squared > limit * (1.0 + 1e-9)) return true;
+  return octomap_norm(v) > bound;
+}
+
 /// A ray's normalised direction and its length, as OctoMap's computeRayKeys
 /// computes them: the float offset, octomap_norm rounded to float, a float
 /// division per component.

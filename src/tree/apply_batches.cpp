@@ -29,6 +29,10 @@
 namespace umbra {
 namespace {
 
+/// The fewest bricks (of all batches) per subtree of a parallel apply, but
+/// for a floor of 16 subtrees a thread (apply_batches_in_parallel).
+constexpr std::size_t kApplyBricksPerTask = 256;
+
 constexpr std::uint8_t bit(unsigned slot) { return static_cast<std::uint8_t>(1u << slot); }
 
 // Templates over OccupancyTree's private BatchGroup (deduced from the calls).
@@ -177,11 +181,14 @@ void OccupancyTree::apply_batches_in_parallel(std::span<const UpdateBatch* const
   // marks are where its surfaces are, so the subtrees are very uneven (TUM
   // at 4 mm on two threads: with 16 or 64 a thread, one worker's share of a
   // frame's apply was up to 1.7 times the other's; with 256, 1.0 to 1.3
-  // times). But the split is serial: for small batches (TUM at 2 cm) 256 a
-  // thread made it 4% of a frame, so at least 64 bricks a subtree.
+  // times). But the split is serial and each subtree costs the pool a task:
+  // for small batches (TUM at 2 cm) 256 a thread made the split 4% of a
+  // frame, and 64 bricks a subtree still gave ~480 tasks of 10 us each, so
+  // at least 256 bricks a subtree.
   std::size_t bricks = 0;
   for (const UpdateBatch* batch : batches) bricks += batch->group_count(1);
-  const std::size_t wanted = std::clamp(bricks / 64, std::size_t{pool.size()} * 16, std::size_t{pool.size()} * 256);
+  const std::size_t wanted =
+      std::clamp(bricks / kApplyBricksPerTask, std::size_t{pool.size()} * 16, std::size_t{pool.size()} * 256);
   std::vector<Task> final_tasks;  // not split further
   while (!tasks.empty() && final_tasks.size() + tasks.size() < wanted) {
     std::vector<Task> next;

@@ -14,6 +14,7 @@
 #include <atomic>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -25,6 +26,7 @@
 #include <gtest/gtest.h>
 
 #include "core/thread_pool.hpp"
+#include "umbra/core/job_cpu_times.hpp"
 #include "umbra/map/occupancy_map.hpp"
 
 namespace umbra {
@@ -55,6 +57,39 @@ TEST(ThreadPool, TheFirstExceptionComesBack) {
   std::atomic<int> after{0};
   pool.run(10, [&](std::size_t, unsigned) { ++after; });  // still usable
   EXPECT_EQ(after.load(), 10);
+}
+
+double thread_cpu_seconds() {
+  timespec t{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// The job accounting's scheduled path is the tasks' CPU times handed out in
+// order to the first free worker, whichever worker really ran them (on a
+// loaded machine one worker may run them all): a job of one 6 ms task then
+// four of 1 ms takes 6 ms on two workers (the first runs the long one, the
+// other the four short ones), not the 10 ms of one worker or the 5 ms of an
+// even split. All times are CPU times, so the test does not depend on the load.
+TEST(ThreadPool, JobAccountingSchedulesTheTasksOnThePoolsWorkers) {
+  ThreadPool pool(2);
+  if (pool.size() != 2) GTEST_SKIP() << "the system started no second thread";
+  set_job_cpu_accounting(true);
+  const JobCpuTimes before = job_cpu_times();
+  pool.run(5, [](std::size_t task, unsigned) {
+    const double end = thread_cpu_seconds() + (task == 0 ? 6e-3 : 1e-3);
+    while (thread_cpu_seconds() < end) {
+    }
+  });
+  const JobCpuTimes after = job_cpu_times();
+  set_job_cpu_accounting(false);
+  const double scheduled = after.scheduled_seconds - before.scheduled_seconds;
+  const double all = after.all_seconds - before.all_seconds;
+  EXPECT_EQ(after.jobs - before.jobs, 1u);
+  EXPECT_GE(all, 10e-3);
+  EXPECT_GE(scheduled, 5.9e-3);  // the long task: each task's time has the clock's own cost taken off
+  EXPECT_LT(scheduled, 8e-3);    // not every task on one worker (10 ms)
+  EXPECT_LE(scheduled, all);
 }
 
 TEST(ThreadPool, ThreadLimitIsFourPerCoreAndAtLeastSixteen) {

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "field/brick_table.hpp"
+#include "field/cell_codes.hpp"
 #include "field/field_layout.hpp"
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/field/distance_field.hpp"
@@ -213,6 +214,87 @@ TEST(DistanceField, MatchesBruteForceWithAWideWindow) {
   options.max_distance = 1.7;
   const DistanceField field(map, options);
   expect_field_matches(map, field, 150, 60, "wide window");
+}
+
+TEST(DistanceField, MatchesBruteForceWithAWindowTooWideForCodes) {
+  // 2.6 m at 10 cm: a window of 26 cells, more offsets within the cap than
+  // 16-bit codes hold, so the bricks keep three int8 per kind
+  // (cell_codes.hpp); the answers must not depend on the layout. Updated
+  // once too (decoding and coding again).
+  OccupancyMap map = random_map(14, true);
+  DistanceFieldOptions options;
+  options.max_distance = 2.6;
+  options.depth = 0;
+  DistanceField field(map, options);
+  ASSERT_FALSE(detail::CellCodes(detail::FieldLayout(map.resolution(), map.depth_levels(), 0, 2.6)).compact());
+  expect_field_matches(map, field, 160, 12, "window too wide for codes");
+  map.set_log_odds(Vec3d{0.05, 0.05, 0.05}, 2.0f);
+  map.set_log_odds(Vec3d{-0.45, 0.35, 0.05}, -1.0f);
+  field.update();
+  expect_field_matches(map, field, 161, 12, "window too wide for codes, updated");
+}
+
+TEST(DistanceField, CellCodesRoundTripEveryOffsetWithinTheCap) {
+  // Every offset a field can keep has a code and decodes to itself; a
+  // brick of them (and of cells with no site) comes back unchanged.
+  for (const double max_distance : {0.25, 0.9, 2.2}) {
+    const detail::FieldLayout layout(kResolution, 16, 0, max_distance);
+    const detail::CellCodes codes(layout);
+    ASSERT_TRUE(codes.compact()) << max_distance;
+    EXPECT_EQ(codes.bytes_per_cell(), 4u);
+    std::vector<detail::SiteOffset> within;
+    const int w = layout.window();
+    for (int z = -w; z <= w; ++z) {
+      for (int y = -w; y <= w; ++y) {
+        for (int x = -w; x <= w; ++x) {
+          const detail::SiteOffset o{std::int8_t(x), std::int8_t(y), std::int8_t(z)};
+          if (layout.within_cap(layout.squared(o))) within.push_back(o);
+        }
+      }
+    }
+    within.push_back(detail::SiteOffset{});  // none
+    std::vector<unsigned char> cells(codes.bytes_per_brick());
+    for (std::size_t first = 0; first < within.size(); first += detail::kBrickVolume) {
+      detail::BrickOffsets in{}, out{};
+      for (int i = 0; i < detail::kBrickVolume; ++i) {
+        in[std::size_t(i)].occupied = within[(first + std::size_t(i)) % within.size()];
+        in[std::size_t(i)].unknown = within[(first + 7 * std::size_t(i) + 3) % within.size()];
+      }
+      codes.encode(in, cells.data());
+      codes.decode(cells.data(), out);
+      for (int i = 0; i < detail::kBrickVolume; ++i) {
+        for (const auto& [a, b] : {std::pair{in[std::size_t(i)].occupied, out[std::size_t(i)].occupied},
+                                   std::pair{in[std::size_t(i)].unknown, out[std::size_t(i)].unknown}}) {
+          ASSERT_EQ(a.x, b.x) << max_distance << " cell " << i;
+          ASSERT_EQ(a.y, b.y) << max_distance << " cell " << i;
+          ASSERT_EQ(a.z, b.z) << max_distance << " cell " << i;
+        }
+        const detail::CellSites one = codes.cell(cells.data(), i);
+        ASSERT_EQ(one.occupied.x, in[std::size_t(i)].occupied.x);
+        ASSERT_EQ(one.unknown.z, in[std::size_t(i)].unknown.z);
+      }
+    }
+  }
+}
+
+TEST(DistanceField, StoresFourBytesACellWithASmallWindow) {
+  // docs/benchmarks.md ("Distance field", memory): within a window whose
+  // offsets fit 16-bit codes a stored brick costs its sites, its bounds and
+  // 4 bytes a cell, under 4.5 bytes a cell with the table's slots.
+  // Against an empty map's field (no bricks) with the same options, so
+  // that the fixed part (the code tables, about 0.3 MB) drops out; 6.3
+  // bytes a cell before the codes.
+  const OccupancyMap map = random_map(15, true);
+  const OccupancyMap empty(kResolution);
+  DistanceFieldOptions options;
+  options.max_distance = 0.9;
+  const DistanceField field(map, options);
+  const DistanceField none(empty, options);
+  ASSERT_EQ(none.stats().bricks, 0u);
+  const DistanceFieldStats stats = field.stats();
+  ASSERT_GT(stats.bricks, 100u);
+  const double per_cell = double(stats.memory_bytes - none.stats().memory_bytes) / double(stats.bricks * detail::kBrickVolume);
+  EXPECT_LT(per_cell, 4.5);
 }
 
 TEST(DistanceField, MatchesBruteForceInsideABox) {

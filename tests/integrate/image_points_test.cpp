@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "core/thread_pool.hpp"
 #include "core/voxel_codes.hpp"
 #include "integrate/image_points.hpp"
+#include "integrate/image_row_codes.hpp"
 #include "umbra/core/morton.hpp"
 
 namespace umbra {
@@ -123,6 +125,74 @@ TEST(ImagePoints, AnyNumberOfWorkersGivesBackProjectsPointsAndTheirVoxels) {
         EXPECT_TRUE(voxels == expected_voxels);
         EXPECT_EQ(found.out_of_bounds(), outside);
         EXPECT_EQ(found.non_finite(), 0u);
+      }
+    }
+  }
+}
+
+// The front end's row codes (image_row_codes, AVX2 where the CPU has it, and
+// its portable definition) are the codes of back_project's points, pixel by
+// pixel, and kNoReadingCode exactly where a pixel has no reading: metre
+// depths with NaN, infinities, negatives and zeros, raw depths with zeros,
+// points outside the map, rows whose width is no multiple of four. On a grid
+// of 0.1 mm, 70 m from the origin, a voxel holds a dozen float coordinates,
+// so a point rounded differently (float arithmetic instead of double, say)
+// changes its code.
+TEST(ImagePoints, RowCodesAreTheCodesOfBackProjectedPoints) {
+  const PinholeCamera camera{60.0, 55.0, 48.3, 30.1};
+  for (const bool fine : {false, true}) {
+    const Grid grid = fine ? Grid(1e-4, 21) : Grid(0.02, 16);  // +- 104 m; +- 655 m
+    const Pose pose = Pose::from_translation_quaternion(fine ? 70.0 : 0.5, fine ? -60.0 : -1.25, fine ? 50.0 : 0.75,
+                                                        0.5, -0.5, 0.5, -0.5);
+    for (const int width : {97, 4, 3}) {
+      Frame f = random_frame(11, width, 23);
+      std::mt19937 rng(3);
+      for (float& z : f.metres) {
+        if (rng() % 17 == 0) z = std::numeric_limits<float>::quiet_NaN();
+        if (rng() % 19 == 0) z = std::numeric_limits<float>::infinity();
+        if (rng() % 23 == 0) z = -z;
+      }
+      f.metres[1] = 4000.0f;  // outside the map, in the narrow images too
+      for (const bool raw : {false, true}) {
+        SCOPED_TRACE(std::string(raw ? "raw" : "metres") + ", width " + std::to_string(width) +
+                     (fine ? ", fine grid" : ""));
+        const DepthImage image = raw ? DepthImage::raw(f.raw, f.width, f.height, 5000.0)
+                                     : DepthImage::metres(f.metres, f.width, f.height);
+        std::vector<Vec3f> points;
+        std::vector<std::uint32_t> pixels;
+        back_project(image, camera, pose, points, &pixels);
+        std::vector<std::uint64_t> expected(image.pixel_count(), kNoReadingCode);
+        std::vector<std::uint64_t> point_codes(points.size());
+        voxel_codes(grid, points, point_codes.data());
+        for (std::size_t i = 0; i < points.size(); ++i) expected[pixels[i]] = point_codes[i];
+        if (!raw) {
+          ASSERT_GT(std::count(expected.begin(), expected.end(), kOutsideCode), 0);  // raw depths stop at 13 m
+        }
+        ASSERT_GT(std::count_if(expected.begin(), expected.end(), [](std::uint64_t c) { return c < kOutsideCode; }),
+                  f.width * 10);
+        ASSERT_GT(std::count(expected.begin(), expected.end(), kNoReadingCode), 0);
+        std::vector<double> column_factor;
+        for (int u = 0; u < f.width; ++u) column_factor.push_back((u - camera.cx) / camera.fx);
+        std::vector<Vec3f> scratch(static_cast<std::size_t>(f.width));
+        std::vector<std::uint64_t> plain(image.pixel_count());
+        std::vector<std::uint64_t> fast(image.pixel_count());
+        std::vector<std::uint64_t> vector_lanes(image.pixel_count());
+        for (int v = 0; v < f.height; ++v) {
+          const double row_factor = (v - camera.cy) / camera.fy;
+          const std::size_t row = std::size_t(v) * std::size_t(f.width);
+          detail::image_row_codes_plain(grid, image, column_factor.data(), row_factor, pose, v, scratch.data(),
+                                        plain.data() + row);
+          image_row_codes(grid, image, column_factor.data(), row_factor, pose, v, scratch.data(), fast.data() + row);
+          if (detail::image_row_codes_avx2_available()) {
+            detail::image_row_codes_avx2(grid, image, column_factor.data(), row_factor, pose, v,
+                                         vector_lanes.data() + row);
+          }
+        }
+        EXPECT_TRUE(plain == expected);
+        EXPECT_TRUE(fast == expected);
+        if (detail::image_row_codes_avx2_available()) {
+          EXPECT_TRUE(vector_lanes == expected);
+        }
       }
     }
   }
