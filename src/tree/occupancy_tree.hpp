@@ -523,6 +523,9 @@ class OccupancyTree {
   std::string check_marks(int depth, std::uint32_t group, std::array<std::int64_t, 2>& event) const;
   /// Drops a node's color (no-op without color).
   void forget_color(int depth, std::uint32_t group, unsigned slot);
+  /// Decays leaf `slot` of leaf group `group` by `step` (its color dropped at 0);
+  /// true when its state (occupied, free, unknown) changed.
+  bool decay_leaf(std::uint32_t group, unsigned slot, DecayStep step);
   /// forget_outside() below node (depth, group, slot) whose first voxel is
   /// `code`; true when something known below was forgotten.
   bool forget_outside_below(int depth, std::uint32_t group, unsigned slot, std::uint64_t code, const KeyBox& keep,

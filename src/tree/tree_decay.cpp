@@ -192,21 +192,25 @@ void OccupancyTree::decay_eagerly(DecayStep step, const std::optional<KeyBox>& r
   decay_below(depth_levels_, 0, 0, 0, step, region, changes, change_depth);
 }
 
+bool OccupancyTree::decay_leaf(std::uint32_t group, unsigned slot, DecayStep step) {
+  float& stored = leaves_[group].log_odds[slot];
+  const float value = stored;
+  const float next = decayed(value, step);
+  if (next == value) return false;
+  stored = next;
+  if (next == 0.0f) forget_color(0, group, slot);
+  return thresholds_.classify(value) != thresholds_.classify(next);
+}
+
 bool OccupancyTree::decay_group(int depth, std::uint32_t group, std::uint64_t code,
                                 std::vector<DecayChange>* changes, int change_depth) {
   const std::uint32_t now = decay_now();
   ++decay_groups_walked_;
   bool changed = false;
   if (depth == 0) {
-    LeafGroup& leaves = leaves_[group];
     const DecayStep owed = owed_step(mark(0, group).step);
     for (unsigned i = 0; i < 8; ++i) {
-      const float value = leaves.log_odds[i];
-      const float next = decayed(value, owed);
-      if (next == value) continue;
-      leaves.log_odds[i] = next;
-      if (next == 0.0f) forget_color(0, group, i);
-      if (thresholds_.classify(value) != thresholds_.classify(next)) {
+      if (decay_leaf(group, i, owed)) {
         changed = true;
         if (change_depth == 0 && changes != nullptr) changes->push_back({code | i, 0});
       }
@@ -368,16 +372,10 @@ bool OccupancyTree::decay_below(int depth, std::uint32_t group, unsigned slot, s
   const std::uint32_t child = inner_[depth][group].child[slot];
   bool changed = false;
   if (depth == 1) {
-    LeafGroup& leaves = leaves_[child];
     for (unsigned i = 0; i < 8; ++i) {
       const std::uint64_t leaf_code = code | i;
       if (where == Overlap::partial && overlap(leaf_code, 0, region) == Overlap::outside) continue;
-      const float value = leaves.log_odds[i];
-      const float next = decayed(value, step);
-      if (next == value) continue;
-      leaves.log_odds[i] = next;
-      if (next == 0.0f) forget_color(0, child, i);
-      if (thresholds_.classify(value) != thresholds_.classify(next)) {
+      if (decay_leaf(child, i, step)) {
         changed = true;
         if (change_depth == 0 && changes != nullptr) changes->push_back({leaf_code, 0});
       }
