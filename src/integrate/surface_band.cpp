@@ -374,8 +374,8 @@ std::uint64_t apply_surface_band_plain(const ProjectiveRule& rule, Key first, st
     bool crossed = false;
     for (std::size_t pixel = 0; pixel + 1 < frame.pixel_rays.size() && !crossed; ++pixel) {
       if (!(frame.depth[pixel] > before)) continue;
-      for (std::uint32_t k = frame.pixel_rays[pixel]; k < frame.pixel_rays[pixel + 1] && !crossed; ++k) {
-        const Vec3d end(frame.ray_ends[frame.ray_order.empty() ? k : frame.ray_order[k]]);
+      for (std::uint32_t ray = frame.pixel_rays[pixel]; ray < frame.pixel_rays[pixel + 1] && !crossed; ++ray) {
+        const Vec3d end(frame.ray_ends[frame.ray_order.empty() ? ray : frame.ray_order[ray]]);
         crossed = detail::segment_crosses(frame.origin, end, rule.max_range, cube.lo, cube.hi);
       }
     }
