@@ -130,6 +130,49 @@ TEST(ImagePoints, AnyNumberOfWorkersGivesBackProjectsPointsAndTheirVoxels) {
   }
 }
 
+// A code range's voxels (a walk task's subtree, or any range) are the
+// image's voxels in that range, in code order, each once, whatever the number
+// of bands merged: up to 2 a worker, and past the 64 that for_each_voxel_in
+// keeps on the stack (a tall image on 40 workers: 80 bands).
+TEST(ImagePoints, TheVoxelsOfACodeRangeAreTheImagesVoxelsInIt) {
+  const Grid grid(0.1, 15);
+  const PinholeCamera camera{60.0, 55.0, 48.3, 30.1};
+  const Pose pose = Pose::from_translation_quaternion(0.5, -1.25, 0.75, 0.5, -0.5, 0.5, -0.5);
+  for (const Frame& f : {random_frame(5), random_frame(8, 23, 1400)}) {
+    const DepthImage image = DepthImage::metres(f.metres, f.width, f.height);
+    std::vector<std::uint64_t> all;
+    ImagePoints one_band;
+    one_band.build(grid, image, camera, pose, {}, nullptr, [] {}, /*voxels_only=*/true);
+    one_band.for_each_voxel([&](std::uint64_t code) { all.push_back(code); });
+    ASSERT_GT(all.size(), 500u);
+    ASSERT_TRUE(std::is_sorted(all.begin(), all.end()) && std::adjacent_find(all.begin(), all.end()) == all.end());
+    // Subtrees of several depths around the image's voxels, and ranges between any two codes.
+    std::mt19937 rng(17);
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> ranges{{0, ~std::uint64_t{0}}, {all[0], all[0] + 1}};
+    for (int i = 0; i < 60; ++i) {
+      const std::uint64_t code = all[rng() % all.size()];
+      const int depth = static_cast<int>(rng() % 8);
+      const std::uint64_t size = std::uint64_t{1} << (3 * depth);
+      ranges.emplace_back(code & ~(size - 1), (code & ~(size - 1)) + size);
+      const std::uint64_t other = all[rng() % all.size()] + rng() % 3;
+      ranges.emplace_back(std::min(code, other), std::max(code, other));
+    }
+    for (const unsigned threads : {2u, 3u, 8u, 40u}) {
+      SCOPED_TRACE("height " + std::to_string(f.height) + ", threads " + std::to_string(threads));
+      ThreadPool pool(threads);
+      ImagePoints banded;
+      banded.build(grid, image, camera, pose, {}, &pool, [] {}, /*voxels_only=*/true);
+      for (const auto& [first, end] : ranges) {
+        const std::vector<std::uint64_t> expected(std::lower_bound(all.begin(), all.end(), first),
+                                                  std::lower_bound(all.begin(), all.end(), end));
+        std::vector<std::uint64_t> found;
+        banded.for_each_voxel_in(first, end, [&](std::uint64_t code) { found.push_back(code); });
+        ASSERT_EQ(found, expected) << "codes [" << first << ", " << end << ")";
+      }
+    }
+  }
+}
+
 // The front end's row codes (image_row_codes, AVX2 where the CPU has it, and
 // its portable definition) are the codes of back_project's points, pixel by
 // pixel, and kNoReadingCode exactly where a pixel has no reading: metre
