@@ -150,5 +150,34 @@ TEST(SpillFile, ADamagedFileIsNamedWithTheByteOffset) {
   EXPECT_NE(load_error(empty).find("holds no pieces"), std::string::npos) << load_error(empty);
 }
 
+TEST(SpillFile, ALastPieceCutShortNamesWhereTheWholePiecesEnd) {
+  // A crash in the middle of an append leaves part of the last piece at the
+  // end (pieces are only appended): the error says where the whole ones end,
+  // and the file cut there holds them all.
+  const auto folder = test::scratch_dir();
+  const auto path = folder / "run.umbs";
+  std::vector<OccupancyMap> pieces;
+  (void)drive(path, pieces);
+  const std::vector<char> good = read_bytes(path);
+  std::uint64_t last = 0;  // where the last piece starts
+  for (std::uint64_t at = 0; at < good.size();) {
+    last = at;
+    std::uint64_t size = 0;
+    for (int i = 0; i < 8; ++i) size |= std::uint64_t{static_cast<unsigned char>(good[at + 8 + i])} << (8 * i);
+    at += 16 + size;
+  }
+  for (const std::uint64_t cut : {last + 5, last + 20, static_cast<std::uint64_t>(good.size() - 1)}) {
+    const auto torn = folder / "torn.umbs";
+    write_bytes(torn, std::vector<char>(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(cut)));
+    const std::string message = load_error(torn);
+    EXPECT_NE(message.find("the " + std::to_string(pieces.size() - 1) + " whole piece(s) before it end at byte " +
+                           std::to_string(last) + ": cut the file to " + std::to_string(last) + " bytes"),
+              std::string::npos)
+        << "cut at " << cut << ": " << message;
+    std::filesystem::resize_file(torn, last);
+    EXPECT_EQ(for_each_spill_piece(torn, [](OccupancyMap&&) {}), pieces.size() - 1) << "cut at " << cut;
+  }
+}
+
 }  // namespace
 }  // namespace umbra
