@@ -8,21 +8,19 @@
 // sized, so a pool for the few groups near the root costs a few hundred
 // bytes, not a whole block; later blocks are full sized from the start. Released groups go to a free list and are handed out again.
 //
-// Attached records (optional, chosen at construction: a node group's
-// colors): a pool built with_attached keeps an `Attached` record per group
-// in blocks parallel to the groups' blocks, grown and copied with them, so
-// attached(i) belongs to group i by construction. There is no second
-// allocation order or free list that could drift from the groups' (the
-// OccupancyTree's colors were once a pool of their own, allocated in
-// lockstep, which a parallel phase cannot keep). A pool without them holds
-// an empty block table for them and nothing else.
-//
-// Marks (optional, switched on later: a node group's decay mark): a second
-// kind of record per group, in blocks parallel to the groups' like the
-// attached ones, but allocated only once attach_marks() is called (a map
-// starts decaying), so a pool whose tree never decays pays nothing for them.
-// From then on every block of groups has its block of marks: grown, copied,
-// reserved for a parallel phase and freed with them.
+// Side records: optional records kept one per group beside the groups, in
+// blocks parallel to the groups' blocks (SideRecords): grown, copied,
+// reserved for a parallel phase and freed with them, so record i belongs to
+// group i by construction. There is no second allocation order or free list
+// that could drift from the groups' (the OccupancyTree's colors were once a
+// pool of their own, allocated in lockstep, which a parallel phase cannot
+// keep). A pool has two kinds, the same mechanism used twice:
+// - attached records (a node group's colors), chosen at construction
+//   (with_attached);
+// - marks (a node group's decay mark), switched on later by attach_marks()
+//   (a map starts decaying), so a pool whose tree never decays pays nothing
+//   for them.
+// A kind that is off holds an empty block table and nothing else.
 //
 // Large pools on huge pages. Once a pool holds kHugePageAfterBytes, its
 // new blocks are carved from 2 MiB chunks that the kernel is asked to back
@@ -125,23 +123,21 @@ class GroupPool {
 
   GroupPool() = default;
   /// with_attached: keep an Attached record per group (see the file comment).
-  explicit GroupPool(bool with_attached) : with_attached_(with_attached) {}
+  explicit GroupPool(bool with_attached) { attached_.on = with_attached; }
   GroupPool(GroupPool&&) noexcept = default;
   GroupPool& operator=(GroupPool&&) noexcept = default;
   GroupPool(const GroupPool& other) { *this = other; }
   GroupPool& operator=(const GroupPool& other) {
     if (this == &other) return *this;
     UMBRA_ASSERT(other.slabs_.empty());
-    with_attached_ = other.with_attached_;
-    with_marks_ = other.with_marks_;
     blocks_.clear();
-    attached_blocks_.clear();
-    mark_blocks_.clear();
+    attached_.blocks.clear();
+    marks_.blocks.clear();
     chunks_.clear();
     block_bytes_ = 0;
     copy_blocks(other.blocks_, other, blocks_);
-    copy_blocks(other.attached_blocks_, other, attached_blocks_);
-    copy_blocks(other.mark_blocks_, other, mark_blocks_);
+    copy_side(other.attached_, other, attached_);
+    copy_side(other.marks_, other, marks_);
     last_capacity_ = other.last_capacity_;
     high_water_ = other.high_water_;
     free_ = other.free_;
@@ -159,40 +155,28 @@ class GroupPool {
     return blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
   }
   /// The record attached to group `index` (only for a pool with_attached).
-  Attached& attached(std::uint32_t index) {
-    UMBRA_ASSERT(with_attached_ && (!slabs_.empty() || index < high_water_));
-    return attached_blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
-  }
-  const Attached& attached(std::uint32_t index) const {
-    UMBRA_ASSERT(with_attached_ && (!slabs_.empty() || index < high_water_));
-    return attached_blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
-  }
-  [[nodiscard]] bool has_attached() const { return with_attached_; }
+  Attached& attached(std::uint32_t index) { return side_record(attached_, index); }
+  const Attached& attached(std::uint32_t index) const { return side_record(attached_, index); }
+  [[nodiscard]] bool has_attached() const { return attached_.on; }
 
   /// The mark of group `index` (only once attach_marks() was called).
-  Mark& mark(std::uint32_t index) {
-    UMBRA_ASSERT(with_marks_ && (!slabs_.empty() || (index < high_water_ && index >> kBlockBits < mark_blocks_.size())));
-    return mark_blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
-  }
-  const Mark& mark(std::uint32_t index) const {
-    UMBRA_ASSERT(with_marks_ && (!slabs_.empty() || (index < high_water_ && index >> kBlockBits < mark_blocks_.size())));
-    return mark_blocks_.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
-  }
-  [[nodiscard]] bool has_marks() const { return with_marks_; }
+  Mark& mark(std::uint32_t index) { return side_record(marks_, index); }
+  const Mark& mark(std::uint32_t index) const { return side_record(marks_, index); }
+  [[nodiscard]] bool has_marks() const { return marks_.on; }
   /// From now on every group has a mark: `initial` for each one there is
   /// (in use or free), unspecified for the groups allocated later (the
   /// caller fills them, as it fills the groups). Nothing when it has them.
   void attach_marks(const Mark& initial) {
     UMBRA_ASSERT(slabs_.empty());
-    if (with_marks_) return;
+    if (marks_.on) return;
     std::vector<Block<Mark>> marks;
     marks.reserve(blocks_.size());
     for (std::size_t b = 0; b < blocks_.size(); ++b) {
       marks.push_back(new_block<Mark>(block_capacity(b), false));
       std::fill_n(marks.back().get(), block_capacity(b), initial);
     }
-    mark_blocks_ = std::move(marks);
-    with_marks_ = true;
+    marks_.blocks = std::move(marks);
+    marks_.on = true;
   }
 
   /// Index of a group whose contents are unspecified; the caller fills it.
@@ -227,11 +211,12 @@ class GroupPool {
     }
     const std::size_t table = blocks_.size() + max_new_groups / kBlockGroups + workers + 1;
     blocks_.reserve(table);
-    if (with_attached_) attached_blocks_.reserve(table);
-    if (with_marks_) mark_blocks_.reserve(table);
     table_limit_ = blocks_.capacity();
-    if (with_attached_) table_limit_ = std::min(table_limit_, attached_blocks_.capacity());
-    if (with_marks_) table_limit_ = std::min(table_limit_, mark_blocks_.capacity());
+    for_each_side([&](auto& side) {
+      if (!side.on) return;
+      side.blocks.reserve(table);
+      table_limit_ = std::min(table_limit_, side.blocks.capacity());
+    });
     slabs_.resize(workers);
     tail_ = high_water_;
     for (std::size_t i = 0; i < free_.size(); ++i) slabs_[i % workers].released.push_back(free_[i]);
@@ -281,8 +266,7 @@ class GroupPool {
   /// Releases every group and all memory.
   void clear() {
     std::vector<Block<Group>>().swap(blocks_);
-    std::vector<Block<Attached>>().swap(attached_blocks_);
-    std::vector<Block<Mark>>().swap(mark_blocks_);  // with_marks_ stays: new blocks get marks
+    for_each_side([](auto& side) { decltype(side.blocks)().swap(side.blocks); });  // `on` stays: new blocks get records
     chunks_.clear();
     block_bytes_ = 0;
     std::vector<std::uint32_t>().swap(free_);
@@ -297,9 +281,9 @@ class GroupPool {
   [[nodiscard]] std::size_t huge_page_bytes() const { return chunks_.memory_bytes(); }
 
   [[nodiscard]] std::size_t memory_bytes() const {
-    return block_bytes_ + chunks_.memory_bytes() + blocks_.capacity() * sizeof(blocks_[0]) +
-           attached_blocks_.capacity() * sizeof(attached_blocks_[0]) + mark_blocks_.capacity() * sizeof(mark_blocks_[0]) +
-           free_.capacity() * sizeof(std::uint32_t);
+    std::size_t tables = blocks_.capacity() * sizeof(blocks_[0]);
+    for_each_side([&](const auto& side) { tables += side.blocks.capacity() * sizeof(side.blocks[0]); });
+    return block_bytes_ + chunks_.memory_bytes() + tables + free_.capacity() * sizeof(std::uint32_t);
   }
 
  private:
@@ -362,14 +346,15 @@ class GroupPool {
   void add_block(std::uint32_t capacity) {
     const bool carved = capacity == kBlockGroups && block_bytes_ + chunks_.memory_bytes() >= kHugePageAfterBytes;
     Block<Group> groups = new_block<Group>(capacity, carved);
-    Block<Attached> attached = with_attached_ ? new_block<Attached>(capacity, carved) : Block<Attached>();
-    Block<Mark> marks = with_marks_ ? new_block<Mark>(capacity, carved) : Block<Mark>();
+    Block<Attached> attached = new_side_block(attached_, capacity, carved);
+    Block<Mark> marks = new_side_block(marks_, capacity, carved);
     reserve_one_more(blocks_);
-    if (with_attached_) reserve_one_more(attached_blocks_);
-    if (with_marks_) reserve_one_more(mark_blocks_);
+    for_each_side([](auto& side) {
+      if (side.on) reserve_one_more(side.blocks);
+    });
     blocks_.push_back(std::move(groups));
-    if (with_attached_) attached_blocks_.push_back(std::move(attached));
-    if (with_marks_) mark_blocks_.push_back(std::move(marks));
+    attached_.add(std::move(attached));
+    marks_.add(std::move(marks));
     last_capacity_ = capacity;
   }
 
@@ -383,10 +368,10 @@ class GroupPool {
   void grow_last_block() {
     const std::uint32_t grown = last_capacity_ * 2;
     Block<Group> groups = grown_copy(blocks_.back(), last_capacity_, grown);
-    Block<Attached> attached = with_attached_ ? grown_copy(attached_blocks_.back(), last_capacity_, grown) : Block<Attached>();
-    Block<Mark> marks = with_marks_ ? grown_copy(mark_blocks_.back(), last_capacity_, grown) : Block<Mark>();
-    if (with_attached_) attached_blocks_.back() = std::move(attached);
-    if (with_marks_) mark_blocks_.back() = std::move(marks);
+    Block<Attached> attached = grown_side_block(attached_, grown);
+    Block<Mark> marks = grown_side_block(marks_, grown);
+    attached_.replace_last(std::move(attached));
+    marks_.replace_last(std::move(marks));
     blocks_.back() = std::move(groups);
     last_capacity_ = grown;
   }
@@ -412,6 +397,58 @@ class GroupPool {
     }
   }
 
+  /// One kind of side record (the file comment): while `on`, one block of
+  /// records per block of groups, of the same capacity.
+  template <typename T>
+  struct SideRecords {
+    bool on = false;
+    std::vector<Block<T>> blocks;  // parallel to blocks_ while on, else empty
+
+    void add(Block<T> block) {
+      if (on) blocks.push_back(std::move(block));
+    }
+    void replace_last(Block<T> block) {
+      if (on) blocks.back() = std::move(block);
+    }
+  };
+
+  /// The record of group `index` in `side` (the public accessors make it const where the pool is).
+  template <typename T>
+  T& side_record(const SideRecords<T>& side, std::uint32_t index) const {
+    // Only the block pointer is read, as in operator[].
+    UMBRA_ASSERT(side.on && (!slabs_.empty() || (index < high_water_ && index >> kBlockBits < side.blocks.size())));
+    return side.blocks.data()[index >> kBlockBits][index & (kBlockGroups - 1)];
+  }
+
+  /// `f` on each kind of side record, the attached ones then the marks.
+  template <typename F>
+  void for_each_side(F&& f) {
+    f(attached_);
+    f(marks_);
+  }
+  template <typename F>
+  void for_each_side(F&& f) const {
+    f(attached_);
+    f(marks_);
+  }
+
+  /// A new block of `side`'s records for a new block of groups (none while it is off).
+  template <typename T>
+  Block<T> new_side_block(const SideRecords<T>& side, std::uint32_t capacity, bool carved) {
+    return side.on ? new_block<T>(capacity, carved) : Block<T>();
+  }
+  /// The last block of `side` grown with the groups' (none while it is off).
+  template <typename T>
+  Block<T> grown_side_block(const SideRecords<T>& side, std::uint32_t grown) {
+    return side.on ? grown_copy(side.blocks.back(), last_capacity_, grown) : Block<T>();
+  }
+  /// `from` (a side of `other`) copied into `to`.
+  template <typename T>
+  void copy_side(const SideRecords<T>& from, const GroupPool& other, SideRecords<T>& to) {
+    to.on = from.on;
+    copy_blocks(from.blocks, other, to.blocks);
+  }
+
   /// One worker's share of a concurrent phase: the chunk it hands out from.
   /// A cache line each: the workers' slabs lie side by side and are written
   /// on every allocation.
@@ -421,11 +458,9 @@ class GroupPool {
     std::vector<std::uint32_t> released;
   };
 
-  bool with_attached_ = false;
   std::vector<Block<Group>> blocks_;
-  std::vector<Block<Attached>> attached_blocks_;  // parallel to blocks_ (with_attached_), else empty
-  bool with_marks_ = false;
-  std::vector<Block<Mark>> mark_blocks_;  // parallel to blocks_ (with_marks_), else empty
+  SideRecords<Attached> attached_;  // colors, chosen at construction
+  SideRecords<Mark> marks_;         // decay marks, from attach_marks() on
   detail::HugePageChunks chunks_;  // holds the carved blocks (their deleters never touch it)
   std::size_t block_bytes_ = 0;    // bytes of the blocks from new[]
   std::uint32_t last_capacity_ = 0;  // groups in the last block

@@ -511,6 +511,8 @@ class OccupancyTree {
   void lower_events(std::array<std::uint32_t, 2>& event, float value) const;
   /// The exact events of a leaf group's values (when decay is tracked).
   void set_leaf_events(std::uint32_t group);
+  /// The events of eight values: lower_events of each, from kNoEvent.
+  [[nodiscard]] std::array<std::uint32_t, 2> events_of(const std::array<float, 8>& values) const;
   /// The lazy step's walk into group `group` of `depth` (due), whose first
   /// voxel is `code`; true when some voxel below changed state.
   bool decay_group(int depth, std::uint32_t group, std::uint64_t code, std::vector<DecayChange>* changes,

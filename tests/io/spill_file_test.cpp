@@ -115,15 +115,25 @@ std::string load_error(const std::filesystem::path& path) {
   return "no error";
 }
 
+/// The bytes of a spill file of a short drive (in `folder`), its pieces in `pieces`.
+std::vector<char> driven_spill_bytes(const std::filesystem::path& folder, std::vector<OccupancyMap>& pieces) {
+  const auto path = folder / "run.umbs";
+  (void)drive(path, pieces);
+  return read_bytes(path);
+}
+
+/// The size N in the header of the piece that starts at byte `at`.
+std::uint64_t piece_size_at(const std::vector<char>& bytes, std::uint64_t at) {
+  std::uint64_t size = 0;
+  for (int i = 0; i < 8; ++i) size |= std::uint64_t{static_cast<unsigned char>(bytes[at + 8 + i])} << (8 * i);
+  return size;
+}
+
 TEST(SpillFile, ADamagedFileIsNamedWithTheByteOffset) {
   const auto folder = test::scratch_dir();
-  const auto path = folder / "run.umbs";
   std::vector<OccupancyMap> pieces;
-  (void)drive(path, pieces);
-  const std::vector<char> good = read_bytes(path);
-  std::uint64_t first_size = 0;
-  for (int i = 0; i < 8; ++i) first_size |= std::uint64_t{static_cast<unsigned char>(good[8 + i])} << (8 * i);
-  const std::uint64_t second = 16 + first_size;
+  const std::vector<char> good = driven_spill_bytes(folder, pieces);
+  const std::uint64_t second = 16 + piece_size_at(good, 0);
 
   const auto truncated = folder / "truncated.umbs";
   write_bytes(truncated, std::vector<char>(good.begin(), good.end() - 10));
@@ -148,6 +158,28 @@ TEST(SpillFile, ADamagedFileIsNamedWithTheByteOffset) {
   const auto empty = folder / "empty.umbs";
   write_bytes(empty, {});
   EXPECT_NE(load_error(empty).find("holds no pieces"), std::string::npos) << load_error(empty);
+}
+
+TEST(SpillFile, ALastPieceCutShortNamesWhereTheWholePiecesEnd) {
+  // A crash in the middle of an append leaves part of the last piece at the
+  // end (pieces are only appended): the error says where the whole ones end,
+  // and the file cut there holds them all.
+  const auto folder = test::scratch_dir();
+  std::vector<OccupancyMap> pieces;
+  const std::vector<char> good = driven_spill_bytes(folder, pieces);
+  std::uint64_t last = 0;  // where the last piece starts
+  for (std::uint64_t at = 0; at < good.size(); at += 16 + piece_size_at(good, at)) last = at;
+  for (const std::uint64_t cut : {last + 5, last + 20, static_cast<std::uint64_t>(good.size() - 1)}) {
+    const auto torn = folder / "torn.umbs";
+    write_bytes(torn, std::vector<char>(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(cut)));
+    const std::string message = load_error(torn);
+    EXPECT_NE(message.find("the " + std::to_string(pieces.size() - 1) + " whole piece(s) before it end at byte " +
+                           std::to_string(last) + ": cut the file to " + std::to_string(last) + " bytes"),
+              std::string::npos)
+        << "cut at " << cut << ": " << message;
+    std::filesystem::resize_file(torn, last);
+    EXPECT_EQ(for_each_spill_piece(torn, [](OccupancyMap&&) {}), pieces.size() - 1) << "cut at " << cut;
+  }
 }
 
 }  // namespace

@@ -172,6 +172,31 @@ TEST(GroupPool, ExceedingTheBoundOfAParallelPhaseIsReported) {
   pool.end_concurrent();
 }
 
+/// The side-record tests' middle part: releases the first 300 groups of
+/// `live`, then two workers take 1500 groups each in one concurrent phase
+/// and `fill(index, worker)` each (its group and its record); the new groups
+/// join `live`.
+template <typename TestPool, typename Fill>
+void release_then_fill_concurrently(TestPool& pool, std::vector<std::uint32_t>& live, Fill fill) {
+  for (std::size_t i = 0; i < 300; ++i) pool.release(live[i]);
+  live.erase(live.begin(), live.begin() + 300);
+  pool.begin_concurrent(2, 3000);
+  std::vector<std::vector<std::uint32_t>> taken(2);
+  auto work = [&](unsigned worker) {
+    for (std::uint32_t i = 0; i < 1500; ++i) {
+      const std::uint32_t index = pool.allocate(worker);
+      fill(index, worker);
+      taken[worker].push_back(index);
+    }
+  };
+  std::thread first(work, 0u);
+  std::thread second(work, 1u);
+  first.join();
+  second.join();
+  pool.end_concurrent();
+  for (const auto& t : taken) live.insert(live.end(), t.begin(), t.end());
+}
+
 TEST(GroupPool, AttachedRecordsStayWithTheirGroups) {
   struct Tag {
     std::uint64_t index;
@@ -199,24 +224,10 @@ TEST(GroupPool, AttachedRecordsStayWithTheirGroups) {
   EXPECT_EQ(pool.memory_bytes() - plain.memory_bytes(),
             2 * TaggedPool::kBlockGroups * sizeof(Tag) + 2 * sizeof(std::unique_ptr<Tag[], detail::BlockDeleter<Tag>>))
       << "two blocks of records and their two table entries";
-  for (std::size_t i = 0; i < 300; ++i) pool.release(live[i]);
-  live.erase(live.begin(), live.begin() + 300);
-  pool.begin_concurrent(2, 3000);
-  std::vector<std::vector<std::uint32_t>> taken(2);
-  auto work = [&](unsigned worker) {
-    for (std::uint32_t i = 0; i < 1500; ++i) {
-      const std::uint32_t index = pool.allocate(worker);
-      pool[index] = {worker + 1, index};
-      pool.attached(index) = {index, ~std::uint64_t{index}};
-      taken[worker].push_back(index);
-    }
-  };
-  std::thread first(work, 0u);
-  std::thread second(work, 1u);
-  first.join();
-  second.join();
-  pool.end_concurrent();
-  for (const auto& t : taken) live.insert(live.end(), t.begin(), t.end());
+  release_then_fill_concurrently(pool, live, [&](std::uint32_t index, unsigned worker) {
+    pool[index] = {worker + 1, index};
+    pool.attached(index) = {index, ~std::uint64_t{index}};
+  });
   const auto expect_tags = [&](const TaggedPool& p) {
     for (const std::uint32_t index : live) {
       ASSERT_EQ(p[index].index, index);
@@ -257,24 +268,10 @@ TEST(GroupPool, MarksAttachedLaterStayWithTheirGroups) {
     tag(index);
     live.push_back(index);
   }
-  for (std::size_t i = 0; i < 300; ++i) pool.release(live[i]);
-  live.erase(live.begin(), live.begin() + 300);
-  pool.begin_concurrent(2, 3000);
-  std::vector<std::vector<std::uint32_t>> taken(2);
-  auto work = [&](unsigned worker) {
-    for (std::uint32_t i = 0; i < 1500; ++i) {
-      const std::uint32_t index = pool.allocate(worker);
-      pool[index] = {worker + 1, index};
-      pool.mark(index) = ~std::uint64_t{index};
-      taken[worker].push_back(index);
-    }
-  };
-  std::thread first(work, 0u);
-  std::thread second(work, 1u);
-  first.join();
-  second.join();
-  pool.end_concurrent();
-  for (const auto& t : taken) live.insert(live.end(), t.begin(), t.end());
+  release_then_fill_concurrently(pool, live, [&](std::uint32_t index, unsigned worker) {
+    pool[index] = {worker + 1, index};
+    pool.mark(index) = ~std::uint64_t{index};
+  });
   const auto expect_tags = [&](const MarkedPool& p) {
     for (const std::uint32_t index : live) {
       ASSERT_EQ(p[index].index, index);

@@ -9,11 +9,14 @@
 //   16 .. 16+N   a complete .umb map file (map_file.hpp) holding the voxels
 //                that left the box in one move, the rest unknown
 //
-// append_spill_piece adds one piece with one write at the end of the file;
-// if the write fails (disk full, ...) the file is cut back to its old size,
-// so the file never holds part of a piece because of an error (a process
-// killed in the middle of the write can leave a part of its last piece:
-// load_spill then names it). The file is not synced to disk per piece.
+// append_spill_piece adds one piece with one write at the end of the file
+// and syncs it to disk (fdatasync; for a new file its folder too) before it
+// returns; if the write or the sync fails (disk full, ...) the file is cut
+// back to its old size, so the file never holds part of a piece because of
+// an error. Pieces are only appended, so a crash or a process killed in the
+// middle of an append can leave part of the last piece at most, never
+// damage an earlier one: load_spill then names the byte where the whole
+// pieces end, and a file cut there holds them all.
 //
 // load_spill reads every piece and adds them up with OccupancyMap::merge,
 // so a voxel that left the box, came back and left again gets the sum of

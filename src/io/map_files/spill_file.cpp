@@ -1,5 +1,6 @@
 // Spill files (umbra/io/spill_file.hpp): pieces of .umb bytes behind a
-// magic and a length, appended with one write each, read back one by one.
+// magic and a length, appended with one write each and synced to disk
+// before the append returns, read back one by one.
 #include "umbra/io/spill_file.hpp"
 
 #include <fcntl.h>
@@ -40,6 +41,30 @@ class Descriptor {
   int fd_;
 };
 
+/// Cuts `file` back to `end` bytes after a failed append and throws `what`
+/// (or says that the cut failed too).
+[[noreturn]] void cut_back_and_throw(int file, off_t end, const std::string& name, const std::string& what) {
+  if (::ftruncate(file, end) != 0) {
+    throw std::runtime_error("cannot append to spill file '" + name + "': " + what + "; cutting it back to " +
+                             std::to_string(end) + " bytes failed too: " + system_reason());
+  }
+  throw std::runtime_error("cannot append to spill file '" + name + "': " + what + " (the file is as before)");
+}
+
+/// Syncs the folder holding `path`, so that a new file's name survives a crash too.
+bool sync_folder_of(const std::filesystem::path& path) {
+  const std::filesystem::path folder = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+  const Descriptor directory(::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+  return directory.get() >= 0 && ::fsync(directory.get()) == 0;
+}
+
+/// What a reader of a file whose last piece is cut short can do: the whole
+/// pieces before it stay readable once the file is cut there.
+std::string keep_the_whole_pieces(std::uint64_t offset, std::size_t whole) {
+  return "; the " + std::to_string(whole) + " whole piece(s) before it end at byte " + std::to_string(offset) +
+         ": cut the file to " + std::to_string(offset) + " bytes to keep them";
+}
+
 }  // namespace
 
 void append_spill_piece(const std::filesystem::path& path, const OccupancyMap& piece) {
@@ -61,16 +86,17 @@ void append_spill_piece(const std::filesystem::path& path, const OccupancyMap& p
   while (written < bytes.size()) {
     const ssize_t n = ::write(file.get(), bytes.data() + written, bytes.size() - written);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const std::string reason = n < 0 ? system_reason() : "nothing written";
-      if (::ftruncate(file.get(), end) != 0) {
-        throw std::runtime_error("cannot append to spill file '" + name + "': " + reason +
-                                 "; cutting it back to " + std::to_string(end) + " bytes failed too: " +
-                                 system_reason());
-      }
-      throw std::runtime_error("cannot append to spill file '" + name + "': " + reason + " (the file is as before)");
-    }
+    if (n <= 0) cut_back_and_throw(file.get(), end, name, n < 0 ? system_reason() : "nothing written");
     written += static_cast<std::size_t>(n);
+  }
+  // On disk before the append returns: the window forgets the piece's
+  // voxels right after, so a piece lost in a crash would be lost for good.
+  // A crash during the write or the sync can leave part of this piece at
+  // the end (never a damaged earlier one: pieces are only appended); the
+  // reader names where the whole pieces end. One sync per move of the box.
+  if (::fdatasync(file.get()) != 0) cut_back_and_throw(file.get(), end, name, "sync failed: " + system_reason());
+  if (end == 0 && !sync_folder_of(path)) {
+    cut_back_and_throw(file.get(), end, name, "syncing its folder failed: " + system_reason());
   }
 }
 
@@ -90,7 +116,8 @@ std::size_t for_each_spill_piece(const std::filesystem::path& path, FunctionRef<
     const std::string piece = "piece " + std::to_string(count + 1);
     if (got < head.size()) {
       throw FormatError::at_byte(name, offset, piece + ": truncated: a 16-byte piece header expected, " +
-                                                   std::to_string(got) + " bytes left");
+                                                   std::to_string(got) + " bytes left" +
+                                                   keep_the_whole_pieces(offset, count));
     }
     if (std::memcmp(head.data(), kSpillMagic.data(), kSpillMagic.size()) != 0) {
       throw FormatError::at_byte(name, offset, piece + ": magic \"UMBSPILL\" expected (not a spill file, or corrupt)");
@@ -101,12 +128,14 @@ std::size_t for_each_spill_piece(const std::filesystem::path& path, FunctionRef<
     if (size > left) {
       throw FormatError::at_byte(name, offset + 8, piece + ": declares " + std::to_string(size) + " bytes, only " +
                                                        std::to_string(left) +
-                                                       " follow (truncated: was the run cut off while spilling?)");
+                                                       " follow (truncated: was the run cut off while spilling?)" +
+                                                       keep_the_whole_pieces(offset, count));
     }
     bytes.resize(static_cast<std::size_t>(size));
     const std::uint64_t map_at = offset + kPieceHeaderBytes;
     if (file.read_at(map_at, bytes.data(), bytes.size()) != bytes.size()) {
-      throw FormatError::at_byte(name, map_at, piece + ": truncated while reading (is the file being written?)");
+      throw FormatError::at_byte(name, map_at, piece + ": truncated while reading (is the file being written?)" +
+                                                   keep_the_whole_pieces(offset, count));
     }
     visit(detail::decode_map_file(name + " (" + piece + ", its map file starting at byte " + std::to_string(map_at) + ")",
                                   bytes));
