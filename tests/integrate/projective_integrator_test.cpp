@@ -109,7 +109,7 @@ UpdateBatch brute_force_misses(const ProjectiveRule& rule, int depth_levels) {
   return batch;
 }
 
-std::vector<Vec3f> random_room_scan(std::mt19937& rng, Vec3f origin);
+std::vector<Vec3f> random_room_scan(std::mt19937& rng, Vec3f origin, bool holes = false);
 
 TEST(ProjectiveIntegrator, TreeWalkClearsExactlyTheRulesVoxels) {
   std::mt19937 rng(7);
@@ -605,16 +605,31 @@ namespace {
 
 /// A scan of a random room from `origin`: points on the walls, floor and
 /// ceiling of a box around it, along rings and steps like a rotating LiDAR.
-std::vector<Vec3f> random_room_scan(std::mt19937& rng, Vec3f origin) {
+/// With `holes`, those of a real LiDAR scan: no returns above a random
+/// elevation in half the azimuths (the sky), every other ring missing in a
+/// sector (gaps between the lines), and beams lost in runs.
+std::vector<Vec3f> random_room_scan(std::mt19937& rng, Vec3f origin, bool holes) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const Vec3d half{1.2 + u(rng), 1.0 + u(rng), 0.6 + 0.5 * u(rng)};
   std::vector<Vec3f> points;
   const int rings = 12 + static_cast<int>(20 * u(rng));
   const int steps = 90 + static_cast<int>(200 * u(rng));
+  constexpr double kPi = 3.14159265358979;
+  const double sky = holes ? 0.1 + 0.3 * u(rng) : 1e9;  // radians of elevation
+  const double gap_from = holes ? 6.3 * u(rng) : 1e9;   // the sector without every other ring
+  int lost = 0;  // beams still to lose in the current run
   for (int r = 0; r < rings; ++r) {
     const double elevation = -0.6 + 1.1 * r / (rings - 1);
     for (int s = 0; s < steps; ++s) {
-      const double azimuth = 2.0 * 3.14159265358979 * s / steps;
+      const double azimuth = 2.0 * kPi * s / steps;
+      if (holes) {
+        if (lost > 0 || u(rng) < 0.01) {
+          lost = lost > 0 ? lost - 1 : static_cast<int>(10 * u(rng));
+          continue;
+        }
+        if (elevation > sky && azimuth < kPi) continue;
+        if (r % 2 == 1 && std::abs(azimuth - gap_from) < 1.5) continue;
+      }
       const Vec3d d{std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
                     std::sin(elevation)};
       // The nearest wall of the box along d, with a little noise; some beams return nothing.
@@ -622,7 +637,7 @@ std::vector<Vec3f> random_room_scan(std::mt19937& rng, Vec3f origin) {
       for (std::size_t a = 0; a < 3; ++a) {
         if (d[a] != 0.0) t = std::min(t, half[a] / std::abs(d[a]));
       }
-      if (u(rng) < 0.03) continue;
+      if (!holes && u(rng) < 0.03) continue;
       t *= 1.0 + 0.01 * (u(rng) - 0.5);
       if (u(rng) < 0.05) t *= 0.5;  // something in front of the wall
       points.push_back(Vec3f(Vec3d(origin) + d * t));
@@ -663,43 +678,6 @@ TEST(ProjectiveIntegrator, ScanImagesFollowTheRule) {
   EXPECT_GT(cleared_bricks, 1000u);
 }
 
-/// A room scan like random_room_scan's with the holes of a real LiDAR
-/// scan: no returns above a random elevation in half the azimuths (the
-/// sky), every other ring missing in a sector (gaps between the lines),
-/// and beams lost in runs.
-std::vector<Vec3f> room_scan_with_holes(std::mt19937& rng, Vec3f origin) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const Vec3d half{1.2 + u(rng), 1.0 + u(rng), 0.6 + 0.5 * u(rng)};
-  const double sky = 0.1 + 0.3 * u(rng);  // radians of elevation
-  const double gap_from = 6.3 * u(rng);   // the sector without every other ring
-  std::vector<Vec3f> points;
-  const int rings = 12 + static_cast<int>(20 * u(rng));
-  const int steps = 90 + static_cast<int>(200 * u(rng));
-  int lost = 0;  // beams still to lose in the current run
-  for (int r = 0; r < rings; ++r) {
-    const double elevation = -0.6 + 1.1 * r / (rings - 1);
-    for (int s = 0; s < steps; ++s) {
-      const double azimuth = 2.0 * 3.14159265358979 * s / steps;
-      if (lost > 0 || u(rng) < 0.01) {
-        lost = lost > 0 ? lost - 1 : static_cast<int>(10 * u(rng));
-        continue;
-      }
-      if (elevation > sky && azimuth < 3.14159265358979) continue;
-      if (r % 2 == 1 && std::abs(azimuth - gap_from) < 1.5) continue;
-      const Vec3d d{std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
-                    std::sin(elevation)};
-      double t = 1e9;
-      for (std::size_t a = 0; a < 3; ++a) {
-        if (d[a] != 0.0) t = std::min(t, half[a] / std::abs(d[a]));
-      }
-      t *= 1.0 + 0.01 * (u(rng) - 0.5);
-      if (u(rng) < 0.05) t *= 0.5;  // something in front of the wall
-      points.push_back(Vec3f(Vec3d(origin) + d * t));
-    }
-  }
-  return points;
-}
-
 TEST(ProjectiveIntegrator, ScanImagesWithHolesFollowTheRule) {
   // The walk skips nodes in the cones of pixels without readings from the
   // pyramid's fine ranges over the pixels the nodes' voxels read
@@ -714,7 +692,7 @@ TEST(ProjectiveIntegrator, ScanImagesWithHolesFollowTheRule) {
   for (int trial = 0; trial < 6; ++trial) {
     const Grid grid(trial % 2 == 0 ? 0.04 : 0.05, kDepthLevels);
     const Vec3f origin{0.011f * trial, 0.017f, -0.009f};
-    const std::vector<Vec3f> points = room_scan_with_holes(rng, origin);
+    const std::vector<Vec3f> points = random_room_scan(rng, origin, true);
     ScanResolution resolution = estimate_scan_resolution(origin, points, {});
     ASSERT_GT(resolution.horizontal, 0.0);
     if (trial >= 3) resolution.vertical *= 0.5;
