@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <limits>
 
 #include "core/assert.hpp"
 
@@ -84,6 +85,18 @@ DepthPyramid::Range DepthPyramid::range(int u0, int v0, int u1, int v1) const {
       result.max = std::max(result.max, level.max_cells[row + x]);
     }
   }
+  return result;
+}
+
+DepthPyramid::Range DepthPyramid::fine_range(int u0, int v0, int u1, int v1) const {
+  UMBRA_ASSERT(u0 >= 0 && v0 >= 0 && u0 <= u1 && v0 <= v1 && u1 < levels_[0].width && v1 < levels_[0].height);
+  const unsigned extent = static_cast<unsigned>(std::max(u1 - u0, v1 - v0) + 1);
+  // Cells of 2^l in (extent / 8, extent / 4] pixels: at most 9 per axis.
+  const int l = std::clamp(static_cast<int>(std::bit_width(extent)) - 3, 0, static_cast<int>(levels_.size()) - 1);
+  const Level& level = levels_[static_cast<std::size_t>(l)];
+  Range result{std::numeric_limits<float>::infinity(), 0.0f};
+  detail::rectangle_min_max(level.min_cells, level.max_cells, level.width, u0 >> l, u1 >> l, v0 >> l, v1 >> l,
+                            result.min, result.max);
   return result;
 }
 

@@ -15,9 +15,14 @@
 // (projective_frame.hpp), read directly with level_max().
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace umbra {
 
@@ -36,6 +41,15 @@ class DepthPyramid {
 
   /// The range over pixels [u0, u1] x [v0, v1] (inclusive; inside the image).
   [[nodiscard]] Range range(int u0, int v0, int u1, int v1) const;
+  /// The same from finer cells: those of the level whose cells are at
+  /// least an eighth of the rectangle's longer side (up to 9 x 9 cells,
+  /// read four at a time), so the answer reaches at most a quarter of the
+  /// side beyond the rectangle instead of up to a whole side. Rectangles
+  /// up to 7 pixels wide are read pixel by pixel: their range is exact.
+  /// The projective walk's node test (projective_tracer.cpp), where the
+  /// rectangles are the few pixels a node projects onto and a pixel of
+  /// slack decides whether a node in the cone of empty pixels is skipped.
+  [[nodiscard]] Range fine_range(int u0, int v0, int u1, int v1) const;
 
   [[nodiscard]] int levels() const { return static_cast<int>(levels_.size()); }
   [[nodiscard]] int width(int level) const { return levels_[static_cast<std::size_t>(level)].width; }
@@ -68,5 +82,54 @@ class DepthPyramid {
   std::vector<Level> levels_;
   std::vector<float> pair_max_;  // build_windows' scratch, kept between images
 };
+
+namespace detail {
+
+/// The least of `lowest` and the largest of `highest` over columns [u0, u1]
+/// of rows [v0, v1] (row r starts at r * stride), folded into `least` and
+/// `largest` as std::min(least, x) and std::max(largest, x) would (a NaN
+/// reading is passed over either way). Four columns at a time with SSE2: a
+/// TUM brick at 2 cm reads 54 cells on average, and whole_brick was a fifth
+/// of a steady frame. Rows of four or more cover their last columns with an
+/// overlapping load (min and max do not mind a cell read twice).
+inline void rectangle_min_max(const float* lowest, const float* highest, int stride, int u0, int u1, int v0, int v1,
+                              float& least, float& largest) {
+  int u = u0;
+#if defined(__SSE2__)
+  const int n = u1 - u0 + 1;
+  if (n >= 4) {
+    __m128 low = _mm_set1_ps(least);
+    __m128 high = _mm_set1_ps(largest);
+    for (int row = v0; row <= v1; ++row) {
+      const std::size_t start = static_cast<std::size_t>(row) * static_cast<std::size_t>(stride);
+      const float* low_row = lowest + start;
+      const float* high_row = highest + start;
+      for (int column = u0;; column += 4) {
+        const int at = std::min(column, u1 - 3);
+        // The reading first: MINPS and MAXPS return their second operand when one is a NaN.
+        low = _mm_min_ps(_mm_loadu_ps(low_row + at), low);
+        high = _mm_max_ps(_mm_loadu_ps(high_row + at), high);
+        if (at == u1 - 3) break;
+      }
+    }
+    alignas(16) float lows[4];
+    alignas(16) float highs[4];
+    _mm_store_ps(lows, low);
+    _mm_store_ps(highs, high);
+    least = std::min(std::min(lows[0], lows[1]), std::min(lows[2], lows[3]));
+    largest = std::max(std::max(highs[0], highs[1]), std::max(highs[2], highs[3]));
+    return;
+  }
+#endif
+  for (int row = v0; row <= v1; ++row) {
+    const std::size_t start = static_cast<std::size_t>(row) * static_cast<std::size_t>(stride);
+    for (int column = u; column <= u1; ++column) {
+      least = std::min(least, lowest[start + static_cast<std::size_t>(column)]);
+      largest = std::max(largest, highest[start + static_cast<std::size_t>(column)]);
+    }
+  }
+}
+
+}  // namespace detail
 
 }  // namespace umbra

@@ -6,10 +6,6 @@
 #include <limits>
 #include <stdexcept>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 #include "core/assert.hpp"
 #include "umbra/core/morton.hpp"
 #include "tree/update_batch.hpp"
@@ -23,52 +19,6 @@ constexpr float kProjectionLimit = 16777216.0f;
 
 /// Bricks this small or smaller are seen whole or not at all (see the header).
 constexpr double kFinestSeenBorder = 0.02;
-
-/// The least of `lowest` and the largest of `highest` over columns [u0, u1]
-/// of rows [v0, v1] (row r starts at r * stride), folded into `least` and
-/// `largest` as std::min(least, x) and std::max(largest, x) would (a NaN
-/// reading is passed over either way). Four columns at a time with SSE2: a
-/// TUM brick at 2 cm reads 54 cells on average, and whole_brick was a fifth
-/// of a steady frame. Rows of four or more cover their last columns with an
-/// overlapping load (min and max do not mind a cell read twice).
-void rectangle_min_max(const float* lowest, const float* highest, int stride, int u0, int u1, int v0, int v1,
-                       float& least, float& largest) {
-  int u = u0;
-#if defined(__SSE2__)
-  const int n = u1 - u0 + 1;
-  if (n >= 4) {
-    __m128 low = _mm_set1_ps(least);
-    __m128 high = _mm_set1_ps(largest);
-    for (int row = v0; row <= v1; ++row) {
-      const std::size_t start = static_cast<std::size_t>(row) * static_cast<std::size_t>(stride);
-      const float* low_row = lowest + start;
-      const float* high_row = highest + start;
-      for (int column = u0;; column += 4) {
-        const int at = std::min(column, u1 - 3);
-        // The reading first: MINPS and MAXPS return their second operand when one is a NaN.
-        low = _mm_min_ps(_mm_loadu_ps(low_row + at), low);
-        high = _mm_max_ps(_mm_loadu_ps(high_row + at), high);
-        if (at == u1 - 3) break;
-      }
-    }
-    alignas(16) float lows[4];
-    alignas(16) float highs[4];
-    _mm_store_ps(lows, low);
-    _mm_store_ps(highs, high);
-    least = std::min(std::min(lows[0], lows[1]), std::min(lows[2], lows[3]));
-    largest = std::max(std::max(highs[0], highs[1]), std::max(highs[2], highs[3]));
-    return;
-  }
-#endif
-  for (int row = v0; row <= v1; ++row) {
-    const std::size_t start = static_cast<std::size_t>(row) * static_cast<std::size_t>(stride);
-    for (int column = u; column <= u1; ++column) {
-      least = std::min(least, lowest[start + static_cast<std::size_t>(column)]);
-      largest = std::max(largest, highest[start + static_cast<std::size_t>(column)]);
-    }
-  }
-}
-
 
 }  // namespace
 
@@ -511,7 +461,7 @@ std::optional<std::uint64_t> ProjectiveRule::whole_brick(Vec3f origin, int level
   if ((u1 - u0 + 1) * (v1 - v0 + 1) > 100) return undecided;
   float least = std::numeric_limits<float>::infinity();
   float largest = 0.0f;
-  rectangle_min_max(lowest, highest, stride, u0, u1, v0, v1, least, largest);
+  detail::rectangle_min_max(lowest, highest, stride, u0, u1, v0, v1, least, largest);
   // No voxel nearer than every reading's d - margin: none cleared.
   if (z_lo >= largest - margin) return 0;
   // Every voxel seen (inside the image, in range) and nearer than every reading: all cleared.

@@ -142,9 +142,19 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth,
   const double edge = rule_.edge_reach * (1.0 + kRelativeError) / near + 1.0;
   const double reach = (level == 0 ? 0.0 : 1.5 * std::ldexp(1.0, level) + 1.0) + edge;
   if (u1 + reach < 0.0 || v1 + reach < 0.0 || u0 - reach >= width || v0 - reach >= height) return Decision::none;
-  const DepthPyramid::Range wide = frame.pyramid.range(
-      static_cast<int>(std::max(u0 - reach, 0.0)), static_cast<int>(std::max(v0 - reach, 0.0)),
-      static_cast<int>(std::min(u1 + reach, width - 1.0)), static_cast<int>(std::min(v1 + reach, height - 1.0)));
+  // The pixels the voxels' windows can read: a centre outside the image
+  // reads as if clamped onto its edge, so the rectangle is the centres'
+  // pixels clamped into the image, widened by the windows' reach only (at
+  // level 0 a voxel reads its own pixel). Widening by the edge reach as
+  // well, a pixel or more on every side inside the image, took in the
+  // readings beside the empty pixels of a LiDAR scan (the sky, the gaps
+  // between its lines) and split nodes that lie wholly in their cones.
+  const double window_reach = level == 0 ? 0.0 : 1.5 * std::ldexp(1.0, level) + 1.0;
+  const DepthPyramid::Range wide = frame.pyramid.fine_range(
+      static_cast<int>(std::max(std::clamp(u0, 0.0, width - 1.0) - window_reach, 0.0)),
+      static_cast<int>(std::max(std::clamp(v0, 0.0, height - 1.0) - window_reach, 0.0)),
+      static_cast<int>(std::min(std::clamp(u1, 0.0, width - 1.0) + window_reach, width - 1.0)),
+      static_cast<int>(std::min(std::clamp(v1, 0.0, height - 1.0) + window_reach, height - 1.0)));
   // Voxels near the surface decided by the rays (surface_band.hpp): a
   // node where some may be cleared is not skipped, one where some may lie
   // is not cleared whole.
@@ -159,7 +169,7 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth,
   if (in_image && within_range && contained && !band.may_hold) {
     // Every voxel's window holds its own pixel: a reading beyond the node
     // on each of the node's pixels clears every voxel.
-    const DepthPyramid::Range own = frame.pyramid.range(static_cast<int>(u0), static_cast<int>(v0),
+    const DepthPyramid::Range own = frame.pyramid.fine_range(static_cast<int>(u0), static_cast<int>(v0),
                                                         static_cast<int>(u1), static_cast<int>(v1));
     if (own.min > 0.0f && z_max + pad < own.min * (1.0 - kRelativeError) - margin) return Decision::all;
   }

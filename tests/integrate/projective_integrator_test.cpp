@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "integrate/centre_box.hpp"
 #include "integrate/image_points.hpp"
 #include "integrate/projective_tracer.hpp"
 #include "integrate/scan_images.hpp"
@@ -108,7 +109,7 @@ UpdateBatch brute_force_misses(const ProjectiveRule& rule, int depth_levels) {
   return batch;
 }
 
-std::vector<Vec3f> random_room_scan(std::mt19937& rng, Vec3f origin);
+std::vector<Vec3f> random_room_scan(std::mt19937& rng, Vec3f origin, bool holes = false);
 
 TEST(ProjectiveIntegrator, TreeWalkClearsExactlyTheRulesVoxels) {
   std::mt19937 rng(7);
@@ -604,16 +605,31 @@ namespace {
 
 /// A scan of a random room from `origin`: points on the walls, floor and
 /// ceiling of a box around it, along rings and steps like a rotating LiDAR.
-std::vector<Vec3f> random_room_scan(std::mt19937& rng, Vec3f origin) {
+/// With `holes`, those of a real LiDAR scan: no returns above a random
+/// elevation in half the azimuths (the sky), every other ring missing in a
+/// sector (gaps between the lines), and beams lost in runs.
+std::vector<Vec3f> random_room_scan(std::mt19937& rng, Vec3f origin, bool holes) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const Vec3d half{1.2 + u(rng), 1.0 + u(rng), 0.6 + 0.5 * u(rng)};
   std::vector<Vec3f> points;
   const int rings = 12 + static_cast<int>(20 * u(rng));
   const int steps = 90 + static_cast<int>(200 * u(rng));
+  constexpr double kPi = 3.14159265358979;
+  const double sky = holes ? 0.1 + 0.3 * u(rng) : 1e9;  // radians of elevation
+  const double gap_from = holes ? 6.3 * u(rng) : 1e9;   // the sector without every other ring
+  int lost = 0;  // beams still to lose in the current run
   for (int r = 0; r < rings; ++r) {
     const double elevation = -0.6 + 1.1 * r / (rings - 1);
     for (int s = 0; s < steps; ++s) {
-      const double azimuth = 2.0 * 3.14159265358979 * s / steps;
+      const double azimuth = 2.0 * kPi * s / steps;
+      if (holes) {
+        if (lost > 0 || u(rng) < 0.01) {
+          lost = lost > 0 ? lost - 1 : static_cast<int>(10 * u(rng));
+          continue;
+        }
+        if (elevation > sky && azimuth < kPi) continue;
+        if (r % 2 == 1 && std::abs(azimuth - gap_from) < 1.5) continue;
+      }
       const Vec3d d{std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
                     std::sin(elevation)};
       // The nearest wall of the box along d, with a little noise; some beams return nothing.
@@ -621,7 +637,7 @@ std::vector<Vec3f> random_room_scan(std::mt19937& rng, Vec3f origin) {
       for (std::size_t a = 0; a < 3; ++a) {
         if (d[a] != 0.0) t = std::min(t, half[a] / std::abs(d[a]));
       }
-      if (u(rng) < 0.03) continue;
+      if (!holes && u(rng) < 0.03) continue;
       t *= 1.0 + 0.01 * (u(rng) - 0.5);
       if (u(rng) < 0.05) t *= 0.5;  // something in front of the wall
       points.push_back(Vec3f(Vec3d(origin) + d * t));
@@ -660,6 +676,82 @@ TEST(ProjectiveIntegrator, ScanImagesFollowTheRule) {
     }
   }
   EXPECT_GT(cleared_bricks, 1000u);
+}
+
+TEST(ProjectiveIntegrator, ScanImagesWithHolesFollowTheRule) {
+  // The walk skips nodes in the cones of pixels without readings from the
+  // pyramid's fine ranges over the pixels the nodes' voxels read
+  // (projective_tracer.cpp). On scans with the sky, gaps between lines and
+  // lost beams, binned both at the estimate's spacing and at half the
+  // rings' spacing (every other row of a sector empty): the walk clears
+  // exactly what the rule clears brick by brick over the whole map, with
+  // nothing skipped.
+  std::mt19937 rng(23);
+  constexpr int kDepthLevels = 7;
+  std::size_t cleared_bricks = 0;
+  for (int trial = 0; trial < 6; ++trial) {
+    const Grid grid(trial % 2 == 0 ? 0.04 : 0.05, kDepthLevels);
+    const Vec3f origin{0.011f * trial, 0.017f, -0.009f};
+    const std::vector<Vec3f> points = random_room_scan(rng, origin, true);
+    ScanResolution resolution = estimate_scan_resolution(origin, points, {});
+    ASSERT_GT(resolution.horizontal, 0.0);
+    if (trial >= 3) resolution.vertical *= 0.5;
+    ScanImages images;
+    images.build(origin, points, resolution);
+    for (const ProjectiveFrame& face : images.faces()) {
+      const ProjectiveRule rule(grid, face, trial % 3 == 1 ? 1.4 : -1.0, trial % 3 == 2 ? 0.02 : 0.0, std::nullopt);
+      UpdateBatch walked(kDepthLevels);
+      ProjectiveTracer(rule).trace(0, kDepthLevels, walked);
+      const UpdateBatch expected = brute_force_misses(rule, kDepthLevels);
+      EXPECT_EQ(leaves_of(tree_from(walked, kDepthLevels)), leaves_of(tree_from(expected, kDepthLevels)))
+          << "trial " << trial;
+      cleared_bricks += expected.group_count(2);
+    }
+  }
+  EXPECT_GT(cleared_bricks, 100u);
+}
+
+TEST(ProjectiveIntegrator, NodesInTheConeOfEmptyPixelsAreSkipped) {
+  // A wall 5 m in front of a camera, with four columns of pixels without a
+  // reading: a node whose voxels project only onto those columns clears
+  // nothing, and the walk skips it whole, though its neighbouring pixels
+  // hold readings beyond it (the node test once took in a pixel or more
+  // around the node's own and split such nodes down to their bricks).
+  const Grid grid(0.02, 12);
+  constexpr int kWidth = 48;
+  constexpr int kHeight = 36;
+  std::vector<float> depths(kWidth * kHeight, 5.0f);
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 16; u < 20; ++u) depths[static_cast<std::size_t>(v) * kWidth + u] = 0.0f;
+  }
+  ProjectiveFrame frame;
+  frame.set(DepthImage::metres(depths, kWidth, kHeight), PinholeCamera{40, 40, 23.5, 17.5},
+            Pose::from_translation_quaternion(0.013, 0.007, 0.003, 1, 0, 0, 0));
+  const ProjectiveRule rule(grid, frame, -1.0, 0.0, std::nullopt);
+  const ProjectiveTracer tracer(rule);
+  int in_cone = 0;
+  const double res = grid.resolution();
+  const std::uint32_t centre = std::uint32_t{1} << (grid.depth_levels() - 1);
+  // Depth-3 nodes 2.5 to 4 m in front of the camera (their voxels read
+  // their own pixels there), across the image.
+  for (std::uint32_t z = centre + 128; z < centre + 200; z += 8) {
+    for (std::uint32_t y = centre - 64; y < centre + 64; y += 8) {
+      for (std::uint32_t x = centre - 48; x < centre + 16; x += 8) {
+        const Key first{x, y, z};
+        const CentreBox box(frame, Vec3d{grid.axis_center(x), grid.axis_center(y), grid.axis_center(z)}, 7 * res);
+        const CentreBox::Pixels pixels = box.pixels(frame, 1e-6);
+        if (pixels.v_min < 0.5 || pixels.v_max > kHeight - 0.5) continue;
+        if (pixels.u_min < 16.05 || pixels.u_max > 19.95) continue;  // not wholly on the empty columns
+        ++in_cone;
+        for (std::uint64_t brick = 0; brick < 8; ++brick) {
+          EXPECT_EQ(rule.cleared_plain(morton::encode(first) + 64 * brick), 0u);
+        }
+        EXPECT_EQ(tracer.classify(morton::encode(first), 3), ProjectiveTracer::Decision::none)
+            << "node at " << x << " " << y << " " << z;
+      }
+    }
+  }
+  EXPECT_GT(in_cone, 20);
 }
 
 TEST(ProjectiveIntegrator, ScanImagesHoldEveryPointOfEveryImage) {
