@@ -142,8 +142,9 @@ struct DistanceField::State {
   void update();
   /// The window of an update's first transform of its raised bricks: a
   /// third of the field's (16 cells on the TUM benchmark, 2 cm and 1 m,
-  /// where it decided 55 to 80% of the raised bricks and made the update
-  /// about 1.1x faster than the full window alone; docs/benchmarks.md).
+  /// where it decided 50 to 83% of the raised bricks and the update's
+  /// thread CPU fell about 10% against the full window alone, one run
+  /// each; docs/benchmarks.md).
   [[nodiscard]] int narrow_window() const { return std::min(layout.window(), std::max(layout.window() / 3, 1)); }
   /// The kinds (bit 0 occupied, bit 1 unknown) in which some cell of brick
   /// `b` (its offsets before the update) had its nearest site among those
