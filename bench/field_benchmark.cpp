@@ -21,6 +21,13 @@
 //
 //   umbra_field_benchmark [--data-dir ../shared/data] [--datasets 3dtk,tum,geb079]
 //                         [--max-distance 1.0] [--queries 1000000] [--samples 2000]
+//                         [--updates-only] [--threads N] [--fingerprint]
+// --updates-only: umbra alone (no OctoMap tree, no dynamicEDT3D, no
+// queries), each update's thread CPU time, so that two builds can be
+// compared on a loaded machine; --threads sets DistanceFieldOptions::threads
+// there; --fingerprint adds, after each update, a hash of the whole field
+// (every cell of the box queried, the answers' bytes hashed): equal
+// fingerprints, bit-identical fields.
 #include <malloc.h>
 
 #include <algorithm>
@@ -73,6 +80,9 @@ struct Options {
   double max_distance = 1.0;
   std::size_t queries = 1000000;
   std::size_t samples = 2000;
+  bool updates_only = false;
+  bool fingerprint = false;
+  unsigned threads = 1;
 };
 
 /// Cell states of the box for the brute forces (one byte per voxel).
@@ -185,6 +195,13 @@ void print_answers(const char* label, std::size_t n, std::size_t umbra_exact, do
               label, n, umbra_exact, umbra_worst, edt_exact, edt_worst, agree, worst_gap);
 }
 
+/// The box the benchmark's fields cover for a scanned dataset (around the
+/// first sensor position; dynamicEDT3D is dense, so it must fit there).
+umbra::Aabb dataset_box(const std::string& name, const umbra::Vec3d& o) {
+  return name == "tum" ? umbra::Aabb{o - umbra::Vec3d{3.0, 3.0, 1.5}, o + umbra::Vec3d{3.0, 3.0, 1.5}}
+                       : umbra::Aabb{o - umbra::Vec3d{10.0, 10.0, 2.0}, o + umbra::Vec3d{10.0, 10.0, 3.0}};
+}
+
 Row run(const std::string& name, const Options& options) {
   Row row;
   row.dataset = name;
@@ -217,8 +234,7 @@ Row run(const std::string& name, const Options& options) {
     tree_free = std::make_unique<octomap::OcTree>(resolution);
     const umbra::Vec3d o(scans[0].origin);
     // A box around the first sensor position both fields can hold (dynamicEDT3D: dense).
-    box = name == "tum" ? umbra::Aabb{o - umbra::Vec3d{3.0, 3.0, 1.5}, o + umbra::Vec3d{3.0, 3.0, 1.5}}
-                        : umbra::Aabb{o - umbra::Vec3d{10.0, 10.0, 2.0}, o + umbra::Vec3d{10.0, 10.0, 3.0}};
+    box = dataset_box(name, o);
   }
   row.resolution = map->resolution();
   umbra::InsertOptions insert;
@@ -390,6 +406,66 @@ Row run(const std::string& name, const Options& options) {
   return row;
 }
 
+/// FNV-1a over the answers (both distances and the gradient, as bytes) at
+/// every cell centre of the box: equal fingerprints, equal fields.
+std::uint64_t field_fingerprint(const umbra::DistanceField& field, const umbra::OccupancyMap& map,
+                                const umbra::Aabb& box) {
+  const umbra::Key lo = map.key(box.min), hi = map.key(box.max);
+  std::vector<umbra::Vec3d> points;
+  std::vector<umbra::DistanceSample> answers;
+  std::uint64_t hash = 1469598103934665603ull;
+  for (std::uint32_t z = lo.z; z <= hi.z; ++z) {
+    points.clear();
+    for (std::uint32_t y = lo.y; y <= hi.y; ++y) {
+      for (std::uint32_t x = lo.x; x <= hi.x; ++x) points.push_back(map.grid().center(umbra::Key{x, y, z}));
+    }
+    answers.resize(points.size());
+    field.distance_and_gradient(points, answers);
+    for (const umbra::DistanceSample& a : answers) {
+      const double v[5] = {a.occupied, a.unknown, a.gradient.x, a.gradient.y, a.gradient.z};
+      const auto* bytes = reinterpret_cast<const unsigned char*>(v);
+      for (std::size_t i = 0; i < sizeof(v); ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
+    }
+  }
+  return hash;
+}
+
+/// --updates-only: umbra's per-scan update alone (see the file comment).
+void run_updates_only(const std::string& name, const Options& options) {
+  umbra::bench::DatasetOptions data_options;
+  data_options.data_dir = options.data_dir;
+  const umbra::bench::Dataset data = umbra::bench::load_dataset(name, data_options);
+  umbra::OccupancyMap map(name == "tum" ? 0.02 : 0.05);
+  umbra::InsertOptions insert;
+  insert.max_range = data.max_range;
+  map.insert_point_cloud(data.scans[0].origin, data.scans[0].points, insert);
+  umbra::DistanceFieldOptions field_options;
+  field_options.max_distance = options.max_distance;
+  field_options.box = dataset_box(name, umbra::Vec3d(data.scans[0].origin));
+  field_options.threads = options.threads;
+  umbra::DistanceField field(map, field_options);
+  std::vector<double> cpu_ms;
+  for (std::size_t i = 1; i < data.scans.size(); ++i) {
+    map.insert_point_cloud(data.scans[i].origin, data.scans[i].points, insert);
+    const double cpu = thread_cpu_seconds();
+    const auto start = Clock::now();
+    field.update();
+    cpu_ms.push_back(1e3 * (thread_cpu_seconds() - cpu));
+    const double wall_ms = 1e3 * seconds_since(start);
+    const umbra::DistanceFieldStats st = field.stats();
+    std::printf("%s update %zu: %.1f ms thread CPU, %.1f ms wall, bricks lowered %zu transformed %zu", name.c_str(), i,
+                cpu_ms.back(), wall_ms, st.bricks_recomputed - st.bricks_transformed, st.bricks_transformed);
+    if (options.fingerprint) {
+      std::printf(", fingerprint %016llx",
+                  static_cast<unsigned long long>(field_fingerprint(field, map, *field_options.box)));
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+  std::printf("%s: update median %.1f ms thread CPU (%u threads)\n", name.c_str(), umbra::bench::median(cpu_ms),
+              options.threads);
+}
+
 double sum(const std::vector<double>& v) {
   double s = 0;
   for (double x : v) s += x;
@@ -412,11 +488,21 @@ int main(int argc, char** argv) {
       options.queries = std::stoul(args.value());
     } else if (arg == "--samples") {
       options.samples = std::stoul(args.value());
+    } else if (arg == "--updates-only") {
+      options.updates_only = true;
+    } else if (arg == "--fingerprint") {
+      options.fingerprint = true;
+    } else if (arg == "--threads") {
+      options.threads = unsigned(std::stoul(args.value()));
     } else {
       std::cerr << "usage: umbra_field_benchmark [--data DIR] [--datasets 3dtk,tum,geb079] [--max-distance M]"
-                   " [--queries N] [--samples N]\n";
+                   " [--queries N] [--samples N] [--updates-only] [--threads N] [--fingerprint]\n";
       return arg == "--help" ? 0 : 2;
     }
+  }
+  if (options.updates_only) {
+    for (const std::string& name : options.datasets) run_updates_only(name, options);
+    return 0;
   }
   std::vector<Row> rows;
   for (const std::string& name : options.datasets) {

@@ -10,14 +10,19 @@ namespace {
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 }
 
-ChunkTransform::ChunkTransform(const FieldLayout& layout)
+std::uint64_t reach_cap(const FieldLayout& layout, int window) {
+  if (window >= layout.window()) return layout.cap_squared();
+  return std::min<std::uint64_t>(layout.cap_squared(), std::uint64_t(layout.squared_gap(window + 1)) - 1);
+}
+
+ChunkTransform::ChunkTransform(const FieldLayout& layout, int window)
     : layout_(layout),
-      window_(layout.window()),
-      bricks_(chunk_bricks(layout.window())),
-      out_(chunk_bricks(layout.window()) * kBrickCells),
-      span_(out_ + 2 * layout.window()),
+      window_(window),
+      bricks_(chunk_bricks(window)),
+      out_(chunk_bricks(window) * kBrickCells),
+      span_(out_ + 2 * window),
       e2_(2u << layout.depth()),
-      cap_(layout.cap_squared()) {
+      cap_(reach_cap(layout, window)) {
   const std::size_t span = std::size_t(span_);
   const std::size_t out = std::size_t(out_);
   sites_.resize(span * span * span);
@@ -53,9 +58,16 @@ void ChunkTransform::load_sites(BrickIndex first, SiteLookup sites) {
   for (std::int64_t bz = brick_lo[2]; bz <= brick_hi[2]; ++bz) {
     for (std::int64_t by = brick_lo[1]; by <= brick_hi[1]; ++by) {
       for (std::int64_t bx = brick_lo[0]; bx <= brick_hi[0]; ++bx) {
-        const BrickBits& bits = *sites(BrickIndex{std::uint32_t(bx), std::uint32_t(by), std::uint32_t(bz)});
         const std::int64_t base[3] = {bx * kBrickCells - origin[0], by * kBrickCells - origin[1],
                                       bz * kBrickCells - origin[2]};
+        // Rows no wanted brick reads stay empty (pass x skips them too).
+        if (!reach_.any_row(std::size_t(std::max<std::int64_t>(base[1], 0)),
+                            std::size_t(std::min<std::int64_t>(base[1] + kBrickCells, span_) - 1),
+                            std::size_t(std::max<std::int64_t>(base[2], 0)),
+                            std::size_t(std::min<std::int64_t>(base[2] + kBrickCells, span_) - 1))) {
+          continue;
+        }
+        const BrickBits& bits = *sites(BrickIndex{std::uint32_t(bx), std::uint32_t(by), std::uint32_t(bz)});
         for (int kind = 0; kind < 2; ++kind) {
           const std::array<std::uint64_t, 8>& words = kind == 0 ? bits.occupied : bits.unknown;
           for (int w = 0; w < 8; ++w) {
@@ -160,9 +172,11 @@ void ChunkTransform::transform(int kind) {
   const int w = window_;
   const std::size_t span = std::size_t(span_);
   const std::size_t out = std::size_t(out_);
-  // Pass x: nearest site along each row, for the output columns.
+  // Pass x: nearest site along each row, for the output columns, in the
+  // rows some wanted brick reads (Reach).
   for (std::size_t z = 0; z < span; ++z) {
     for (std::size_t y = 0; y < span; ++y) {
+      if (!reach_.row(y, z)) continue;
       const std::uint8_t* row = &sites_[(z * span + y) * span];
       std::int8_t* dest = &pass_x_[(z * span + y) * out];
       int last = -1000000;
@@ -180,13 +194,15 @@ void ChunkTransform::transform(int kind) {
       }
     }
   }
-  // Pass y: along each column of the output's x, all z.
+  // Pass y: along each column of the output's x, at the z some wanted
+  // brick of the slab reads; the rows none of them reads count as empty.
   for (std::size_t z = 0; z < span; ++z) {
     for (std::size_t x = 0; x < out; ++x) {
-      if (!wanted_x_[x / kBrickCells]) continue;  // no wanted brick in this slab
+      const std::size_t slab = x / kBrickCells;
+      if (!reach_.slab_z(slab, z)) continue;  // no wanted brick of this slab reads this z
       for (std::size_t y = 0; y < span; ++y) {
         const std::int8_t dx = pass_x_[(z * span + y) * out + x];
-        column_[y] = dx == SiteOffset::kNoSite ? kNone : layout_.squared_gap(dx);
+        column_[y] = dx == SiteOffset::kNoSite || !reach_.slab_row(slab, y, z) ? kNone : layout_.squared_gap(dx);
       }
       column(column_.data(), 1, best_.data(), from_.data());
       for (std::size_t t = 0; t < out; ++t) {
@@ -203,8 +219,11 @@ void ChunkTransform::transform(int kind) {
   std::vector<SiteOffset>& result = result_[std::size_t(kind)];
   for (std::size_t y = 0; y < out; ++y) {
     for (std::size_t x = 0; x < out; ++x) {
-      if (!wanted_xy_[x / kBrickCells + std::size_t(bricks_) * (y / kBrickCells)]) continue;
-      for (std::size_t z = 0; z < span; ++z) column_[z] = pass_y_[(z * out + y) * out + x];
+      const std::size_t bx = x / kBrickCells, by = y / kBrickCells;
+      if (!wanted_xy_[bx + std::size_t(bricks_) * by]) continue;
+      for (std::size_t z = 0; z < span; ++z) {
+        column_[z] = reach_.column_z(bx, by, z) ? pass_y_[(z * out + y) * out + x] : kNone;
+      }
       column(column_.data(), 1, best_.data(), from_.data());
       for (std::size_t t = 0; t < out; ++t) {
         SiteOffset o;
@@ -219,11 +238,73 @@ void ChunkTransform::transform(int kind) {
   }
 }
 
+void ChunkReach::compute(const std::vector<bool>& wanted, int bricks, int window) {
+  // In span coordinates a brick b's cells are [8 b + window, 8 b + 7 +
+  // window] and it reads [8 b, 8 b + 7 + 2 window]: the bricks reading
+  // position p are those with 8 b in [p - 7 - 2 window, p].
+  bricks_ = bricks;
+  span_ = bricks * kBrickCells + 2 * window;
+  const std::size_t n = std::size_t(bricks);
+  const std::size_t span = std::size_t(span_);
+  first_.resize(span);
+  last_.resize(span);
+  for (int p = 0; p < span_; ++p) {
+    const int lo = p - 7 - 2 * window;
+    first_[std::size_t(p)] = lo <= 0 ? 0 : (lo + kBrickCells - 1) / kBrickCells;
+    last_[std::size_t(p)] = std::min(p / kBrickCells, bricks - 1);
+  }
+  // Per slab (x brick) a 2D prefix count of the wanted bricks over (y, z)
+  // bricks, and per column (x, y brick) a 1D one over z bricks: then
+  // whether any wanted brick reads a place is one rectangle's count.
+  const std::size_t side = n + 1;
+  slab_count_.assign(n * side * side, 0);
+  column_count_.assign(n * n * side, 0);
+  for (std::size_t bx = 0; bx < n; ++bx) {
+    for (std::size_t bz = 0; bz < n; ++bz) {
+      for (std::size_t by = 0; by < n; ++by) {
+        const int here = wanted[(bz * n + by) * n + bx] ? 1 : 0;
+        slab_count_[(bx * side + bz + 1) * side + by + 1] = here + slab_count_[(bx * side + bz) * side + by + 1] +
+                                                           slab_count_[(bx * side + bz + 1) * side + by] -
+                                                           slab_count_[(bx * side + bz) * side + by];
+        column_count_[(bx * n + by) * side + bz + 1] = column_count_[(bx * n + by) * side + bz] + here;
+      }
+    }
+  }
+  // The 2D tables the passes read per place (one byte each).
+  slab_rows_.assign(n * span * span, 0);
+  rows_.assign(span * span, 0);
+  slab_z_.assign(n * span, 0);
+  column_z_.assign(n * n * span, 0);
+  for (std::size_t z = 0; z < span; ++z) {
+    const int z0 = first_[z], z1 = last_[z];
+    if (z0 > z1) continue;
+    for (std::size_t bx = 0; bx < n; ++bx) {
+      const auto count = [&](int y0, int y1) {
+        const std::size_t b = bx * side;
+        return slab_count_[(b + std::size_t(z1) + 1) * side + std::size_t(y1) + 1] -
+               slab_count_[(b + std::size_t(z0)) * side + std::size_t(y1) + 1] -
+               slab_count_[(b + std::size_t(z1) + 1) * side + std::size_t(y0)] +
+               slab_count_[(b + std::size_t(z0)) * side + std::size_t(y0)];
+      };
+      if (count(0, bricks - 1) == 0) continue;
+      slab_z_[bx * span + z] = 1;
+      for (std::size_t y = 0; y < span; ++y) {
+        if (first_[y] > last_[y] || count(first_[y], last_[y]) == 0) continue;
+        slab_rows_[(bx * span + z) * span + y] = 1;
+        rows_[z * span + y] = 1;
+      }
+      for (std::size_t by = 0; by < n; ++by) {
+        const std::size_t c = (bx * n + by) * side;
+        column_z_[(bx * n + by) * span + z] = column_count_[c + std::size_t(z1) + 1] != column_count_[c + std::size_t(z0)];
+      }
+    }
+  }
+}
+
 void ChunkTransform::run(BrickIndex first, SiteLookup sites, FunctionRef<bool(BrickIndex)> wanted,
                          FunctionRef<void(BrickIndex, const BrickOffsets&)> write, int kinds) {
   // Which bricks are wanted; the y and z passes skip the columns of none.
   std::vector<bool> wanted_brick(std::size_t(bricks_) * std::size_t(bricks_) * std::size_t(bricks_));
-  wanted_x_.assign(std::size_t(bricks_), false);
   wanted_xy_.assign(std::size_t(bricks_) * std::size_t(bricks_), false);
   bool any = false;
   for (std::uint32_t bz = 0; bz < std::uint32_t(bricks_); ++bz) {
@@ -231,13 +312,13 @@ void ChunkTransform::run(BrickIndex first, SiteLookup sites, FunctionRef<bool(Br
       for (std::uint32_t bx = 0; bx < std::uint32_t(bricks_); ++bx) {
         if (!wanted(BrickIndex{first.x + bx, first.y + by, first.z + bz})) continue;
         wanted_brick[(bz * std::uint32_t(bricks_) + by) * std::uint32_t(bricks_) + bx] = true;
-        wanted_x_[bx] = true;
         wanted_xy_[bx + std::size_t(bricks_) * by] = true;
         any = true;
       }
     }
   }
   if (!any) return;
+  reach_.compute(wanted_brick, bricks_, window_);
   load_sites(first, sites);
   if ((kinds & 1) != 0) transform(0);
   if ((kinds & 2) != 0) transform(1);

@@ -20,9 +20,15 @@
 // envelope holding its own side only, the pick among equally near sites
 // is the canonical one of nearer_tie() (field_layout.hpp).
 //
-// A chunk is kChunkBricks(window) bricks per axis: large enough that the
-// window read around it (the sites of window() cells on each side) costs
+// A chunk is chunk_bricks(window) bricks per axis: large enough that the
+// window read around it (the sites of `window` cells on each side) costs
 // a few times its own cells, not dozens.
+//
+// The window may be narrower than the field's (FieldLayout::window()):
+// then the transform is exact for the cells whose nearest site is nearer
+// than any site outside that window can be (S < squared_gap(window + 1))
+// and answers "none" for the others (reach_cap()), which an update then
+// sends through the full window (docs/design.md, "Updates").
 #pragma once
 
 #include <array>
@@ -52,9 +58,55 @@ using BrickOffsets = std::array<CellSites, kBrickVolume>;
 /// Sites of any brick (never nullptr).
 using SiteLookup = FunctionRef<const BrickBits*(BrickIndex)>;
 
+/// The largest S a transform with `window` cells on each side answers
+/// exactly: the field's cap at its full window; below it, one less than
+/// the least S of a site outside the window (squared_gap(window + 1)), so
+/// that no site it did not read can be as near as one it answers.
+std::uint64_t reach_cap(const FieldLayout& layout, int window);
+
+/// Where the wanted bricks of a chunk read: a wanted brick's cells depend
+/// on the sites within `window` cells of it only, so the passes skip the
+/// rows, columns and places no wanted brick reads (the raised bricks of an
+/// update are a few in a chunk: about 100 of 2,197 on the TUM benchmark).
+/// Places are span coordinates (distance_transform.cpp).
+class ChunkReach {
+ public:
+  /// `wanted` by (z * bricks + y) * bricks + x.
+  void compute(const std::vector<bool>& wanted, int bricks, int window);
+  /// Some wanted brick reads the row (y, z) (pass x).
+  [[nodiscard]] bool row(std::size_t y, std::size_t z) const { return rows_[z * std::size_t(span_) + y] != 0; }
+  /// Some wanted brick of slab (x brick) `slab` reads the row (y, z) (pass y's inputs).
+  [[nodiscard]] bool slab_row(std::size_t slab, std::size_t y, std::size_t z) const {
+    return slab_rows_[(slab * std::size_t(span_) + z) * std::size_t(span_) + y] != 0;
+  }
+  /// Some wanted brick of the slab reads the plane z (pass y's columns).
+  [[nodiscard]] bool slab_z(std::size_t slab, std::size_t z) const { return slab_z_[slab * std::size_t(span_) + z] != 0; }
+  /// Some wanted brick reads a row (y, z) with y in [y0, y1], z in [z0, z1] (loading the sites).
+  [[nodiscard]] bool any_row(std::size_t y0, std::size_t y1, std::size_t z0, std::size_t z1) const {
+    for (std::size_t z = z0; z <= z1; ++z) {
+      for (std::size_t y = y0; y <= y1; ++y) {
+        if (row(y, z)) return true;
+      }
+    }
+    return false;
+  }
+  /// Some wanted brick of the column (x, y bricks) reads z (pass z's inputs).
+  [[nodiscard]] bool column_z(std::size_t bx, std::size_t by, std::size_t z) const {
+    return column_z_[(bx * std::size_t(bricks_) + by) * std::size_t(span_) + z] != 0;
+  }
+
+ private:
+  int bricks_ = 0;
+  int span_ = 0;
+  std::vector<int> first_, last_;  // per place: the bricks (along an axis) that read it
+  std::vector<int> slab_count_, column_count_;  // prefix counts of wanted bricks
+  std::vector<std::uint8_t> rows_, slab_rows_, slab_z_, column_z_;
+};
+
 class ChunkTransform {
  public:
-  explicit ChunkTransform(const FieldLayout& layout);
+  /// `window` <= layout.window() (see the file comment).
+  ChunkTransform(const FieldLayout& layout, int window);
 
   [[nodiscard]] int bricks_per_axis() const { return bricks_; }
   /// Computes the chunk whose first brick is `first` (a multiple of
@@ -74,12 +126,12 @@ class ChunkTransform {
   void transform(int kind);
 
   const FieldLayout& layout_;
-  int window_;
+  int window_;  // cells read on each side of the chunk
   int bricks_;  // per axis
   int out_;     // output cells per axis
   int span_;    // input cells per axis: out + 2 window
   std::uint32_t e2_;  // 2 E
-  std::uint64_t cap_;  // the largest S within max_distance
+  std::uint64_t cap_;  // the largest S answered: reach_cap(layout, window)
   std::vector<std::uint8_t> sites_;    // span^3, bit 0 occupied, bit 1 unknown
   std::vector<std::int8_t> pass_x_;    // [z][y][x out]: x offset of the row's nearest site, or kNoSite
   std::vector<std::uint32_t> column_;  // one column's values
@@ -92,10 +144,10 @@ class ChunkTransform {
   std::vector<std::int64_t> hull_f_;
   std::vector<std::uint32_t> best_;
   std::vector<std::int16_t> from_;
-  // The wanted bricks of the current run, by x and by (x, y) (the passes
-  // skip the columns where no brick is wanted).
-  std::vector<bool> wanted_x_;
+  // The wanted bricks of the current run by (x, y) (pass z skips the
+  // columns where no brick is wanted), and where they read.
   std::vector<bool> wanted_xy_;
+  ChunkReach reach_;
 };
 
 }  // namespace umbra::detail
