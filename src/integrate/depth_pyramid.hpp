@@ -52,6 +52,12 @@ class DepthPyramid {
   [[nodiscard]] Range fine_range(int u0, int v0, int u1, int v1) const;
 
   [[nodiscard]] int levels() const { return static_cast<int>(levels_.size()); }
+  /// 2^level, the pixels a cell of `level` is wide, and its inverse, both
+  /// exact (powers of two). Not std::ldexp: that is a call into libm
+  /// (scalbn), 0.6% of a steady TUM frame at 2 cm from whole_brick and the
+  /// walk's node tests.
+  [[nodiscard]] static double cell_pixels(int level) { return static_cast<double>(std::uint64_t{1} << level); }
+  [[nodiscard]] static float pixel_cells(int level) { return 1.0f / static_cast<float>(std::uint64_t{1} << level); }
   [[nodiscard]] int width(int level) const { return levels_[static_cast<std::size_t>(level)].width; }
   [[nodiscard]] int height(int level) const { return levels_[static_cast<std::size_t>(level)].height; }
   /// The maxima of a level, row by row (level 0: `farthest` itself).

@@ -63,7 +63,7 @@ __attribute__((target("avx2"))) std::uint64_t projective_cleared_avx2(const Proj
   const __m256 margin = _mm256_set1_ps(rule.margin);
   const __m256 range_squared = _mm256_set1_ps(rule.max_range_squared);
   const bool limited = rule.max_range_squared > 0.0f;
-  const __m256 scale = _mm256_set1_ps(1.0f / static_cast<float>(1u << level));  // exact: a power of two
+  const __m256 scale = _mm256_set1_ps(DepthPyramid::pixel_cells(level));
   const __m256 half = _mm256_set1_ps(0.5f);
   const __m256 edge_reach = _mm256_set1_ps(rule.edge_reach);
   const __m256 width = _mm256_set1_ps(rule.width);

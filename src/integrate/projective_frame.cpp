@@ -312,7 +312,7 @@ std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
   const int level = window_level(base);
   const float* readings = level == 0 ? frame->depth.data() : frame->pyramid.window_max(level);
   const int cells_wide = frame->pyramid.width(level);
-  const float scale = std::ldexp(1.0f, -level);  // exact: a power of two
+  const float scale = DepthPyramid::pixel_cells(level);
   std::uint64_t result = 0;
   std::uint64_t seen = 0;
   for (unsigned i = 0; i < 64; ++i) {
@@ -449,7 +449,7 @@ std::optional<std::uint64_t> ProjectiveRule::whole_brick(Vec3f origin, int level
     // window_max's entry (b + 1) (width + 1) + (a + 1) for window (a, b).
     lowest = highest = frame->pyramid.window_max(level);
     stride = frame->pyramid.width(level) + 1;
-    const float scale = std::ldexp(1.0f, -level);
+    const float scale = DepthPyramid::pixel_cells(level);
     u0 = static_cast<int>(std::floor(clamp_u(u.lo) * scale - 0.5f)) + 1;
     u1 = static_cast<int>(std::floor(clamp_u(u.hi) * scale - 0.5f)) + 1;
     v0 = static_cast<int>(std::floor(clamp_v(v.lo) * scale - 0.5f)) + 1;

@@ -83,7 +83,7 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth,
   // every node along that plane down to bricks, minutes for one image).
   // Asked of every node it cost 5% of the walk.
   const auto outside_planes = [&] {
-    const double reach = 1.5 * std::ldexp(1.0, rule_.top_level) + 1.0;
+    const double reach = 1.5 * DepthPyramid::cell_pixels(rule_.top_level) + 1.0;
     const double left_offset = u_offset + reach;
     const double right_offset = u_offset - width - reach;
     const double top_offset = v_offset + reach;
@@ -133,14 +133,14 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth,
   // bricks have the largest level.
   // Cells (projective_frame.hpp) are voxels 2^c times as wide: their
   // windows reach as far as those of the widest level's.
-  const double cell_scale = std::ldexp(1.0, static_cast<int>(rule_.cells.size()));
+  const double cell_scale = DepthPyramid::cell_pixels(static_cast<int>(rule_.cells.size()));
   const double w = rule_.half_voxel_pixels * cell_scale * (1.0 + kRelativeError) / near;
   const int level = w < 1.0 ? 0
                             : std::min(static_cast<int>(std::bit_width(static_cast<unsigned>(std::min(w, 1048576.0)))),
                                        rule_.top_level);
   // Centres within the edge reach outside the image read its edge (clamped).
   const double edge = rule_.edge_reach * (1.0 + kRelativeError) / near + 1.0;
-  const double reach = (level == 0 ? 0.0 : 1.5 * std::ldexp(1.0, level) + 1.0) + edge;
+  const double reach = (level == 0 ? 0.0 : 1.5 * DepthPyramid::cell_pixels(level) + 1.0) + edge;
   if (u1 + reach < 0.0 || v1 + reach < 0.0 || u0 - reach >= width || v0 - reach >= height) return Decision::none;
   // The pixels the voxels' windows can read: a centre outside the image
   // reads as if clamped onto its edge, so the rectangle is the centres'
