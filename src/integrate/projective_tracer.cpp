@@ -140,7 +140,8 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth,
                                        rule_.top_level);
   // Centres within the edge reach outside the image read its edge (clamped).
   const double edge = rule_.edge_reach * (1.0 + kRelativeError) / near + 1.0;
-  const double reach = (level == 0 ? 0.0 : 1.5 * DepthPyramid::cell_pixels(level) + 1.0) + edge;
+  const double window_reach = level == 0 ? 0.0 : 1.5 * DepthPyramid::cell_pixels(level) + 1.0;
+  const double reach = window_reach + edge;
   if (u1 + reach < 0.0 || v1 + reach < 0.0 || u0 - reach >= width || v0 - reach >= height) return Decision::none;
   // The pixels the voxels' windows can read: a centre outside the image
   // reads as if clamped onto its edge, so the rectangle is the centres'
@@ -149,7 +150,6 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth,
   // well, a pixel or more on every side inside the image, took in the
   // readings beside the empty pixels of a LiDAR scan (the sky, the gaps
   // between its lines) and split nodes that lie wholly in their cones.
-  const double window_reach = level == 0 ? 0.0 : 1.5 * std::ldexp(1.0, level) + 1.0;
   const DepthPyramid::Range wide = frame.pyramid.fine_range(
       static_cast<int>(std::max(std::clamp(u0, 0.0, width - 1.0) - window_reach, 0.0)),
       static_cast<int>(std::max(std::clamp(v0, 0.0, height - 1.0) - window_reach, 0.0)),
