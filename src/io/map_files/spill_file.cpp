@@ -41,21 +41,37 @@ class Descriptor {
   int fd_;
 };
 
-/// Cuts `file` back to `end` bytes after a failed append and throws `what`
-/// (or says that the cut failed too).
+/// Cuts `file` back to `end` bytes after a failed append and throws `what`.
+/// When the cut fails too, the piece may be whole on disk while the caller
+/// keeps its voxels and spills them again: its magic is overwritten, so that
+/// a reader stops there with an error instead of adding the voxels twice.
 [[noreturn]] void cut_back_and_throw(int file, off_t end, const std::string& name, const std::string& what) {
-  if (::ftruncate(file, end) != 0) {
-    throw std::runtime_error("cannot append to spill file '" + name + "': " + what + "; cutting it back to " +
-                             std::to_string(end) + " bytes failed too: " + system_reason());
+  if (::ftruncate(file, end) == 0) {
+    throw std::runtime_error("cannot append to spill file '" + name + "': " + what +
+                             (end == 0 ? " (the new file is left empty)" : " (the file is as before)"));
   }
-  throw std::runtime_error("cannot append to spill file '" + name + "': " + what + " (the file is as before)");
+  const std::string cut_reason = system_reason();
+  const std::array<char, 8> spoiled{};
+  const bool marked = ::pwrite(file, spoiled.data(), spoiled.size(), end) == static_cast<ssize_t>(spoiled.size());
+  throw std::runtime_error("cannot append to spill file '" + name + "': " + what + "; cutting it back to " +
+                           std::to_string(end) + " bytes failed too (" + cut_reason + "): " +
+                           (marked ? "the piece's magic at byte " + std::to_string(end) +
+                                         " was zeroed, so readers stop there; cut the file to " +
+                                         std::to_string(end) + " bytes"
+                                   : "its bytes from " + std::to_string(end) + " on may hold the piece: cut the file to " +
+                                         std::to_string(end) + " bytes before reading it"));
 }
 
-/// Syncs the folder holding `path`, so that a new file's name survives a crash too.
+/// Syncs the folder holding `path`, so that a new file's name survives a
+/// crash too. A folder that cannot be opened for reading (no read
+/// permission) or synced (EINVAL, EROFS: some network and FUSE file
+/// systems) is not an error: the piece itself is synced, and refusing would
+/// make spilling impossible there. Other errors (EIO) are.
 bool sync_folder_of(const std::filesystem::path& path) {
   const std::filesystem::path folder = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
   const Descriptor directory(::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
-  return directory.get() >= 0 && ::fsync(directory.get()) == 0;
+  if (directory.get() < 0) return true;
+  return ::fsync(directory.get()) == 0 || errno == EINVAL || errno == EROFS;
 }
 
 /// What a reader of a file whose last piece is cut short can do: the whole
