@@ -13,7 +13,8 @@
 // and syncs it to disk (fdatasync; for a new file its folder too) before it
 // returns; if the write or the sync fails (disk full, ...) the file is cut
 // back to its old size, so the file never holds part of a piece because of
-// an error. Pieces are only appended, so a crash or a process killed in the
+// an error (if the cut fails too, the piece's magic is zeroed, so that
+// readers stop there with an error instead of counting it twice). Pieces are only appended, so a crash or a process killed in the
 // middle of an append can leave part of the last piece at most, never
 // damage an earlier one: load_spill then names the byte where the whole
 // pieces end, and a file cut there holds them all.
