@@ -23,7 +23,8 @@
 //                         [--max-distance 1.0] [--queries 1000000] [--samples 2000]
 //                         [--updates-only] [--threads N] [--fingerprint]
 // --updates-only: umbra alone (no OctoMap tree, no dynamicEDT3D, no
-// queries), each update's thread CPU time, so that two builds can be
+// queries), each update's thread CPU time (and the process' CPU time and
+// the wall time: with --threads N the serial share), so that two builds can be
 // compared on a loaded machine; --threads sets DistanceFieldOptions::threads
 // there; --fingerprint adds, after each update, a hash of the whole field
 // (every cell of the box queried, the answers' bytes hashed): equal
@@ -49,21 +50,23 @@
 
 #include "common/argument_cursor.hpp"
 #include "bench_data.hpp"
+#include "field_datasets.hpp"
 #include "umbra/io/octomap_files.hpp"
 #include "umbra/map/occupancy_map.hpp"
 #include "umbra/field/distance_field.hpp"
 
 namespace {
 
+using umbra::bench::field_dataset_box;
+using umbra::bench::thread_cpu_seconds;
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-/// CPU seconds of the calling thread (a one-thread update runs there
-/// entirely; on a shared machine this is steadier than the wall clock).
-double thread_cpu_seconds() {
+/// CPU seconds of all the process' threads (an update's workers included).
+double process_cpu_seconds() {
   timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
@@ -195,13 +198,6 @@ void print_answers(const char* label, std::size_t n, std::size_t umbra_exact, do
               label, n, umbra_exact, umbra_worst, edt_exact, edt_worst, agree, worst_gap);
 }
 
-/// The box the benchmark's fields cover for a scanned dataset (around the
-/// first sensor position; dynamicEDT3D is dense, so it must fit there).
-umbra::Aabb dataset_box(const std::string& name, const umbra::Vec3d& o) {
-  return name == "tum" ? umbra::Aabb{o - umbra::Vec3d{3.0, 3.0, 1.5}, o + umbra::Vec3d{3.0, 3.0, 1.5}}
-                       : umbra::Aabb{o - umbra::Vec3d{10.0, 10.0, 2.0}, o + umbra::Vec3d{10.0, 10.0, 3.0}};
-}
-
 Row run(const std::string& name, const Options& options) {
   Row row;
   row.dataset = name;
@@ -234,7 +230,7 @@ Row run(const std::string& name, const Options& options) {
     tree_free = std::make_unique<octomap::OcTree>(resolution);
     const umbra::Vec3d o(scans[0].origin);
     // A box around the first sensor position both fields can hold (dynamicEDT3D: dense).
-    box = dataset_box(name, o);
+    box = field_dataset_box(name, o);
   }
   row.resolution = map->resolution();
   umbra::InsertOptions insert;
@@ -441,20 +437,26 @@ void run_updates_only(const std::string& name, const Options& options) {
   map.insert_point_cloud(data.scans[0].origin, data.scans[0].points, insert);
   umbra::DistanceFieldOptions field_options;
   field_options.max_distance = options.max_distance;
-  field_options.box = dataset_box(name, umbra::Vec3d(data.scans[0].origin));
+  field_options.box = field_dataset_box(name, umbra::Vec3d(data.scans[0].origin));
   field_options.threads = options.threads;
   umbra::DistanceField field(map, field_options);
   std::vector<double> cpu_ms;
   for (std::size_t i = 1; i < data.scans.size(); ++i) {
     map.insert_point_cloud(data.scans[i].origin, data.scans[i].points, insert);
     const double cpu = thread_cpu_seconds();
+    const double process_cpu = process_cpu_seconds();
     const auto start = Clock::now();
     field.update();
     cpu_ms.push_back(1e3 * (thread_cpu_seconds() - cpu));
+    const double process_ms = 1e3 * (process_cpu_seconds() - process_cpu);
     const double wall_ms = 1e3 * seconds_since(start);
     const umbra::DistanceFieldStats st = field.stats();
-    std::printf("%s update %zu: %.1f ms thread CPU, %.1f ms wall, bricks lowered %zu transformed %zu", name.c_str(), i,
-                cpu_ms.back(), wall_ms, st.bricks_recomputed - st.bricks_transformed, st.bricks_transformed);
+    // With N threads the calling thread runs the serial part and about 1/N
+    // of the parallel one, so serial ~ (N thread CPU - process CPU) / (N - 1),
+    // whatever the machine's load (CPU time, not wall).
+    std::printf("%s update %zu: %.1f ms thread CPU, %.1f ms process CPU, %.1f ms wall, bricks lowered %zu transformed %zu",
+                name.c_str(), i, cpu_ms.back(), process_ms, wall_ms, st.bricks_recomputed - st.bricks_transformed,
+                st.bricks_transformed);
     if (options.fingerprint) {
       std::printf(", fingerprint %016llx",
                   static_cast<unsigned long long>(field_fingerprint(field, map, *field_options.box)));
