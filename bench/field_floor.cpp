@@ -305,10 +305,7 @@ ChangedLines incremental_lines(const Grid3& g, const std::vector<std::uint8_t>& 
 /// --check: the transform against a brute force on random grids (so that
 /// its timings are those of an exact transform); true when all agree.
 bool transform_matches_brute_force() {
-  Grid3 g;
-  g.nx = 23;
-  g.ny = 17;
-  g.nz = 19;
+  const Grid3 g{23, 17, 19};
   std::mt19937 rng(3);
   for (int trial = 0; trial < 20; ++trial) {
     std::vector<std::uint8_t> sites(g.cells());
@@ -345,10 +342,7 @@ bool transform_matches_brute_force() {
 /// from the previous scan's passes) gives the dense transform's capped
 /// field after random changes of the sites.
 bool scheme_c_matches_dense() {
-  Grid3 g;
-  g.nx = 41;
-  g.ny = 29;
-  g.nz = 23;
+  const Grid3 g{41, 29, 23};
   const int window = 6;
   const std::uint32_t cap = window * window;
   std::mt19937 rng(5);
@@ -360,41 +354,12 @@ bool scheme_c_matches_dense() {
     SeparableTransform incremental(g), reference(g);
     incremental.dense(before, 1);
     reference.dense(after, 1);
-    const std::vector<std::uint32_t> old_x = incremental.pass_x(), old_y = incremental.pass_y();
-    ChangedLines rows;
-    rows.reset(g);
+    // The lines as the measurement finds them (the passes' changes within
+    // the cap), then the passes on them only, from the previous passes.
+    const ChangedLines lines = incremental_lines(g, before, after, 1, incremental.pass_x(), reference.pass_x(),
+                                                 incremental.pass_y(), reference.pass_y(), cap);
+    time_changed_lines(incremental, g, after, 1, lines, window, window);
     const auto beyond = [cap](std::uint32_t v) { return std::min(v, cap + 1); };
-    for (int z = 0; z < g.nz; ++z) {
-      for (int y = 0; y < g.ny; ++y) {
-        for (int x = 0; x < g.nx; ++x) {
-          if (before[g.index(x, y, z)] != after[g.index(x, y, z)]) rows.rows_x[std::size_t(z) * std::size_t(g.ny) + std::size_t(y)].add(x);
-        }
-      }
-    }
-    // The passes one after another, each on the lines whose input changed.
-    time_changed_lines_pass(incremental, g, after, 1, rows, window, window, 0);
-    ChangedLines columns_y;
-    columns_y.reset(g);
-    for (int z = 0; z < g.nz; ++z) {
-      for (int y = 0; y < g.ny; ++y) {
-        for (int x = 0; x < g.nx; ++x) {
-          const std::size_t i = g.index(x, y, z);
-          if (beyond(old_x[i]) != beyond(incremental.pass_x()[i])) columns_y.columns_y[std::size_t(z) * std::size_t(g.nx) + std::size_t(x)].add(y);
-        }
-      }
-    }
-    time_changed_lines_pass(incremental, g, after, 1, columns_y, window, window, 1);
-    ChangedLines columns_z;
-    columns_z.reset(g);
-    for (int z = 0; z < g.nz; ++z) {
-      for (int y = 0; y < g.ny; ++y) {
-        for (int x = 0; x < g.nx; ++x) {
-          const std::size_t i = g.index(x, y, z);
-          if (beyond(old_y[i]) != beyond(incremental.pass_y()[i])) columns_z.columns_z[std::size_t(y) * std::size_t(g.nx) + std::size_t(x)].add(z);
-        }
-      }
-    }
-    time_changed_lines_pass(incremental, g, after, 1, columns_z, window, window, 2);
     for (std::size_t i = 0; i < g.cells(); ++i) {
       if (beyond(incremental.at(i)) != beyond(reference.at(i))) {
         std::printf("scheme C: cell %zu of trial %d: %u, dense %u\n", i, trial, incremental.at(i), reference.at(i));
