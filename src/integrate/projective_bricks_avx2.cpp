@@ -99,7 +99,7 @@ __attribute__((target("avx2"))) std::uint64_t projective_cleared_avx2(const Proj
     const __m256 u = _mm256_min_ps(_mm256_max_ps(_mm256_and_ps(u_free, ok), zero), width_inside);
     const __m256 v = _mm256_min_ps(_mm256_max_ps(_mm256_and_ps(v_free, ok), zero), height_inside);
     if (_mm256_movemask_ps(ok) == 0) {
-      if (rule.whole_bricks_seen) return 0;  // a voxel not seen: the brick clears nothing
+      if (rule.seen_depth == 2) return 0;  // a voxel not seen: the brick clears nothing
       continue;
     }
     __m256 d;
@@ -126,7 +126,7 @@ __attribute__((target("avx2"))) std::uint64_t projective_cleared_avx2(const Proj
     const __m256 seen_lanes = _mm256_and_ps(ok, _mm256_cmp_ps(d, zero, _CMP_GT_OQ));
     seen |= static_cast<std::uint64_t>(static_cast<unsigned>(_mm256_movemask_ps(seen_lanes))) << (8 * group);
   }
-  return rule.whole_bricks_seen && seen != ~std::uint64_t{0} ? 0 : result;
+  return ProjectiveRule::keep_seen_units(result, seen, rule.seen_depth);
 }
 
 #else

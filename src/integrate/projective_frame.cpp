@@ -19,6 +19,8 @@ constexpr float kProjectionLimit = 16777216.0f;
 
 /// Bricks this small or smaller are seen whole or not at all (see the header).
 constexpr double kFinestSeenBorder = 0.02;
+/// Groups of eight this small or smaller are seen whole or not at all (see the header).
+constexpr double kGroupSeenBorder = 0.04;
 
 }  // namespace
 
@@ -94,7 +96,7 @@ ProjectiveRule::ProjectiveRule(const Grid& grid_in, const ProjectiveFrame& frame
     offset_max[axis] = *std::max_element(offset_table[axis].begin(), offset_table[axis].end());
   }
   centre_dz = static_cast<float>(frame_in.rotate(Vec3d{1.5 * res, 1.5 * res, 1.5 * res}).z);
-  whole_bricks_seen = sees_whole_bricks(res);
+  seen_depth = seen_unit_depth(res, !frame_in.depth_halves.empty());
   edge_reach = half_voxel_pixels;
   width_inside = width - 0.5f;
   height_inside = height - 0.5f;
@@ -105,18 +107,32 @@ ProjectiveRule::ProjectiveRule(const Grid& grid_in, const ProjectiveFrame& frame
   }
 }
 
-bool ProjectiveRule::sees_whole_bricks(double resolution) { return 4.0 * resolution <= kFinestSeenBorder; }
+int ProjectiveRule::seen_unit_depth(double resolution, bool scan_image) {
+  if (4.0 * resolution <= kFinestSeenBorder) return 2;
+  return !scan_image && 2.0 * resolution <= kGroupSeenBorder * (1.0 + 1e-9) ? 1 : 0;
+}
+
+std::uint64_t ProjectiveRule::keep_seen_units(std::uint64_t cleared, std::uint64_t seen, int seen_depth) {
+  if (seen_depth == 0) return cleared;
+  if (seen_depth == 2) return seen == ~std::uint64_t{0} ? cleared : 0;
+  // Bit 8 j of `whole` ends up set when the eight bits 8 j to 8 j + 7 of
+  // `seen` are (group j, the depth-1 node of voxels 8 j to 8 j + 7, all seen).
+  std::uint64_t whole = seen & (seen >> 1);
+  whole &= whole >> 2;
+  whole &= whole >> 4;
+  return cleared & ((whole & 0x0101010101010101u) * 0xFFu);
+}
 
 void ProjectiveRule::use_cells(double widest) {
   cells.clear();
-  if (!whole_bricks_seen || tree != nullptr) return;
+  if (seen_depth != 2 || tree != nullptr) return;
   for (int c = 1; std::ldexp(grid->resolution(), c) <= widest * (1.0 + 1e-9); ++c) {
     if (grid->depth_levels() - c < 3) break;                     // a coarse grid with bricks and room above them
     if (max_range > 0.0 && range_depth != 0 && range_depth < 2 + c) break;  // the range node would split the node
     auto level = std::make_shared<CellLevel>(*grid, c, *frame, margin);  // margin: the same float
     ProjectiveRule& coarse = level->rule;
     coarse.edge_reach = edge_reach;
-    coarse.whole_bricks_seen = true;
+    coarse.seen_depth = 2;
     // The finest grid's range: per node in add_cell_misses, or voxel by voxel on the cells' centres.
     coarse.max_range_squared = range_depth == 0 ? max_range_squared : 0.0f;
     cells.push_back(std::move(level));
@@ -306,8 +322,13 @@ bool ProjectiveRule::ray_crosses(std::uint64_t code) const {
 }
 
 std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
+  const VoxelVerdicts verdicts = voxel_verdicts(brick);
+  return keep_seen_units(verdicts.cleared, verdicts.seen, seen_depth);
+}
+
+ProjectiveRule::VoxelVerdicts ProjectiveRule::voxel_verdicts(std::uint64_t brick) const {
   const Key first = morton::decode(brick);
-  if (!within_range(first)) return 0;
+  if (!within_range(first)) return {0, 0};
   const Vec3f base = brick_origin(first);
   const int level = window_level(base);
   const float* readings = level == 0 ? frame->depth.data() : frame->pyramid.window_max(level);
@@ -354,7 +375,7 @@ std::uint64_t ProjectiveRule::cleared_plain(std::uint64_t brick) const {
     if (d > 0.0f) seen |= std::uint64_t{1} << i;
     if (z < d - margin) result |= std::uint64_t{1} << i;
   }
-  return whole_bricks_seen && seen != ~std::uint64_t{0} ? 0 : result;
+  return {result, seen};
 }
 
 std::uint64_t ProjectiveRule::cleared(std::uint64_t brick) const {

@@ -11,9 +11,10 @@
 //  - v is *seen* when z > 0, v is within range (below) and its window
 //    holds a reading;
 //  - v is *cleared* (gets a miss) when it is seen and some pixel of its
-//    window has a reading d with z < d - margin, and, at resolutions of 5 mm
-//    and finer, every voxel of its brick (the 4 x 4 x 4 voxels of its
-//    depth-2 node) is seen.
+//    window has a reading d with z < d - margin, and every voxel of its
+//    *seen unit* is seen: its brick (the 4 x 4 x 4 voxels of its depth-2
+//    node) at resolutions of 5 mm and finer, its group of eight (its
+//    depth-1 node) in depth images at 6 mm to 2 cm, v itself otherwise.
 // In words: some pixel whose ray passes through the voxel saw a surface
 // beyond it, which is when OctoMap's ray from that pixel would clear it.
 // Taking the voxel's own pixel only (the centre ray) left 5% of the simple
@@ -28,15 +29,22 @@
 // 2 cm: 1.9% of the simple integrator's free voxels left unknown without
 // this, 1.5% with it; occupied recall and precision unchanged).
 //
-// Whole bricks at fine resolutions. Free space ends where the image stops
-// seeing: at the image's edges and around pixels without readings, whose
-// cones run from the camera to the surface. Voxel by voxel those borders
-// cost the map a leaf group per few voxels of their area: at 4 mm the ten
-// TUM frames' map held 75 million nodes (794 MiB with color), three times
-// the map with whole bricks. At 5 mm and finer a brick (2 cm and less) is
-// seen whole or not at all; at coarser resolutions the borders stay exact
-// (a brick of 8 cm at 2 cm would leave 7% of the simple integrator's free
-// voxels unknown).
+// Seen units. Free space ends where the image stops seeing: at the
+// image's edges and around pixels without readings, whose cones run from
+// the camera to the surface. Voxel by voxel those borders cost the map a
+// leaf group per few voxels of their area: at 4 mm the ten TUM frames' map
+// held 75 million nodes (794 MiB with color), three times the map with
+// whole bricks. So at 5 mm and finer a brick (2 cm and less) is seen whole
+// or not at all. At 2 cm (depth images) a group of eight (4 cm) is: the
+// ten TUM frames' tree went from 2.08 M nodes (10.2 MiB) to 1.32 M (7.1
+// MiB; the fast integrator's 1.42 M, 6.9 MiB), the simple integrator's
+// free voxels left unknown from 1.24% to 3.0% (bricks of 8 cm: 7%). At 4
+// and 5 cm groups left 4.0% and 4.98% unknown on the same frames, too near
+// the 5% the rule is held to, and on the 3DTK scans at 2 cm 4.8% (1.5%
+// voxel by voxel; their rays are sparse): there the borders stay exact
+// (docs/benchmarks.md, "Round nine (issue 22)"). A whole seen unit is all
+// the rule adds: a voxel cleared was seen (d > margin >= 0), so the walk's
+// whole-node decisions (every voxel cleared, or none) stay the rule's.
 //
 // The window level is chosen per brick (the 4 x 4 x 4 voxels of a depth-2
 // node, the unit the rule is evaluated in): from the camera-frame depth
@@ -201,9 +209,17 @@ struct ProjectiveRule {
   int range_depth = 0;             ///< max_range applies to nodes of this depth, 0 or >= 2 (file comment)
   float max_range_squared = 0.0f;  ///< range_depth 0: the per-voxel test's bound
   float half_voxel_pixels = 0.0f;  ///< min(fx, fy) * resolution / 2: w = this / z
-  bool whole_bricks_seen = false;  ///< a brick clears only when all its voxels are seen (fine resolutions)
-  /// The default of whole_bricks_seen at this resolution.
-  static bool sees_whole_bricks(double resolution);
+  /// The seen unit (file comment, "Seen units"): a voxel clears only when
+  /// every voxel of its depth-`seen_depth` node is seen: 0 the voxel
+  /// itself, 1 its group of eight, 2 its brick (fine resolutions: also
+  /// turns on cells and off the surface band).
+  int seen_depth = 0;
+  /// The default of seen_depth at this resolution, for a depth image or
+  /// the image of a scan (scan_images.hpp).
+  static int seen_unit_depth(double resolution, bool scan_image);
+  /// `cleared` (a brick's voxels, bit i: voxel i) less the voxels of the
+  /// depth-`seen_depth` nodes not all of whose voxels are in `seen`.
+  [[nodiscard]] static std::uint64_t keep_seen_units(std::uint64_t cleared, std::uint64_t seen, int seen_depth);
   float edge_reach = 0.0f;         ///< pixel-metres: a centre projecting this / z pixels outside the image reads its edge
   float width_inside = 0.0f;       ///< width - 1/2: the projection clamped into the image
   float height_inside = 0.0f;      ///< height - 1/2
@@ -272,8 +288,16 @@ struct ProjectiveRule {
 
 
   /// The voxels of the brick the rule clears (bit i: voxel brick + i; the
-  /// box and known obstacles not applied), voxel by voxel: the definition.
+  /// box and known obstacles not applied), voxel by voxel: the definition
+  /// (voxel_verdicts, then keep_seen_units).
   [[nodiscard]] std::uint64_t cleared_plain(std::uint64_t brick) const;
+  /// Each voxel of the brick on its own, before the seen unit applies:
+  /// those that pass the reading test (cleared) and those seen.
+  struct VoxelVerdicts {
+    std::uint64_t cleared;
+    std::uint64_t seen;
+  };
+  [[nodiscard]] VoxelVerdicts voxel_verdicts(std::uint64_t brick) const;
   /// The same, eight voxels at a time where the CPU has AVX2 (bit for bit
   /// the same: a test compares them).
   [[nodiscard]] std::uint64_t cleared(std::uint64_t brick) const;

@@ -157,7 +157,7 @@ Vec3d ray_end(const ProjectiveFrame& frame, std::size_t pixel) {
 }  // namespace
 
 bool SurfaceBand::possible(double resolution, const ProjectiveFrame& frame, double max_range) {
-  if (ProjectiveRule::sees_whole_bricks(resolution) || !frame.depth_halves.empty()) return false;
+  if (!frame.depth_halves.empty() || ProjectiveRule::seen_unit_depth(resolution, false) == 2) return false;
   // A voxel in the band lies at least z_min deep, within range, and has a reading beyond z_min - h.
   const double z_min = std::min(frame.fx, frame.fy) * resolution / (2.0 * kHalfWidthPixels);
   const double half_diagonal = std::sqrt(3.0) / 2.0 * resolution;
@@ -172,7 +172,7 @@ bool SurfaceBand::possible(double resolution, const ProjectiveFrame& frame, doub
 std::optional<SurfaceBand> SurfaceBand::make(const ProjectiveRule& rule, std::shared_ptr<Image>* scratch) {
   const ProjectiveFrame& frame = *rule.frame;
   // Scans: not a depth image's rays (scan_images.hpp); fine resolutions: see the header.
-  if (rule.whole_bricks_seen || rule.tree != nullptr || !possible(rule.grid->resolution(), frame, rule.max_range)) {
+  if (rule.seen_depth == 2 || rule.tree != nullptr || !possible(rule.grid->resolution(), frame, rule.max_range)) {
     return std::nullopt;
   }
   const std::size_t width = static_cast<std::size_t>(frame.width);

@@ -79,6 +79,24 @@ std::vector<float> random_depths(std::mt19937& rng, int width, int height) {
   return depth;
 }
 
+/// The voxels of brick `brick` the rule clears, by the definition written
+/// out voxel by voxel (not ProjectiveRule::keep_seen_units): a voxel that
+/// passes its reading test is cleared only when every voxel of its seen
+/// unit (its depth-`seen_depth` node) is seen.
+std::uint64_t cleared_by_definition(const ProjectiveRule& rule, std::uint64_t brick) {
+  const ProjectiveRule::VoxelVerdicts verdicts = rule.voxel_verdicts(brick);
+  const unsigned unit = 1u << (3 * rule.seen_depth);
+  std::uint64_t cleared = 0;
+  for (unsigned i = 0; i < 64; ++i) {
+    if (((verdicts.cleared >> i) & 1u) == 0) continue;
+    const unsigned first = i / unit * unit;
+    bool unit_seen = true;
+    for (unsigned j = first; j < first + unit; ++j) unit_seen = unit_seen && ((verdicts.seen >> j) & 1u) != 0;
+    if (unit_seen) cleared |= std::uint64_t{1} << i;
+  }
+  return cleared;
+}
+
 /// The rule's misses below the depth-`depth` node `node`: by cells where
 /// they decide a node (the coarsest level first), else brick by brick.
 void brute_force_node(const ProjectiveRule& rule, std::uint64_t node, int depth, UpdateBatch& batch) {
@@ -91,7 +109,7 @@ void brute_force_node(const ProjectiveRule& rule, std::uint64_t node, int depth,
     return;
   }
   // The rule, with its voxels near the surface decided by the rays where it has a band (surface_band.hpp).
-  std::uint64_t cleared = apply_surface_band_plain(rule, morton::decode(node), rule.cleared_plain(node));
+  std::uint64_t cleared = apply_surface_band_plain(rule, morton::decode(node), cleared_by_definition(rule, node));
   if (rule.box_keys) {
     for (unsigned i = 0; i < 64; ++i) {
       if (!rule.box_keys->contains(morton::decode(node + i))) cleared &= ~(std::uint64_t{1} << i);
@@ -116,6 +134,7 @@ TEST(ProjectiveIntegrator, TreeWalkClearsExactlyTheRulesVoxels) {
   constexpr int kDepthLevels = 7;  // 128^3 voxels: brute force over all of them
   int cases_with_misses = 0;
   int with_cells = 0;
+  int with_group_changes = 0;
   int with_band_changes = 0;
   for (int trial = 0; trial < 32; ++trial) {
     const Grid grid(trial % 3 == 0 ? 0.05 : 0.03, kDepthLevels);
@@ -150,9 +169,10 @@ TEST(ProjectiveIntegrator, TreeWalkClearsExactlyTheRulesVoxels) {
     // (mostly) cells where voxels are narrower than pixels, as depth images
     // there have (up to 4 times the resolution here; the scenes are 0.6 to
     // 2.6 m away, so some nodes are decided by cells and some not).
+    ASSERT_EQ(rule.seen_depth, 0);
+    if (trial % 3 == 1) rule.seen_depth = 1;  // groups of eight seen whole, as at 2 and 4 cm
     if (trial % 3 == 2) {
-      ASSERT_FALSE(rule.whole_bricks_seen);
-      rule.whole_bricks_seen = true;
+      rule.seen_depth = 2;
       if (trial % 9 != 8) {
         rule.use_cells(4.0 * grid.resolution());
         if (rule.range_depth == 0 || rule.range_depth >= 4) {
@@ -169,7 +189,7 @@ TEST(ProjectiveIntegrator, TreeWalkClearsExactlyTheRulesVoxels) {
     back_project_rows(image, camera, pose, 0, kHeight, ray_ends.data(), ray_pixels.data());
     frame.set_rays(ray_ends, ray_pixels);
     rule.surface_band = SurfaceBand::make(rule);
-    EXPECT_EQ(rule.surface_band.has_value(), !rule.whole_bricks_seen) << "trial " << trial;
+    EXPECT_EQ(rule.surface_band.has_value(), rule.seen_depth != 2) << "trial " << trial;
     const ProjectiveTracer tracer(rule);
 
     UpdateBatch walked(kDepthLevels);
@@ -186,10 +206,18 @@ TEST(ProjectiveIntegrator, TreeWalkClearsExactlyTheRulesVoxels) {
       with_band_changes += leaves_of(tree_from(brute_force_misses(without, kDepthLevels), kDepthLevels)) !=
                                    expected_leaves ? 1 : 0;
     }
+    if (rule.seen_depth == 1) {
+      // Whole groups change the answer somewhere (else this would not test them).
+      ProjectiveRule voxel_by_voxel = rule;
+      voxel_by_voxel.seen_depth = 0;
+      with_group_changes += leaves_of(tree_from(brute_force_misses(voxel_by_voxel, kDepthLevels), kDepthLevels)) !=
+                                    expected_leaves ? 1 : 0;
+    }
   }
   EXPECT_GE(cases_with_misses, 26);  // the scenes do clear something
   EXPECT_GE(with_cells, 6);
   EXPECT_GE(with_band_changes, 16);
+  EXPECT_GE(with_group_changes, 8);
 }
 
 TEST(ProjectiveIntegrator, TreeWalkKeepsToTheSurfaceBand) {
@@ -249,7 +277,7 @@ TEST(ProjectiveIntegrator, AvxEqualsPlain) {
     frame.set(DepthImage::metres(depths, 64, 48), PinholeCamera{30.0 + 20 * trial, 45.0, 31.5, 23.5},
               random_pose(rng, 0.3));
     ProjectiveRule rule(grid, frame, trial % 2 == 0 ? 0.9 : -1.0, 0.01 * (trial % 3), std::nullopt);
-    rule.whole_bricks_seen = trial % 4 == 1;
+    rule.seen_depth = trial / 3 % 3;  // voxels, groups of eight, bricks: each on each grid
     for (std::uint64_t brick = 0; brick < (std::uint64_t{1} << (3 * kDepthLevels)); brick += 64) {
       const std::uint64_t plain = rule.cleared_plain(brick);
       ASSERT_EQ(rule.cleared(brick), plain) << "trial " << trial << " brick " << brick;
@@ -282,7 +310,7 @@ TEST(ProjectiveIntegrator, BrickBoundsAgreeWithTheVoxels) {
     ProjectiveFrame frame;
     frame.set(DepthImage::metres(depths, 64, 48), PinholeCamera{30.0 + 20 * trial, 45.0, 31.5, 23.5}, pose);
     ProjectiveRule rule(grid, frame, trial % 3 == 0 ? 0.9 : -1.0, 0.01 * (trial % 3), std::nullopt);
-    rule.whole_bricks_seen = trial % 4 == 1;
+    rule.seen_depth = trial / 3 % 3;  // voxels, groups of eight, bricks: each on each grid
     for (std::uint64_t brick = 0; brick < (std::uint64_t{1} << (3 * kDepthLevels)); brick += 64) {
       const Key first = morton::decode(brick);
       if (!rule.within_range(first)) continue;
