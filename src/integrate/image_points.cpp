@@ -7,6 +7,7 @@
 #include "core/thread_pool.hpp"
 #include "core/voxel_codes.hpp"
 #include "integrate/image_row_codes.hpp"
+#include "integrate/row_candidates.hpp"
 
 namespace umbra {
 
@@ -250,26 +251,13 @@ void ImagePoints::find_voxels_streamed(const Grid& grid, const DepthImage& depth
   for (int v = band.row_begin; v < band.row_end; ++v) {
     image_row_codes(grid, depth, column_factor, (v - camera.cy) / camera.fy, pose, v, points, codes);
     // add_candidates' rule (see there), the pixels without a reading
-    // passed over: they neither keep a code nor stand beside one. The
-    // kept codes are compacted in place (the n-th kept is at or before
-    // the pixel it came from).
-    std::uint64_t* const kept = codes;
-    std::size_t n = 0;
-    std::uint64_t left = kNoReadingCode;
-    for (std::size_t u = 0; u < columns; ++u) {
-      const std::uint64_t code = codes[u];
-      const bool reading = code != kNoReadingCode;
-      // `left` is the previous pixel's code, kNoReadingCode where it has no
-      // reading or at the row's start: never equal to a reading's code.
-      const bool repeat = (code == left) | (code == above[u]);
-      kept[n] = code;
-      n += static_cast<std::size_t>((code < kNoReadingCode) & !repeat);
-      scan.non_finite += static_cast<std::size_t>(code == kNonFiniteCode);
-      scan.outside += static_cast<std::size_t>(code == kOutsideCode);
-      left = code;
-      above[u] = reading ? code : above[u];
-    }
-    band.candidates.insert(band.candidates.end(), kept, kept + n);
+    // passed over: they neither keep a code nor stand beside one
+    // (row_candidates.hpp). The kept codes are compacted in place.
+    RowCandidateCounts counts;
+    const std::size_t n = keep_row_candidates(codes, above, columns, counts);
+    scan.non_finite += counts.non_finite;
+    scan.outside += counts.outside;
+    band.candidates.insert(band.candidates.end(), codes, codes + n);
   }
   finish_candidates(grid, band, scan);
 }
