@@ -24,6 +24,13 @@ namespace umbra {
 struct InsertStats;
 class UpdateBatch;
 
+/// Voxels of one brick: bit i of `voxels` stands for the voxel whose code
+/// is brick + i (`brick`: the brick's first code, a multiple of 64).
+struct BrickVoxels {
+  std::uint64_t brick;
+  std::uint64_t voxels;
+};
+
 class BrickHits {
  public:
   /// Hits from `origin` into `batch` (max_range <= 0: no range), counted in
@@ -36,13 +43,14 @@ class BrickHits {
 
   /// The end voxel `code`. Voxels of one brick given one after another are
   /// handed over together (any order works; sorted codes are cheapest).
-  void add(std::uint64_t code) {
-    const std::uint64_t brick = code & ~std::uint64_t{63};
-    if (brick != brick_) {
+  void add(std::uint64_t code) { add({code & ~std::uint64_t{63}, std::uint64_t{1} << (code & 63)}); }
+  /// Several end voxels of one brick.
+  void add(BrickVoxels voxels) {
+    if (voxels.brick != brick_) {
       flush();
-      brick_ = brick;
+      brick_ = voxels.brick;
     }
-    voxels_ |= std::uint64_t{1} << (code & 63);
+    voxels_ |= voxels.voxels;
   }
 
   /// Hands over the collected brick now.

@@ -426,9 +426,9 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
       });
       return;
     }
-    // The voxels come sorted: a brick at a time (brick_hits.hpp).
+    // The voxels come a brick at a time, sorted (brick_hits.hpp).
     BrickHits hits(grid, origin, options.max_range, batch, counts);
-    image_points_.for_each_voxel_in(first, end, [&](std::uint64_t code) { hits.add(code); });
+    image_points_.for_each_brick_in(first, end, [&](BrickVoxels voxels) { hits.add(voxels); });
   };
   const auto side_job = [&](std::size_t job, UpdateBatch& batch) {
     if (job == 0) {

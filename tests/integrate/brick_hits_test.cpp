@@ -63,7 +63,7 @@ TEST(BrickHits, SameHitsAndCountsAsVoxelByVoxel) {
       const Vec3f origin{u(rng), u(rng), u(rng)};
       const double max_range = trial == 5 ? 0.0 : 40.0 * resolution * (1 + trial);
       // Voxels in clusters (a surface's bricks) around the range's sphere,
-      // inside and beyond it, sorted as the image's voxels come; some repeat.
+      // inside and beyond it, each once and sorted, as the image's voxels come.
       std::vector<std::uint64_t> codes;
       std::normal_distribution<double> direction(0.0, 1.0);
       std::uniform_real_distribution<double> radius(0.5, 1.5);
@@ -79,8 +79,9 @@ TEST(BrickHits, SameHitsAndCountsAsVoxelByVoxel) {
         }
       }
       std::sort(codes.begin(), codes.end());
+      codes.erase(std::unique(codes.begin(), codes.end()), codes.end());
       expect_same(grid, voxel_by_voxel(grid, origin, max_range, codes), by_bricks(grid, origin, max_range, codes), codes);
-      // Unsorted (the same brick again later) gives the same hits too.
+      // Unsorted (a brick's voxels handed over in several parts) gives the same too.
       std::shuffle(codes.begin(), codes.end(), rng);
       expect_same(grid, voxel_by_voxel(grid, origin, max_range, codes), by_bricks(grid, origin, max_range, codes), codes);
     }
@@ -106,6 +107,41 @@ TEST(BrickHits, VoxelsOnTheRangeSphereToTheLastBit) {
     EXPECT_TRUE(exact.batch.holds_hit(morton::encode(key), 0));
     expect_same(grid, exact, by_bricks(grid, origin, max_range, codes), codes);
   }
+}
+
+
+TEST(BrickHits, FloatRoundingAtTheBricksFarCorner) {
+  // Far from the origin a voxel centre's float length can exceed a bound
+  // that its exact length stays below: the per-voxel test truncates that
+  // voxel, so its brick must not be taken as wholly within range. Voxels at
+  // their brick's far corner (keys 3 mod 4 beyond the origin), 60 to 300 m
+  // out, with max_range between the exact and the float length.
+  const Grid grid(0.02, 16);
+  const Vec3f origin{0.001f, 0.002f, 0.003f};
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<std::uint32_t> far(3000, 15000);
+  int checked = 0;
+  for (int i = 0; i < 200000 && checked < 50; ++i) {
+    const Key key{grid.key_offset() + (far(rng) | 3u), grid.key_offset() + (far(rng) | 3u),
+                  grid.key_offset() + (far(rng) | 3u)};
+    const Vec3f offset = grid.center_f(key) - origin;
+    const double in_float = static_cast<double>(offset.x * offset.x + offset.y * offset.y + offset.z * offset.z);
+    const double dx = grid.axis_center(key.x) - origin.x;
+    const double dy = grid.axis_center(key.y) - origin.y;
+    const double dz = grid.axis_center(key.z) - origin.z;
+    const double exact = dx * dx + dy * dy + dz * dz;
+    const double limit = exact * (1.0 + 1.5e-9);
+    if (!(in_float > limit * (1.0 + 1.2e-9))) continue;
+    const double max_range = std::sqrt(limit);
+    ASSERT_TRUE(octomap_norm_exceeds(offset, max_range));
+    std::vector<std::uint64_t> codes{morton::encode({key.x - 1, key.y, key.z}), morton::encode(key)};
+    std::sort(codes.begin(), codes.end());
+    const Hits exact_hits = voxel_by_voxel(grid, origin, max_range, codes);
+    EXPECT_FALSE(exact_hits.batch.holds_hit(morton::encode(key), 0));
+    expect_same(grid, exact_hits, by_bricks(grid, origin, max_range, codes), codes);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 50);
 }
 
 }  // namespace
