@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 
 #include "core/radix_sort.hpp"
 #include "core/thread_pool.hpp"
 #include "core/voxel_codes.hpp"
 #include "integrate/image_row_codes.hpp"
+#include "integrate/row_candidates.hpp"
 
 namespace umbra {
 
@@ -163,22 +165,52 @@ void ImagePoints::for_each_voxel(FunctionRef<void(std::uint64_t)> visit) const {
 
 void ImagePoints::for_each_voxel_in(std::uint64_t first, std::uint64_t end,
                                     FunctionRef<void(std::uint64_t)> visit) const {
-  // Each band's codes in [first, end): a contiguous run of its sorted list.
-  const auto run = [&](const std::vector<std::uint64_t>& list) {
-    const auto begin = std::lower_bound(list.begin(), list.end(), first);
+  // A brick's voxels once, though several bands may hand it over.
+  BrickVoxels pending{0, 0};
+  const auto flush = [&] {
+    for (std::uint64_t rest = pending.voxels; rest != 0; rest &= rest - 1) {
+      visit(pending.brick | static_cast<std::uint64_t>(std::countr_zero(rest)));
+    }
+  };
+  for_each_brick_in(first, end, [&](BrickVoxels bricks) {
+    if (bricks.brick != pending.brick) {
+      flush();
+      pending = {bricks.brick, 0};
+    }
+    pending.voxels |= bricks.voxels;
+  });
+  flush();
+}
+
+void ImagePoints::for_each_brick_in(std::uint64_t first, std::uint64_t end,
+                                    FunctionRef<void(BrickVoxels)> visit) const {
+  if (first >= end) return;
+  constexpr std::uint64_t kBrickCodes = 64;
+  // Each band's bricks that hold codes in [first, end): a contiguous run of
+  // its sorted list; the first and last may hold codes outside it too.
+  const std::uint64_t first_brick = first & ~(kBrickCodes - 1);
+  const auto run = [&](const std::vector<BrickVoxels>& list) {
+    const auto before = [](const BrickVoxels& b, std::uint64_t brick) { return b.brick < brick; };
+    const auto begin = std::lower_bound(list.begin(), list.end(), first_brick, before);
     return std::pair{static_cast<std::size_t>(begin - list.begin()),
-                     static_cast<std::size_t>(std::lower_bound(begin, list.end(), end) - list.begin())};
+                     static_cast<std::size_t>(std::lower_bound(begin, list.end(), end, before) - list.begin())};
+  };
+  // The voxels of `bricks` in [first, end).
+  const auto in_range = [&](BrickVoxels bricks) {
+    if (bricks.brick < first) bricks.voxels &= ~std::uint64_t{0} << (first - bricks.brick);
+    if (end - bricks.brick < kBrickCodes) bricks.voxels &= (std::uint64_t{1} << (end - bricks.brick)) - 1;
+    return bricks;
   };
   // The bands' runs merged a stretch at a time (one band: its run): the
-  // band with the lowest head hands over all its codes up to the lowest
+  // band with the lowest head hands over all its bricks up to the lowest
   // head of the others. The bands are strips of the image, so within a
-  // subtree one band's voxels come in long stretches, and most codes cost
+  // subtree one band's bricks come in long stretches, and most bricks cost
   // a comparison or two. (A heap of the heads cost about 50 instructions a
   // code: 3.5% of the instructions of a TUM frame at 2 cm on two threads,
   // callgrind, and most of what two threads did more than one.)
   struct Run {
-    const std::uint64_t* next;
-    const std::uint64_t* stop;
+    const BrickVoxels* next;
+    const BrickVoxels* stop;
   };
   std::array<Run, 64> small_runs;  // on the stack for up to 32 workers
   std::vector<Run> large_runs;
@@ -187,35 +219,28 @@ void ImagePoints::for_each_voxel_in(std::uint64_t first, std::uint64_t end,
     large_runs.resize(bands_.size());
     runs = large_runs.data();
   }
-  std::size_t open = 0;  // runs[0, open) hold codes
+  std::size_t open = 0;  // runs[0, open) hold bricks
   for (const Band& band : bands_) {
     const auto [begin, stop] = run(band.candidates);
     if (begin < stop) runs[open++] = {band.candidates.data() + begin, band.candidates.data() + stop};
   }
-  std::uint64_t last = kNonFiniteCode;  // no voxel has this code
   while (open > 0) {
     if (open == 1) {  // the last run (or the one band's) needs no comparisons
-      const std::uint64_t* next = runs[0].next;
-      if (*next == last) ++next;  // handed over by another run already
-      for (; next != runs[0].stop; ++next) visit(*next);
+      for (const BrickVoxels* next = runs[0].next; next != runs[0].stop; ++next) visit(in_range(*next));
       return;
     }
     std::size_t lowest = 0;
     std::uint64_t bound = ~std::uint64_t{0};  // the lowest head of the other runs
     for (std::size_t r = 1; r < open; ++r) {
-      if (*runs[r].next < *runs[lowest].next) {
-        bound = *runs[lowest].next;
+      if (runs[r].next->brick < runs[lowest].next->brick) {
+        bound = runs[lowest].next->brick;
         lowest = r;
       } else {
-        bound = std::min(bound, *runs[r].next);
+        bound = std::min(bound, runs[r].next->brick);
       }
     }
-    // A code equal to the bound heads another run too: visited once, here.
     Run& stretch = runs[lowest];
-    for (; stretch.next != stretch.stop && *stretch.next <= bound; ++stretch.next) {
-      if (*stretch.next != last) visit(*stretch.next);
-      last = *stretch.next;
-    }
+    for (; stretch.next != stretch.stop && stretch.next->brick <= bound; ++stretch.next) visit(in_range(*stretch.next));
     if (stretch.next == stretch.stop) runs[lowest] = runs[--open];
   }
 }
@@ -250,26 +275,13 @@ void ImagePoints::find_voxels_streamed(const Grid& grid, const DepthImage& depth
   for (int v = band.row_begin; v < band.row_end; ++v) {
     image_row_codes(grid, depth, column_factor, (v - camera.cy) / camera.fy, pose, v, points, codes);
     // add_candidates' rule (see there), the pixels without a reading
-    // passed over: they neither keep a code nor stand beside one. The
-    // kept codes are compacted in place (the n-th kept is at or before
-    // the pixel it came from).
-    std::uint64_t* const kept = codes;
-    std::size_t n = 0;
-    std::uint64_t left = kNoReadingCode;
-    for (std::size_t u = 0; u < columns; ++u) {
-      const std::uint64_t code = codes[u];
-      const bool reading = code != kNoReadingCode;
-      // `left` is the previous pixel's code, kNoReadingCode where it has no
-      // reading or at the row's start: never equal to a reading's code.
-      const bool repeat = (code == left) | (code == above[u]);
-      kept[n] = code;
-      n += static_cast<std::size_t>((code < kNoReadingCode) & !repeat);
-      scan.non_finite += static_cast<std::size_t>(code == kNonFiniteCode);
-      scan.outside += static_cast<std::size_t>(code == kOutsideCode);
-      left = code;
-      above[u] = reading ? code : above[u];
-    }
-    band.candidates.insert(band.candidates.end(), kept, kept + n);
+    // passed over: they neither keep a code nor stand beside one
+    // (row_candidates.hpp). The kept codes are compacted in place.
+    RowCandidateCounts counts;
+    const std::size_t n = keep_row_candidates(codes, above, columns, counts);
+    scan.non_finite += counts.non_finite;
+    scan.outside += counts.outside;
+    append_candidates(band, codes, n);
   }
   finish_candidates(grid, band, scan);
 }
@@ -319,7 +331,7 @@ void ImagePoints::add_candidates(const Grid& grid, int width, std::span<const Ve
       left = code;
       above[column] = code;
     }
-    band.candidates.insert(band.candidates.end(), kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(n));
+    append_candidates(band, kept.data(), n);
   }
   scan.left = left;
   scan.left_pixel = left_pixel;
@@ -328,11 +340,34 @@ void ImagePoints::add_candidates(const Grid& grid, int width, std::span<const Ve
   scan.outside += outside;
 }
 
+void ImagePoints::append_candidates(Band& band, const std::uint64_t* codes, std::size_t n) {
+  // Codes of one brick in a row (a brick is several pixels wide) join its record.
+  std::vector<BrickVoxels>& list = band.candidates;
+  for (std::size_t i = 0; i < n; ++i) {
+    const BrickVoxels voxel{codes[i] & ~std::uint64_t{63}, std::uint64_t{1} << (codes[i] & 63)};
+    if (!list.empty() && list.back().brick == voxel.brick) {
+      list.back().voxels |= voxel.voxels;
+    } else {
+      list.push_back(voxel);
+    }
+  }
+}
+
 void ImagePoints::finish_candidates(const Grid& grid, Band& band, const VoxelScan& scan) {
   band.non_finite = scan.non_finite;
   band.out_of_bounds = scan.outside;
-  radix_sort(band.candidates, 3 * grid.depth_levels(), [](std::uint64_t code) { return code; }, band.sort_scratch);
-  band.candidates.erase(std::unique(band.candidates.begin(), band.candidates.end()), band.candidates.end());
+  std::vector<BrickVoxels>& list = band.candidates;
+  radix_sort(list, 3 * grid.depth_levels() - 6, [](const BrickVoxels& b) { return b.brick >> 6; }, band.sort_scratch);
+  // One record a brick: its records' voxels together.
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    if (kept > 0 && list[kept - 1].brick == list[i].brick) {
+      list[kept - 1].voxels |= list[i].voxels;
+    } else {
+      list[kept++] = list[i];
+    }
+  }
+  list.resize(kept);
 }
 
 std::size_t ImagePoints::memory_bytes() const {
@@ -342,9 +377,8 @@ std::size_t ImagePoints::memory_bytes() const {
   for (const Band& band : bands_) {
     bytes += band.row_factors.capacity() * sizeof(double) + band.row_points.capacity() * sizeof(Vec3f) +
              band.row_codes.capacity() * sizeof(std::uint64_t);
-    bytes += (band.candidates.capacity() + band.above.capacity() + band.sort_scratch.records.capacity()) *
-                 sizeof(std::uint64_t) +
-             band.sort_scratch.counts.capacity() * sizeof(std::uint32_t);
+    bytes += (band.candidates.capacity() + band.sort_scratch.records.capacity()) * sizeof(BrickVoxels) +
+             band.above.capacity() * sizeof(std::uint64_t) + band.sort_scratch.counts.capacity() * sizeof(std::uint32_t);
   }
   return bytes;
 }

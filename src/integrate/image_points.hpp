@@ -29,6 +29,7 @@
 #include "umbra/core/vec3.hpp"
 #include "umbra/integrate/depth_image.hpp"
 #include "core/radix_sort.hpp"
+#include "integrate/brick_hits.hpp"
 
 namespace umbra {
 
@@ -78,6 +79,10 @@ class ImagePoints {
   void for_each_voxel(FunctionRef<void(std::uint64_t)> visit) const;
   /// The same for the voxels whose codes lie in [first, end) (a subtree's, for its worker).
   void for_each_voxel_in(std::uint64_t first, std::uint64_t end, FunctionRef<void(std::uint64_t)> visit) const;
+  /// The same voxels a brick at a time: visit(bricks) in increasing brick
+  /// order, each brick's voxels in [first, end) that hold a point. A brick
+  /// that several bands hold is visited once for each, one after another.
+  void for_each_brick_in(std::uint64_t first, std::uint64_t end, FunctionRef<void(BrickVoxels)> visit) const;
   [[nodiscard]] std::size_t non_finite() const { return non_finite_; }
   [[nodiscard]] std::size_t out_of_bounds() const { return out_of_bounds_; }
 
@@ -89,9 +94,13 @@ class ImagePoints {
     int row_end = 0;
     std::size_t first = 0;  // its first point in points_
     std::size_t count = 0;
-    std::vector<std::uint64_t> candidates;  // its voxel codes: sorted, each once
-    std::vector<std::uint64_t> above;       // the code last seen in each column
-    RadixSortScratch<std::uint64_t> sort_scratch;
+    // Its voxels by brick: sorted, each brick once. A brick of 4x4x4
+    // voxels holds about 17 of a TUM frame's voxels at 2 cm, and a row's
+    // candidates mostly come a few to a brick: kept as bricks, a frame's
+    // sort moves about 3 times fewer records than as voxel codes.
+    std::vector<BrickVoxels> candidates;
+    std::vector<std::uint64_t> above;  // the code last seen in each column
+    RadixSortScratch<BrickVoxels> sort_scratch;
     std::size_t non_finite = 0;
     std::size_t out_of_bounds = 0;
     // voxels_only: one row's x factors, points and codes at a time (kept between images).
@@ -117,7 +126,9 @@ class ImagePoints {
   /// receives their codes when not null.
   static void add_candidates(const Grid& grid, int width, std::span<const Vec3f> points, const std::uint32_t* pixels,
                              std::uint64_t* codes, Band& band, VoxelScan& scan);
-  /// Sorts the band's candidates and drops repeats; sets its counts from `scan`.
+  /// Adds the voxel codes codes[0, n) to the band's candidates.
+  static void append_candidates(Band& band, const std::uint64_t* codes, std::size_t n);
+  /// Sorts the band's candidates and merges repeated bricks; sets its counts from `scan`.
   static void finish_candidates(const Grid& grid, Band& band, const VoxelScan& scan);
   /// Empties the band's candidates for a scan of its pixels from the start.
   static VoxelScan start_scan(int width, Band& band);

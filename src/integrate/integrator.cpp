@@ -8,6 +8,7 @@
 
 #include "core/radix_sort.hpp"
 #include "core/voxel_codes.hpp"
+#include "integrate/brick_hits.hpp"
 #include "integrate/scan_images.hpp"
 #include "integrate/color_samples.hpp"
 #include "integrate/end_voxels.hpp"
@@ -419,9 +420,15 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
   // them instead (hits_in), so that no batch holds hits all over the image.
   InsertStats hit_stats;
   const auto add_hits_in = [&](std::uint64_t first, std::uint64_t end, UpdateBatch& batch, InsertStats& counts) {
-    image_points_.for_each_voxel_in(first, end, [&](std::uint64_t code) {
-      if (add_end_voxel_hit(grid, origin, code, options.max_range, box, box_keys, batch, counts)) ++counts.hits;
-    });
+    if (box) {  // each voxel's ray clipped by the box
+      image_points_.for_each_voxel_in(first, end, [&](std::uint64_t code) {
+        if (add_end_voxel_hit(grid, origin, code, options.max_range, box, box_keys, batch, counts)) ++counts.hits;
+      });
+      return;
+    }
+    // The voxels come a brick at a time, sorted (brick_hits.hpp).
+    BrickHits hits(grid, origin, options.max_range, batch, counts);
+    image_points_.for_each_brick_in(first, end, [&](BrickVoxels voxels) { hits.add(voxels); });
   };
   const auto side_job = [&](std::size_t job, UpdateBatch& batch) {
     if (job == 0) {

@@ -103,21 +103,23 @@ std::uint32_t UpdateBatch::descend(std::uint64_t code, int depth, Mark mark) {
   return group;
 }
 
-bool UpdateBatch::add_hit(std::uint64_t code) {
+int UpdateBatch::add_hits_in_brick(std::uint64_t code, std::uint64_t voxels) {
   const std::uint32_t group = descend(code, 1, Mark::hit);
-  std::uint8_t& hits = bricks_[group].hit[morton::slot(code, 1)];
-  const auto bit = static_cast<std::uint8_t>(1u << morton::slot(code, 0));
-  if ((hits & bit) != 0) return false;  // its path already holds the marks below
-  hits |= bit;
-  // Every group on the path now holds a hit (path_ is valid from depth 1 up);
-  // above the first group that already said so, all do.
+  Brick& brick = bricks_[group];
+  const auto had = std::bit_cast<std::uint64_t>(brick.hit);
+  const std::uint64_t added = voxels & ~had;
+  if (added == 0) return 0;  // its path already holds the marks below
+  brick.hit = std::bit_cast<std::array<std::uint8_t, 8>>(had | added);
+  // Every group on the path now holds a hit (path_ is valid from depth 1 up;
+  // a brick's voxels share their path from depth 2): above the first group
+  // that already said so, all do.
   for (int d = 2; d <= depth_levels_; ++d) {
     std::uint8_t& marks = inner_[d][path_[d]].hits;
     const auto slot_bit = static_cast<std::uint8_t>(1u << morton::slot(code, d));
     if ((marks & slot_bit) != 0) break;
     marks |= slot_bit;
   }
-  return true;
+  return std::popcount(added);
 }
 
 void UpdateBatch::add_misses_slow(std::uint64_t code, std::uint64_t voxels) {

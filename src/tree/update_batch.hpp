@@ -69,7 +69,12 @@ class UpdateBatch {
 
   /// The finest voxel `code` gets a hit (wins over any miss). True when it
   /// had none before.
-  bool add_hit(std::uint64_t code);
+  bool add_hit(std::uint64_t code) { return add_hits_in_brick(code, std::uint64_t{1} << (code & 63)) != 0; }
+
+  /// Hits for several voxels of one brick (bit i of `voxels`: the voxel
+  /// whose code is (code & ~63) + i, as for add_misses_in_brick): one
+  /// descent for all of them. Returns how many had no hit before.
+  int add_hits_in_brick(std::uint64_t code, std::uint64_t voxels);
 
   /// The finest voxel `code` gets a miss, unless it gets a hit.
   void add_miss(std::uint64_t code) { add_misses_in_brick(code, std::uint64_t{1} << (code & 63)); }
