@@ -122,7 +122,9 @@ TEST(ThreadPool, SpinningAndSleepingWaitsRunEveryTaskOnceBeforeRunReturns) {
 
 // The spinning waits' CPU time is counted apart (JobCpuTimes::waiting_seconds),
 // so that the serial part (CPU time outside jobs and waits) stays the work
-// outside the jobs: here one worker waits while another runs a 3 ms task.
+// outside the jobs: here one thread waits while the other runs a 3 ms task,
+// and the worker waits for a next job that does not come. A wait is counted
+// when it ends: the test lets the spins run out before it looks.
 TEST(ThreadPool, JobAccountingCountsTheSpinningWaitsApart) {
   if (ThreadPool::hardware_threads() < 2) GTEST_SKIP() << "one hardware thread: the pool does not spin";
   ThreadPool pool(2);
@@ -135,6 +137,7 @@ TEST(ThreadPool, JobAccountingCountsTheSpinningWaitsApart) {
     while (thread_cpu_seconds() < end) {
     }
   });
+  std::this_thread::sleep_for(std::chrono::duration<double>(3 * ThreadPool::kSpinSeconds));
   const JobCpuTimes after = job_cpu_times();
   set_job_cpu_accounting(false);
   EXPECT_GT(after.waiting_seconds, before.waiting_seconds);
