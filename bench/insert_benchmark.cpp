@@ -199,7 +199,10 @@ Measurement measure_in_this_process(const Dataset& data, const Method& method, d
       m.scan_seconds[i] = std::chrono::duration<double>(Clock::now() - start).count();
       m.scan_cpu_seconds[i] = process_cpu_seconds() - cpu_start;
       const umbra::JobCpuTimes jobs_end = umbra::job_cpu_times();
-      m.scan_job_seconds[i] = jobs_end.all_seconds - jobs_start.all_seconds;
+      // The pools' spinning waits are neither jobs nor serial work: counted with the jobs, so that
+      // the serial part stays the work outside them (the CPU columns keep the spin).
+      m.scan_job_seconds[i] = jobs_end.all_seconds - jobs_start.all_seconds +
+                              (jobs_end.waiting_seconds - jobs_start.waiting_seconds);
       m.scan_busiest_seconds[i] = jobs_end.busiest_seconds - jobs_start.busiest_seconds;
       m.scan_scheduled_seconds[i] = jobs_end.scheduled_seconds - jobs_start.scheduled_seconds;
     }

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <ctime>
 #include <system_error>
 
@@ -20,6 +21,15 @@ unsigned hardware_threads() { return ThreadPool::hardware_threads(); }
 unsigned max_threads() { return ThreadPool::max_threads(); }
 
 namespace {
+
+/// A hint to the core that this thread is spinning (x86: pause).
+inline void cpu_relax() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#else
+  std::this_thread::yield();
+#endif
+}
 
 std::atomic<bool> g_accounting{false};
 std::mutex g_totals_mutex;
@@ -72,7 +82,8 @@ unsigned ThreadPool::hardware_threads() {
 
 unsigned ThreadPool::max_threads() { return std::max(kMinThreadLimit, kThreadsPerCore * hardware_threads()); }
 
-ThreadPool::ThreadPool(unsigned threads) : requested_(threads == 0 ? hardware_threads() : threads) {
+ThreadPool::ThreadPool(unsigned threads)
+    : requested_(threads == 0 ? hardware_threads() : threads), spins_(requested_ <= hardware_threads()) {
   workers_.reserve(requested_ - 1);
   for (unsigned w = 1; w < requested_; ++w) {
     try {
@@ -86,7 +97,7 @@ ThreadPool::ThreadPool(unsigned threads) : requested_(threads == 0 ? hardware_th
 ThreadPool::~ThreadPool() {
   {
     std::lock_guard lock(mutex_);
-    stopping_ = true;
+    stopping_.store(true, std::memory_order_release);
   }
   wake_.notify_all();
   for (std::thread& t : workers_) t.join();
@@ -119,14 +130,16 @@ void ThreadPool::run(std::size_t tasks, const std::function<void(std::size_t, un
     tasks_ = tasks;
     next_task_.store(0, std::memory_order_relaxed);
     failed_.store(false, std::memory_order_relaxed);
-    busy_ = static_cast<unsigned>(workers_.size());
+    busy_.store(static_cast<unsigned>(workers_.size()), std::memory_order_relaxed);
     failure_ = nullptr;
-    ++generation_;
+    // Release: a worker that sees the new generation sees the job above.
+    generation_.fetch_add(1, std::memory_order_release);
   }
   wake_.notify_all();
   work_on_job(0);
+  (void)spin_until([this] { return busy_.load(std::memory_order_acquire) == 0; });
   std::unique_lock lock(mutex_);
-  done_.wait(lock, [this] { return busy_ == 0; });
+  done_.wait(lock, [this] { return busy_.load(std::memory_order_relaxed) == 0; });
   job_ = nullptr;
   job_seconds_ = nullptr;
   if (accounting) {
@@ -163,19 +176,55 @@ void ThreadPool::work_on_job(unsigned worker) {
   if (seconds != nullptr) seconds->seconds = thread_cpu_seconds() - start;
 }
 
+template <typename Done>
+bool ThreadPool::spin_until(const Done& done) const {
+  if (!spins_ || done()) return done();
+  // Job CPU accounting: the spin's CPU time, apart from the serial work.
+  struct Waiting {
+    double start = g_accounting.load(std::memory_order_relaxed) ? thread_cpu_seconds() : -1.0;
+    ~Waiting() {
+      if (start < 0.0) return;
+      const double seconds = thread_cpu_seconds() - start;
+      std::lock_guard lock(g_totals_mutex);
+      g_totals.waiting_seconds += seconds;
+    }
+  } waiting;
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point stop = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                    std::chrono::duration<double>(kSpinSeconds));
+  const Clock::time_point yield_from = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                          std::chrono::duration<double>(kPureSpinSeconds));
+  for (;;) {
+    // The clock now and then only: a read is a few tens of nanoseconds.
+    for (int i = 0; i < 64; ++i) {
+      if (done()) return true;
+      cpu_relax();
+    }
+    const Clock::time_point now = Clock::now();
+    // Past the first few microseconds, hand the core to any other thread
+    // that wants it (on an idle core this returns at once, without a halt).
+    if (now >= yield_from) std::this_thread::yield();
+    if (now >= stop) return done();
+  }
+}
+
 void ThreadPool::worker_loop(unsigned worker) {
   std::size_t seen = 0;
+  const auto news = [&] {
+    return stopping_.load(std::memory_order_acquire) || generation_.load(std::memory_order_acquire) != seen;
+  };
   for (;;) {
-    {
+    if (!spin_until(news)) {
       std::unique_lock lock(mutex_);
-      wake_.wait(lock, [&] { return stopping_ || generation_ != seen; });
-      if (stopping_) return;
-      seen = generation_;
+      wake_.wait(lock, news);
     }
+    if (stopping_.load(std::memory_order_acquire)) return;
+    seen = generation_.load(std::memory_order_acquire);
     work_on_job(worker);
     {
+      // Under the lock, so that a caller about to sleep on done_ cannot miss it.
       std::lock_guard lock(mutex_);
-      --busy_;
+      busy_.fetch_sub(1, std::memory_order_release);
     }
     done_.notify_one();
   }

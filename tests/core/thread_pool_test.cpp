@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -21,6 +22,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -90,6 +92,55 @@ TEST(ThreadPool, JobAccountingSchedulesTheTasksOnThePoolsWorkers) {
   EXPECT_GE(scheduled, 5.9e-3);  // the long task: each task's time has the clock's own cost taken off
   EXPECT_LT(scheduled, 8e-3);    // not every task on one worker (10 ms)
   EXPECT_LE(scheduled, all);
+}
+
+// Waiting threads spin for up to ThreadPool::kSpinSeconds, then sleep: jobs
+// back to back (the workers see them while spinning), jobs after a pause
+// longer than the spin (the workers sleep and are woken) and jobs whose
+// last task outlasts the caller's spin (the caller sleeps until the workers
+// are done) all run every task once and return only when all are done.
+// With more threads than hardware threads nobody spins.
+TEST(ThreadPool, SpinningAndSleepingWaitsRunEveryTaskOnceBeforeRunReturns) {
+  for (const unsigned threads : {2u, ThreadPool::hardware_threads(), 3u * ThreadPool::hardware_threads()}) {
+    ThreadPool pool(threads);
+    std::vector<std::atomic<int>> runs(16);
+    for (int job = 0; job < 300; ++job) {
+      for (auto& r : runs) r.store(0);
+      const bool pause = job % 50 == 1;  // the workers' spins end: they sleep
+      const bool long_task = job % 50 == 2;  // the caller's spin ends: it sleeps
+      if (pause) std::this_thread::sleep_for(std::chrono::duration<double>(3 * ThreadPool::kSpinSeconds));
+      pool.run(runs.size(), [&](std::size_t task, unsigned) {
+        if (long_task && task == runs.size() - 1) {
+          std::this_thread::sleep_for(std::chrono::duration<double>(3 * ThreadPool::kSpinSeconds));
+        }
+        runs[task].fetch_add(1);
+      });
+      for (const auto& r : runs) ASSERT_EQ(r.load(), 1) << threads << " threads, job " << job;
+    }
+  }
+}
+
+// The spinning waits' CPU time is counted apart (JobCpuTimes::waiting_seconds),
+// so that the serial part (CPU time outside jobs and waits) stays the work
+// outside the jobs: here one thread waits while the other runs a 3 ms task,
+// and the worker waits for a next job that does not come. A wait is counted
+// when it ends: the test lets the spins run out before it looks.
+TEST(ThreadPool, JobAccountingCountsTheSpinningWaitsApart) {
+  if (ThreadPool::hardware_threads() < 2) GTEST_SKIP() << "one hardware thread: the pool does not spin";
+  ThreadPool pool(2);
+  if (pool.size() != 2) GTEST_SKIP() << "the system started no second thread";
+  set_job_cpu_accounting(true);
+  const JobCpuTimes before = job_cpu_times();
+  pool.run(2, [](std::size_t task, unsigned) {
+    if (task != 0) return;
+    const double end = thread_cpu_seconds() + 3e-3;
+    while (thread_cpu_seconds() < end) {
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::duration<double>(3 * ThreadPool::kSpinSeconds));
+  const JobCpuTimes after = job_cpu_times();
+  set_job_cpu_accounting(false);
+  EXPECT_GT(after.waiting_seconds, before.waiting_seconds);
 }
 
 TEST(ThreadPool, ThreadLimitIsFourPerCoreAndAtLeastSixteen) {

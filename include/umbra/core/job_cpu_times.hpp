@@ -14,6 +14,10 @@ struct JobCpuTimes {
   /// not grow when other processes preempt a worker (the pool then hands
   /// the running worker more tasks).
   double scheduled_seconds = 0.0;
+  /// CPU time the pools' threads spent spinning while they waited, for the
+  /// next job or for the others to finish a job (ThreadPool::kSpinSeconds
+  /// at most a wait): outside the jobs, but no serial work either.
+  double waiting_seconds = 0.0;
   unsigned long long jobs = 0;
 };
 
