@@ -721,19 +721,24 @@ TEST(ProjectiveIntegrator, NodesBesideAnImageAreSkippedWithoutLosingMisses) {
   // at 1 m, computed here from the camera-frame corners) is
   // called "none", also those near the image whose voxels' windows would
   // reach into it (the test of the projected rectangle widens by them).
-  std::mt19937 rng(41);
+  struct Case {
+    double resolution;
+    double max_range;
+    double margin;
+  };
+  constexpr Case kCases[] = {{0.03, -1.0, 0.0}, {0.05, 1.4, 0.0}, {0.03, -1.0, 0.02}, {0.05, -1.0, 0.0}};
   constexpr int kDepthLevels = 7;
+  std::mt19937 rng(41);
   std::size_t beside = 0;
   for (int trial = 0; trial < 4; ++trial) {
-    const Grid grid(trial % 2 == 0 ? 0.03 : 0.05, kDepthLevels);
-    const Vec3f origin{0.007f * trial, -0.013f, 0.019f};
-    const std::vector<Vec3f> points = random_room_scan(rng, origin, true);
-    const ScanResolution resolution = estimate_scan_resolution(origin, points, {});
-    ASSERT_GT(resolution.horizontal, 0.0);
+    const Case& setting = kCases[trial];
+    const Grid grid(setting.resolution, kDepthLevels);
+    const Vec3f scan_origin{0.007f * trial, -0.013f, 0.019f};
+    const std::vector<Vec3f> points = random_room_scan(rng, scan_origin, true);
     ScanImages images;
-    images.build(origin, points, resolution);
+    images.build(scan_origin, points, estimate_scan_resolution(scan_origin, points, {}));
     for (const ProjectiveFrame& face : images.faces()) {
-      const ProjectiveRule rule(grid, face, trial == 1 ? 1.4 : -1.0, trial == 2 ? 0.02 : 0.0, std::nullopt);
+      const ProjectiveRule rule(grid, face, setting.max_range, setting.margin, std::nullopt);
       const ProjectiveTracer tracer(rule);
       std::vector<std::uint64_t> cleared;  // per brick, the definition
       for (std::uint64_t brick = 0; brick < (std::uint64_t{1} << (3 * kDepthLevels)); brick += 64) {
