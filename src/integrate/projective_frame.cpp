@@ -355,16 +355,13 @@ ProjectiveRule::VoxelVerdicts ProjectiveRule::voxel_verdicts(std::uint64_t brick
     const float u = std::min(std::max(u_free, 0.0f), width_inside);
     const float v = std::min(std::max(v_free, 0.0f), height_inside);
     float d = 0.0f;
-    if (level == 0) {
+    if (level == 0 && !frame->depth_halves.empty()) {
+      // Its half pixel's reading: the half's nearest, else its pixel's (u + u and v + v are exact).
+      d = frame->depth_halves[static_cast<std::size_t>(static_cast<int>(v + v)) * static_cast<std::size_t>(2 * cells_wide) +
+                              static_cast<std::size_t>(static_cast<int>(u + u))];
+    } else if (level == 0) {
       d = readings[static_cast<std::size_t>(static_cast<int>(v)) * static_cast<std::size_t>(cells_wide) +
                 static_cast<std::size_t>(static_cast<int>(u))];
-      if (!frame->depth_halves.empty()) {
-        // Its half pixel's nearest reading, where it has one (u + u and v + v are exact).
-        const float half = frame->depth_halves[static_cast<std::size_t>(static_cast<int>(v + v)) *
-                                                   static_cast<std::size_t>(2 * cells_wide) +
-                                               static_cast<std::size_t>(static_cast<int>(u + u))];
-        if (half > 0.0f) d = half;
-      }
     } else {
       // The window's first cell (a, b), and its maximum from window_max.
       const int a = static_cast<int>(std::floor(u * scale - 0.5f));

@@ -150,9 +150,11 @@ struct ProjectiveFrame {
   int width = 0;
   int height = 0;
   std::vector<float> depth;  ///< metres, row by row; 0: no reading
-  /// Images of scans (scan_images.hpp): the nearest reading of each half
-  /// pixel, (2 width) x (2 height), 0 where none; `depth` holds each pixel's
-  /// nearest. Empty for depth images (one reading a pixel).
+  /// Images of scans (scan_images.hpp): what a voxel reads at level 0 in
+  /// each half pixel, (2 width) x (2 height): the half's nearest reading
+  /// where it has one, else its pixel's nearest (0 where the pixel has
+  /// none); `depth` holds each pixel's nearest. Empty for depth images (one
+  /// reading a pixel).
   std::vector<float> depth_halves;
   /// With depth_halves: the largest of each pixel's four halves (the
   /// pyramid's maxima start from it).

@@ -16,6 +16,44 @@ constexpr double kRelativeError = kProjectiveRelativeError;
 
 }  // namespace
 
+ProjectiveTracer::ProjectiveTracer(const ProjectiveRule& rule) : rule_(rule) {
+  if (rule.tree != nullptr) cursor_.emplace(*rule.tree);
+  const ProjectiveFrame& frame = *rule.frame;
+  const auto axis = [&](std::size_t row) {
+    return Vec3d{frame.rotation[row][0], frame.rotation[row][1], frame.rotation[row][2]};
+  };
+  const Vec3d x = axis(0);
+  const Vec3d y = axis(1);
+  const Vec3d z = axis(2);
+  const double u_offset = frame.cx + 0.5;  // u = fx x / z + u_offset, as the rule's
+  const double v_offset = frame.cy + 0.5;
+  // In the camera frame u >= -edge / z is fx x + u_offset z + edge >= 0, and
+  // u < width + edge / z is -(fx x + (u_offset - width) z) + edge > 0; v likewise.
+  side_planes_ = {x * frame.fx + z * u_offset, (x * frame.fx + z * (u_offset - frame.width)) * -1.0,
+                  y * frame.fy + z * v_offset, (y * frame.fy + z * (v_offset - frame.height)) * -1.0};
+  side_planes_scale_ = frame.fx + frame.fy + std::abs(u_offset) + std::abs(u_offset - frame.width) +
+                       std::abs(v_offset) + std::abs(v_offset - frame.height);
+}
+
+bool ProjectiveTracer::outside_image_sides(Vec3d lo, double span, double far, double pad) const {
+  // A plane's linear function over the box of centres is largest at the
+  // box's middle plus |normal| . half the span; a centre off by `pad`
+  // metres and the rule's float rounding move it by at most plane_pad (the
+  // bound of outside_planes in classify_node, whose corner coordinates are
+  // bounded here by the farthest centre's distance). A voxel whose centre
+  // lies beyond the edge reach outside a side is not seen
+  // (projective_frame.hpp), whatever its window.
+  const double half = 0.5 * span;
+  const Vec3d middle = Vec3d{lo.x + half, lo.y + half, lo.z + half} - rule_.frame->origin;
+  const double edge = rule_.edge_reach * (1.0 + kRelativeError);
+  const double plane_pad = 1e-5 * (side_planes_scale_ * far + edge) + side_planes_scale_ * pad + 1e-9;
+  for (const Vec3d& plane : side_planes_) {
+    const double largest = plane.dot(middle) + (std::abs(plane.x) + std::abs(plane.y) + std::abs(plane.z)) * half;
+    if (largest + edge < -plane_pad) return true;
+  }
+  return false;
+}
+
 ProjectiveTracer::Decision ProjectiveTracer::classify(std::uint64_t code, int depth) const {
   return classify_node(morton::decode(code), depth);
 }
@@ -61,6 +99,11 @@ ProjectiveTracer::Decision ProjectiveTracer::classify_node(Key first, int depth,
     }
   }
   if (all_in_range != nullptr) *all_in_range = within_range;
+  // Beyond the edge reach outside a side of the image: no voxel is seen.
+  // Asked before the node's corners are projected (sixteen divisions): a
+  // scan's walks test many nodes beside their images (a node beside one
+  // image lies in the next), most of the node tests of the 3DTK scans.
+  if (outside_image_sides(lo, span, far, pad)) return Decision::none;
 
   // The eight corners of that box in the camera frame.
   const CentreBox box(frame, lo, span);

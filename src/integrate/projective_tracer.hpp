@@ -27,6 +27,7 @@
 // into independent subtrees for threads (Integrator::trace_image).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -41,9 +42,7 @@ class ProjectiveTracer {
  public:
   enum class Decision : std::uint8_t { none, all, split };
 
-  explicit ProjectiveTracer(const ProjectiveRule& rule) : rule_(rule) {
-    if (rule.tree != nullptr) cursor_.emplace(*rule.tree);
-  }
+  explicit ProjectiveTracer(const ProjectiveRule& rule);
 
   /// What the rule does to the voxels of the depth-`depth` node (depth >= 2)
   /// whose first voxel is `code`: clears none, clears all, or only some (or
@@ -81,7 +80,18 @@ class ProjectiveTracer {
   /// Whether the map holds an obstacle in the depth-`depth` node `code`.
   [[nodiscard]] bool holds_obstacle(std::uint64_t code, int depth) const;
 
+  /// Whether the node whose voxel centres span [lo, lo + span] on each map
+  /// axis lies wholly beyond the edge reach outside one side of the image
+  /// (no voxel of it is seen); `far`: the farthest centre's distance from
+  /// the camera, `pad`: classify_node's.
+  [[nodiscard]] bool outside_image_sides(Vec3d lo, double span, double far, double pad) const;
+
   const ProjectiveRule& rule_;
+  /// The image's four sides as planes through the camera in the map frame
+  /// (left, right, top, bottom): a point p sees the image's side of plane i
+  /// where side_planes_[i] . (p - origin) + edge_reach >= 0.
+  std::array<Vec3d, 4> side_planes_;
+  double side_planes_scale_ = 0.0;  ///< fx + fy + the four planes' |offsets|: bounds a plane's terms per metre
   // Looks up known obstacles along the walk (a walk is in Morton order, so
   // consecutive lookups share most of their path). One per tracer: a
   // tracer belongs to one thread.

@@ -222,15 +222,26 @@ void ScanImages::build(Vec3f origin, std::span<const Vec3f> points, ScanResoluti
   }
   for (std::size_t k = 0; k < held_; ++k) {
     ProjectiveFrame& face = faces_[k];
-    // The pyramid's maxima: each pixel's farthest half (by its nearest reading).
+    // The pyramid's maxima: each pixel's farthest half (by its nearest
+    // reading). Then the halves without a point of a pixel with one take
+    // the pixel's nearest reading, the one a voxel there reads
+    // (projective_frame.hpp): one read a voxel instead of two. Their
+    // farthest stays the same (the pixel's nearest is no farther than any
+    // of its halves').
     std::vector<float>& farthest = face.farthest_half;
     assign_zeros(farthest, face.depth.size());
     const std::size_t wide = 2 * std::size_t(face.width);
     for (std::size_t y = 0; y < std::size_t(face.height); ++y) {
       for (std::size_t x = 0; x < std::size_t(face.width); ++x) {
-        const float* top = &face.depth_halves[2 * y * wide + 2 * x];
-        const float* bottom = top + wide;
-        farthest[y * std::size_t(face.width) + x] = std::max(std::max(top[0], top[1]), std::max(bottom[0], bottom[1]));
+        float* top = &face.depth_halves[2 * y * wide + 2 * x];
+        float* bottom = top + wide;
+        const std::size_t at = y * std::size_t(face.width) + x;
+        farthest[at] = std::max(std::max(top[0], top[1]), std::max(bottom[0], bottom[1]));
+        const float nearest = face.depth[at];
+        top[0] = top[0] == 0.0f ? nearest : top[0];
+        top[1] = top[1] == 0.0f ? nearest : top[1];
+        bottom[0] = bottom[0] == 0.0f ? nearest : bottom[0];
+        bottom[1] = bottom[1] == 0.0f ? nearest : bottom[1];
       }
     }
     face.pyramid.build(face.depth.data(), farthest.data(), face.width, face.height);

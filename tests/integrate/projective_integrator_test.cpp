@@ -739,6 +739,74 @@ TEST(ProjectiveIntegrator, ScanImagesWithHolesFollowTheRule) {
   EXPECT_GT(cleared_bricks, 100u);
 }
 
+TEST(ProjectiveIntegrator, NodesBesideAnImageAreSkippedWithoutLosingMisses) {
+  // The walk skips a node whose voxel centres all lie beyond the edge reach
+  // outside one side of an image before projecting it
+  // (ProjectiveTracer::outside_image_sides). On the images of scans with
+  // holes, at every depth from bricks' parents up: every node the walk
+  // calls "none" clears nothing by the rule, brick by brick; and every node
+  // wholly beside an image (its centres' corners beyond a side by a pixel
+  // at 1 m, computed here from the camera-frame corners) is
+  // called "none", also those near the image whose voxels' windows would
+  // reach into it (the test of the projected rectangle widens by them).
+  struct Case {
+    double resolution;
+    double max_range;
+    double margin;
+  };
+  constexpr Case kCases[] = {{0.03, -1.0, 0.0}, {0.05, 1.4, 0.0}, {0.03, -1.0, 0.02}, {0.05, -1.0, 0.0}};
+  constexpr int kDepthLevels = 7;
+  std::mt19937 rng(41);
+  std::size_t beside = 0;
+  for (int trial = 0; trial < 4; ++trial) {
+    const Case& setting = kCases[trial];
+    const Grid grid(setting.resolution, kDepthLevels);
+    const Vec3f scan_origin{0.007f * trial, -0.013f, 0.019f};
+    const std::vector<Vec3f> points = random_room_scan(rng, scan_origin, true);
+    ScanImages images;
+    images.build(scan_origin, points, estimate_scan_resolution(scan_origin, points, {}));
+    for (const ProjectiveFrame& face : images.faces()) {
+      const ProjectiveRule rule(grid, face, setting.max_range, setting.margin, std::nullopt);
+      const ProjectiveTracer tracer(rule);
+      std::vector<std::uint64_t> cleared;  // per brick, the definition
+      for (std::uint64_t brick = 0; brick < (std::uint64_t{1} << (3 * kDepthLevels)); brick += 64) {
+        cleared.push_back(rule.cleared_plain(brick));
+      }
+      for (int depth = 3; depth <= 5; ++depth) {
+        const std::uint64_t voxels = std::uint64_t{1} << (3 * depth);
+        for (std::uint64_t node = 0; node < (std::uint64_t{1} << (3 * kDepthLevels)); node += voxels) {
+          const ProjectiveTracer::Decision decision = tracer.classify(node, depth);
+          if (decision == ProjectiveTracer::Decision::none) {
+            for (std::uint64_t brick = node; brick < node + voxels; brick += 64) {
+              ASSERT_EQ(cleared[brick / 64], 0u) << "trial " << trial << " node " << node << " depth " << depth;
+            }
+          }
+          // The corners of the box of the node's voxel centres, camera frame.
+          const Key first = morton::decode(node);
+          const double span = ((1u << depth) - 1) * grid.resolution();
+          std::array<double, 4> nearest_side{1e300, 1e300, 1e300, 1e300};  // the largest of each side's function, negated
+          for (unsigned i = 0; i < 8; ++i) {
+            const Vec3d c = face.to_camera(Vec3d{grid.axis_center(first.x) + (i & 1u ? span : 0.0),
+                                                 grid.axis_center(first.y) + (i & 2u ? span : 0.0),
+                                                 grid.axis_center(first.z) + (i & 4u ? span : 0.0)});
+            const double sides[4] = {face.fx * c.x + (face.cx + 0.5) * c.z,
+                                     -(face.fx * c.x + (face.cx + 0.5 - face.width) * c.z),
+                                     face.fy * c.y + (face.cy + 0.5) * c.z,
+                                     -(face.fy * c.y + (face.cy + 0.5 - face.height) * c.z)};
+            for (std::size_t k = 0; k < 4; ++k) nearest_side[k] = std::min(nearest_side[k], -(sides[k] + rule.edge_reach));
+          }
+          if (*std::max_element(nearest_side.begin(), nearest_side.end()) > 1.0) {
+            ++beside;
+            EXPECT_EQ(decision, ProjectiveTracer::Decision::none)
+                << "trial " << trial << " node " << node << " depth " << depth;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(beside, 1000u);
+}
+
 TEST(ProjectiveIntegrator, NodesInTheConeOfEmptyPixelsAreSkipped) {
   // A wall 5 m in front of a camera, with four columns of pixels without a
   // reading: a node whose voxels project only onto those columns clears
@@ -825,6 +893,12 @@ TEST(ProjectiveIntegrator, ScanImagesHoldEveryPointOfEveryImage) {
         ++held;
       }
       ASSERT_EQ(face.depth, depth) << "trial " << trial;
+      // A half without a point reads its pixel's nearest.
+      for (std::size_t half = 0; half < halves.size(); ++half) {
+        const std::size_t row = half / std::size_t(2 * face.width);
+        const std::size_t column = half % std::size_t(2 * face.width);
+        if (halves[half] == 0.0f) halves[half] = depth[row / 2 * std::size_t(face.width) + column / 2];
+      }
       ASSERT_EQ(face.depth_halves, halves) << "trial " << trial;
       for (std::size_t at = 0; at < rays.size(); ++at) {
         ASSERT_EQ(face.pixel_rays[at + 1] - face.pixel_rays[at], rays[at]) << "trial " << trial << " pixel " << at;
