@@ -76,10 +76,11 @@ std::uint64_t BrickHits::in_range(std::uint64_t voxels) const {
 
 void BrickHits::flush() {
   if (voxels_ == 0) return;
-  const std::uint64_t kept = in_range(voxels_);
-  stats_.truncated += static_cast<std::size_t>(std::popcount(voxels_ & ~kept));
-  if (kept != 0) stats_.hits += static_cast<std::size_t>(batch_.add_hits_in_brick(brick_, kept));
+  const std::uint64_t voxels = voxels_;
   voxels_ = 0;
+  const std::uint64_t kept = in_range(voxels);
+  stats_.truncated += static_cast<std::size_t>(std::popcount(voxels & ~kept));
+  if (kept != 0) stats_.hits += static_cast<std::size_t>(batch_.add_hits_in_brick(brick_, kept));
 }
 
 }  // namespace umbra

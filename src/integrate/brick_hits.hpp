@@ -38,8 +38,10 @@ class BrickHits {
   BrickHits(const Grid& grid, Vec3f origin, double max_range, UpdateBatch& batch, InsertStats& stats);
   BrickHits(const BrickHits&) = delete;
   BrickHits& operator=(const BrickHits&) = delete;
-  /// Hands over the last brick.
-  ~BrickHits() { flush(); }
+  /// The caller hands over the last brick with flush(): the destructor does
+  /// not, since the batch may allocate and a destructor must not throw (nor
+  /// retry after an exception left a brick half handed over).
+  ~BrickHits() = default;
 
   /// The end voxel `code`. Voxels of one brick given one after another are
   /// handed over together (any order works; sorted codes are cheapest).

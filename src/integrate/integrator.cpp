@@ -429,6 +429,7 @@ InsertStats Integrator::trace_image(const OccupancyTree& tree, const Grid& grid,
     // The voxels come a brick at a time, sorted (brick_hits.hpp).
     BrickHits hits(grid, origin, options.max_range, batch, counts);
     image_points_.for_each_brick_in(first, end, [&](BrickVoxels voxels) { hits.add(voxels); });
+    hits.flush();
   };
   const auto side_job = [&](std::size_t job, UpdateBatch& batch) {
     if (job == 0) {

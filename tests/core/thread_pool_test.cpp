@@ -124,7 +124,7 @@ TEST(ThreadPool, SpinningAndSleepingWaitsRunEveryTaskOnceBeforeRunReturns) {
 // so that the serial part (CPU time outside jobs and waits) stays the work
 // outside the jobs: here one thread waits while the other runs a 3 ms task,
 // and the worker waits for a next job that does not come. A wait is counted
-// when it ends: the test lets the spins run out before it looks.
+// when it ends: the test looks until one is.
 TEST(ThreadPool, JobAccountingCountsTheSpinningWaitsApart) {
   if (ThreadPool::hardware_threads() < 2) GTEST_SKIP() << "one hardware thread: the pool does not spin";
   ThreadPool pool(2);
@@ -137,8 +137,14 @@ TEST(ThreadPool, JobAccountingCountsTheSpinningWaitsApart) {
     while (thread_cpu_seconds() < end) {
     }
   });
-  std::this_thread::sleep_for(std::chrono::duration<double>(3 * ThreadPool::kSpinSeconds));
-  const JobCpuTimes after = job_cpu_times();
+  // The worker's spin after the job is counted when it ends, which a loaded
+  // machine may delay: look until it is counted (or, if it never is, give up
+  // after 30 s and fail).
+  JobCpuTimes after = job_cpu_times();
+  for (int look = 0; look < 30000 && after.waiting_seconds <= before.waiting_seconds; ++look) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    after = job_cpu_times();
+  }
   set_job_cpu_accounting(false);
   EXPECT_GT(after.waiting_seconds, before.waiting_seconds);
 }
