@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "common/argument_cursor.hpp"
 #include "umbra/io/scan_source.hpp"
 
 namespace umbra::bench {
@@ -43,6 +44,20 @@ std::vector<Scan> simulated_camera_frames();
 
 /// "a,b,c" -> {"a", "b", "c"}.
 std::vector<std::string> split_list(const std::string& text);
+
+/// The dataset flags the dataset benchmarks share (scripts/bench.sh passes --data to every benchmark): --data (or --data-dir) DIR
+/// and --datasets a,b. True when `arg` is one of them (its value read from `args`).
+inline bool take_dataset_flag(umbra_bench::ArgumentCursor& args, const std::string& arg, std::string& data_dir,
+                              std::vector<std::string>& datasets) {
+  if (arg == "--data" || arg == "--data-dir") {
+    data_dir = args.value();
+  } else if (arg == "--datasets") {
+    datasets = split_list(args.value());
+  } else {
+    return false;
+  }
+  return true;
+}
 
 /// The median of some values (the mean of the middle two for an even count).
 double median(std::vector<double> values);

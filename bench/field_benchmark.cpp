@@ -480,11 +480,8 @@ int main(int argc, char** argv) {
   Options options;
   for (umbra_bench::ArgumentCursor args{argc, argv}; args.next();) {
     const std::string arg = args.flag();
-    if (arg == "--data" || arg == "--data-dir") {  // scripts/bench.sh passes --data, as to every benchmark
-      options.data_dir = args.value();
-    } else if (arg == "--datasets") {
-      options.datasets = umbra::bench::split_list(args.value());
-    } else if (arg == "--max-distance") {
+    if (umbra::bench::take_dataset_flag(args, arg, options.data_dir, options.datasets)) continue;
+    if (arg == "--max-distance") {
       options.max_distance = std::stod(args.value());
     } else if (arg == "--queries") {
       options.queries = std::stoul(args.value());

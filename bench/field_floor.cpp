@@ -542,11 +542,8 @@ int main(int argc, char** argv) {
   Options options;
   for (umbra_bench::ArgumentCursor args{argc, argv}; args.next();) {
     const std::string arg = args.flag();
-    if (arg == "--data" || arg == "--data-dir") {
-      options.data_dir = args.value();
-    } else if (arg == "--datasets") {
-      options.datasets = umbra::bench::split_list(args.value());
-    } else if (arg == "--max-distance") {
+    if (umbra::bench::take_dataset_flag(args, arg, options.data_dir, options.datasets)) continue;
+    if (arg == "--max-distance") {
       options.max_distance = std::stod(args.value());
     } else if (arg == "--check") {
       const bool transform_ok = transform_matches_brute_force();
